@@ -23,6 +23,6 @@
 #![cfg_attr(not(test), warn(clippy::unwrap_used, clippy::expect_used, clippy::panic))]
 
 pub mod com;
-// pub mod os;
+pub mod os;
 pub mod sonar;
 pub mod warning;

@@ -1,0 +1,169 @@
+//! Ready queue: one FIFO per priority over a shared pool of `Q` entries, and a 64-bit
+//! bitmap of non-empty priorities, so that every operation is O(1): the highest ready
+//! priority is `63 - leading_zeros(bitmap)`.
+//!
+//! Each entry is one activation record (a task id). Equality and hashing look at the
+//! logical content (the sequence of tasks at each priority), not at which pool slots hold
+//! it, so two queues that will behave the same compare equal.
+
+use core::hash::{Hash, Hasher};
+
+const NIL: u8 = u8::MAX;
+const LEVELS: usize = 64;
+
+/// The pool is full: more records than the configuration's activations allow. The
+/// kernel's limit checks make this unreachable; it is an error value, not a panic.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) struct QueueFull;
+
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct ReadyQueue<const Q: usize> {
+    bitmap: u64,
+    head: [u8; LEVELS],
+    tail: [u8; LEVELS],
+    next: [u8; Q],
+    task: [u8; Q],
+    free: u8,
+}
+
+impl<const Q: usize> ReadyQueue<Q> {
+    pub(crate) const fn new() -> Self {
+        let mut next = [NIL; Q];
+        let mut i = 0;
+        while i + 1 < Q {
+            next[i] = (i + 1) as u8;
+            i += 1;
+        }
+        Self {
+            bitmap: 0,
+            head: [NIL; LEVELS],
+            tail: [NIL; LEVELS],
+            next,
+            task: [0; Q],
+            free: if Q == 0 { NIL } else { 0 },
+        }
+    }
+
+    /// Highest priority with a ready entry.
+    #[inline(always)]
+    pub(crate) fn highest(&self) -> Option<u8> {
+        if self.bitmap == 0 {
+            None
+        } else {
+            Some(63 - self.bitmap.leading_zeros() as u8)
+        }
+    }
+
+    #[inline(always)]
+    fn alloc(&mut self, task: u8) -> Result<usize, QueueFull> {
+        let slot = self.free as usize;
+        if slot >= Q {
+            return Err(QueueFull);
+        }
+        self.free = self.next[slot];
+        self.task[slot] = task;
+        self.next[slot] = NIL;
+        Ok(slot)
+    }
+
+    /// Appends an entry at the tail of `prio` (newest).
+    #[inline(always)]
+    pub(crate) fn push_back(&mut self, prio: u8, task: u8) -> Result<(), QueueFull> {
+        let slot = self.alloc(task)?;
+        let p = (prio & 63) as usize;
+        let tail = self.tail[p] as usize;
+        if tail < Q {
+            self.next[tail] = slot as u8;
+        } else {
+            self.head[p] = slot as u8;
+            self.bitmap |= 1 << p;
+        }
+        self.tail[p] = slot as u8;
+        Ok(())
+    }
+
+    /// Inserts an entry at the head of `prio` (oldest): a preempted task.
+    #[inline]
+    pub(crate) fn push_front(&mut self, prio: u8, task: u8) -> Result<(), QueueFull> {
+        let slot = self.alloc(task)?;
+        let p = (prio & 63) as usize;
+        self.next[slot] = self.head[p];
+        if self.head[p] == NIL {
+            self.tail[p] = slot as u8;
+            self.bitmap |= 1 << p;
+        }
+        self.head[p] = slot as u8;
+        Ok(())
+    }
+
+    /// Removes and returns the oldest entry of `prio`.
+    #[inline]
+    pub(crate) fn pop_front(&mut self, prio: u8) -> Option<u8> {
+        let p = (prio & 63) as usize;
+        let slot = self.head[p] as usize;
+        if slot >= Q {
+            return None;
+        }
+        let task = self.task[slot];
+        self.head[p] = self.next[slot];
+        if self.head[p] == NIL {
+            self.tail[p] = NIL;
+            self.bitmap &= !(1 << p);
+        }
+        self.next[slot] = self.free;
+        self.free = slot as u8;
+        Some(task)
+    }
+
+    /// The tasks queued at `prio`, oldest first.
+    pub(crate) fn iter(&self, prio: u8) -> impl Iterator<Item = u8> + '_ {
+        let mut slot = self.head[(prio & 63) as usize];
+        core::iter::from_fn(move || {
+            let s = slot as usize;
+            if s >= Q {
+                return None;
+            }
+            slot = self.next[s];
+            Some(self.task[s])
+        })
+    }
+
+    /// Bitmap of non-empty priorities.
+    pub(crate) fn bitmap(&self) -> u64 {
+        self.bitmap
+    }
+}
+
+impl<const Q: usize> PartialEq for ReadyQueue<Q> {
+    fn eq(&self, other: &Self) -> bool {
+        if self.bitmap != other.bitmap {
+            return false;
+        }
+        let mut levels = self.bitmap;
+        while levels != 0 {
+            let p = levels.trailing_zeros() as u8;
+            if !self.iter(p).eq(other.iter(p)) {
+                return false;
+            }
+            levels &= levels - 1;
+        }
+        true
+    }
+}
+
+impl<const Q: usize> Eq for ReadyQueue<Q> {}
+
+impl<const Q: usize> Hash for ReadyQueue<Q> {
+    fn hash<H: Hasher>(&self, state: &mut H) {
+        self.bitmap.hash(state);
+        let mut levels = self.bitmap;
+        while levels != 0 {
+            let p = levels.trailing_zeros() as u8;
+            for t in self.iter(p) {
+                t.hash(state);
+            }
+            NIL.hash(state);
+            levels &= levels - 1;
+        }
+    }
+}
