@@ -20,7 +20,10 @@
 //! The crate is `#![no_std]`, forbids `unsafe`, and never allocates.
 #![no_std]
 #![forbid(unsafe_code)]
-#![cfg_attr(not(test), warn(clippy::unwrap_used, clippy::expect_used, clippy::panic))]
+#![cfg_attr(
+    not(test),
+    warn(clippy::unwrap_used, clippy::expect_used, clippy::panic)
+)]
 
 pub mod com;
 pub mod os;

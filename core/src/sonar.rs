@@ -288,22 +288,45 @@ mod tests {
             cfg.measure(Echo::Pulse { width_us: 5831 }),
             Measurement::Distance { distance_mm: 1000 }
         );
-        assert_eq!(cfg.measure(Echo::Pulse { width_us: 38_000 }), Measurement::NothingInRange);
-        assert_eq!(cfg.measure(Echo::Pulse { width_us: 30_000 }), Measurement::NothingInRange);
-        assert_eq!(cfg.measure(Echo::Pulse { width_us: u32::MAX }), Measurement::NothingInRange);
+        assert_eq!(
+            cfg.measure(Echo::Pulse { width_us: 38_000 }),
+            Measurement::NothingInRange
+        );
+        assert_eq!(
+            cfg.measure(Echo::Pulse { width_us: 30_000 }),
+            Measurement::NothingInRange
+        );
+        assert_eq!(
+            cfg.measure(Echo::Pulse { width_us: u32::MAX }),
+            Measurement::NothingInRange
+        );
         assert_eq!(cfg.measure(Echo::Missing), Measurement::Invalid);
-        assert_eq!(cfg.measure(Echo::Pulse { width_us: 0 }), Measurement::Invalid);
+        assert_eq!(
+            cfg.measure(Echo::Pulse { width_us: 0 }),
+            Measurement::Invalid
+        );
         assert_eq!(cfg.echo_to_distance_mm(u32::MAX), 736_586_891);
     }
 
     #[test]
     fn temperature_compensation() {
-        assert_eq!(SpeedOfSound::at_temperature(0).map(|s| s.mm_per_s()), Ok(331_300));
-        assert_eq!(SpeedOfSound::at_temperature(200).map(|s| s.mm_per_s()), Ok(343_420));
-        assert_eq!(SpeedOfSound::at_temperature(-500).map(|s| s.mm_per_s()), Ok(301_000));
+        assert_eq!(
+            SpeedOfSound::at_temperature(0).map(|s| s.mm_per_s()),
+            Ok(331_300)
+        );
+        assert_eq!(
+            SpeedOfSound::at_temperature(200).map(|s| s.mm_per_s()),
+            Ok(343_420)
+        );
+        assert_eq!(
+            SpeedOfSound::at_temperature(-500).map(|s| s.mm_per_s()),
+            Ok(301_000)
+        );
         assert_eq!(
             SpeedOfSound::at_temperature(851),
-            Err(SonarConfigError::TemperatureOutOfRange { temp_decicelsius: 851 })
+            Err(SonarConfigError::TemperatureOutOfRange {
+                temp_decicelsius: 851
+            })
         );
         assert_eq!(
             SpeedOfSound::new(1),

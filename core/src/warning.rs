@@ -174,13 +174,10 @@ mod tests {
     #[test]
     #[cfg_attr(kani, kani::proof)]
     fn paper_level_matches_spec_for_any_distance() {
-        bolero::check!()
-            .with_type::<u32>()
-            .cloned()
-            .for_each(|d| {
-                let level = Thresholds::PAPER.level_for_distance(d);
-                assert!(spec::level_is_correct(&Thresholds::PAPER, d, level));
-            });
+        bolero::check!().with_type::<u32>().cloned().for_each(|d| {
+            let level = Thresholds::PAPER.level_for_distance(d);
+            assert!(spec::level_is_correct(&Thresholds::PAPER, d, level));
+        });
     }
 
     #[test]
@@ -260,7 +257,10 @@ mod tests {
             assert_eq!(totals, [u64::from(u32::MAX) + 1 - 2000, 1000, 1000]);
         }
         #[cfg(miri)]
-        for d in (0..=u32::MAX).step_by(104_729).chain([999, 1000, 1999, 2000]) {
+        for d in (0..=u32::MAX)
+            .step_by(104_729)
+            .chain([999, 1000, 1999, 2000])
+        {
             let level = Thresholds::PAPER.level_for_distance(d);
             assert!(spec::level_is_correct(&Thresholds::PAPER, d, level));
         }

@@ -3,7 +3,8 @@
 
 use crate::OsModel;
 use cw_core::os::{
-    AlarmAction, AlarmAutostart, AlarmConfig, CounterConfig, CounterId, OsConfig, TaskConfig, TaskId,
+    AlarmAction, AlarmAutostart, AlarmConfig, CounterConfig, CounterId, OsConfig, TaskConfig,
+    TaskId,
 };
 
 const fn unwrap<const T: usize, const R: usize, const C: usize, const A: usize>(
@@ -34,7 +35,9 @@ const fn cyclic(name: &'static str, task: u8, offset: u32, period: u32) -> Alarm
 /// resource guards the sonar data shared by sonar, obstacle and Com.
 pub static PAPER: OsConfig<6, 1, 1, 4> = unwrap(OsConfig::new(
     [
-        TaskConfig::basic("OsStartupTask", 6).non_preemptive().autostart(),
+        TaskConfig::basic("OsStartupTask", 6)
+            .non_preemptive()
+            .autostart(),
         TaskConfig::basic("OsLEDTask", 5),
         TaskConfig::basic("OsBswServiceTask", 4),
         TaskConfig::basic("OsObstacleDetectionTask", 3).uses(0b1),
@@ -131,7 +134,10 @@ pub static EVENTS: OsConfig<3, 1, 1, 2> = unwrap(OsConfig::new(
             name: "EvE1",
             counter: CounterId(0),
             action: AlarmAction::SetEvent(TaskId(0), 0b01),
-            autostart: AlarmAutostart::Relative { increment: 2, cycle: 2 },
+            autostart: AlarmAutostart::Relative {
+                increment: 2,
+                cycle: 2,
+            },
         },
         AlarmConfig {
             name: "ActB",

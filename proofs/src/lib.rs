@@ -12,7 +12,8 @@
 //! - activations are neither lost nor invented and never exceed the limit;
 //! - resource stacks are consistent; waiting tasks wait for something not yet set.
 //!
-//! Checked on every transition (recorded as a violation in the next state):
+//! Checked on every transition (`cw_core::os::spec::transition_rules`, recorded as a
+//! violation in the next state):
 //! - FIFO within a priority: each ready queue keeps its old entries in order, loses at most
 //!   its head (to the dispatcher), gains new entries only at its tail, and only a preempted
 //!   task goes to its head;
@@ -24,43 +25,24 @@
 //! - a refused service leaves the state unchanged.
 
 use cw_core::os::{
-    spec, CounterId, EventMask, Os, OsConfig, OsError, ResourceId, TaskId, TaskKind, RES_SCHEDULER,
+    spec, CounterId, EventMask, Os, OsConfig, ResourceId, TaskId, TaskKind, RES_SCHEDULER,
 };
 use stateright::{Model, Property};
 use std::fmt::Debug;
 
-/// One step: a service called by the running task, or an interrupt.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub enum Step {
-    /// The running task calls `ActivateTask`.
-    Activate(TaskId),
-    /// The running task calls `TerminateTask`.
-    Terminate,
-    /// The running task calls `ChainTask`.
-    Chain(TaskId),
-    /// The running task calls `Schedule`.
-    Schedule,
-    /// The running task calls `GetResource`.
-    GetResource(ResourceId),
-    /// The running task calls `ReleaseResource`.
-    ReleaseResource(ResourceId),
-    /// The running task calls `SetEvent`.
-    SetEvent(TaskId, EventMask),
-    /// The running task calls `ClearEvent`.
-    ClearEvent(EventMask),
-    /// The running task calls `WaitEvent`.
-    WaitEvent(EventMask),
-    /// A timer ISR calls `IncrementCounter`.
-    Tick(CounterId),
-    /// An ISR calls `ActivateTask`.
-    IsrActivate(TaskId),
-    /// An ISR calls `SetEvent`.
-    IsrSetEvent(TaskId, EventMask),
-}
+/// One step: a service called by the running task, or a whole ISR (timer tick,
+/// activation or event from an interrupt).
+pub use cw_core::os::spec::Service as Step;
 
 /// A state of the model: the kernel, plus the first transition check that failed, if any.
 #[derive(Debug, Clone, PartialEq, Eq, Hash)]
-pub struct ModelState<const T: usize, const R: usize, const C: usize, const A: usize, const Q: usize> {
+pub struct ModelState<
+    const T: usize,
+    const R: usize,
+    const C: usize,
+    const A: usize,
+    const Q: usize,
+> {
     /// The real kernel.
     pub os: Os<T, R, C, A, Q>,
     /// A broken transition rule (exploration stops there and the property reports it).
@@ -85,153 +67,23 @@ pub struct OsModel<const T: usize, const R: usize, const C: usize, const A: usiz
     pub adversarial: bool,
 }
 
-impl<const T: usize, const R: usize, const C: usize, const A: usize, const Q: usize> OsModel<T, R, C, A, Q> {
+impl<const T: usize, const R: usize, const C: usize, const A: usize, const Q: usize>
+    OsModel<T, R, C, A, Q>
+{
     fn tasks(&self) -> impl Iterator<Item = TaskId> {
         (0..T as u8).map(TaskId)
     }
 
     fn resources(&self) -> impl Iterator<Item = ResourceId> {
-        (0..R as u8).map(ResourceId).chain(std::iter::once(RES_SCHEDULER))
-    }
-
-    fn run(os: &mut Os<T, R, C, A, Q>, step: Step) -> Result<(), OsError> {
-        match step {
-            Step::Activate(t) => os.activate_task(t),
-            Step::Terminate => os.terminate_task(),
-            Step::Chain(t) => os.chain_task(t),
-            Step::Schedule => os.schedule(),
-            Step::GetResource(r) => os.get_resource(r),
-            Step::ReleaseResource(r) => os.release_resource(r),
-            Step::SetEvent(t, m) => os.set_event(t, m),
-            Step::ClearEvent(m) => os.clear_event(m),
-            Step::WaitEvent(m) => os.wait_event(m),
-            Step::Tick(c) => Self::in_isr(os, |os| os.increment_counter(c).map(|_| ())),
-            Step::IsrActivate(t) => Self::in_isr(os, |os| os.activate_task(t)),
-            Step::IsrSetEvent(t, m) => Self::in_isr(os, |os| os.set_event(t, m)),
-        }
-    }
-
-    /// Runs `service` inside a category-2 ISR: rescheduling happens at the ISR's exit.
-    fn in_isr(
-        os: &mut Os<T, R, C, A, Q>,
-        service: impl FnOnce(&mut Os<T, R, C, A, Q>) -> Result<(), OsError>,
-    ) -> Result<(), OsError> {
-        os.enter_isr()?;
-        let result = service(os);
-        os.exit_isr()?;
-        result
-    }
-
-    /// The transition rules; returns the first one broken.
-    pub(crate) fn check_transition(
-        &self,
-        before: &Os<T, R, C, A, Q>,
-        after: &Os<T, R, C, A, Q>,
-        step: Step,
-        result: Result<(), OsError>,
-    ) -> Option<&'static str> {
-        let caller = before.running();
-        let is_isr_step = matches!(step, Step::Tick(_) | Step::IsrActivate(_) | Step::IsrSetEvent(..));
-        if result.is_err() && !is_isr_step && after != before {
-            return Some("a refused service changed the state");
-        }
-        // Activation limit.
-        if let Step::Activate(t) | Step::IsrActivate(t) = step {
-            let max = self.cfg.tasks()[t.0 as usize].max_activations;
-            let had = before.activation_count(t);
-            match result {
-                Err(OsError::Limit) if had != max => return Some("E_OS_LIMIT below the limit"),
-                Err(OsError::Limit) => {}
-                Ok(()) if after.activation_count(t) != had + 1 => return Some("an activation was lost"),
-                Ok(()) => {}
-                Err(_) => return Some("ActivateTask failed for another reason"),
-            }
-        }
-        // Resources: LIFO release, priority restored; take raises to the ceiling.
-        if let (Step::ReleaseResource(r), Ok(()), Some(t)) = (step, result, caller) {
-            if before.held_resources(t).next() != Some(r) {
-                return Some("a resource was released out of LIFO order");
-            }
-            let mut expected = after.dispatch_priority(t).unwrap_or(0);
-            for held in after.held_resources(t) {
-                expected = expected.max(after.ceiling(held).unwrap_or(0));
-            }
-            let now = if after.running() == Some(t) {
-                after.running_priority()
-            } else {
-                after.saved_priority(t)
-            };
-            if now != Some(expected) {
-                return Some("ReleaseResource did not restore the priority");
-            }
-        }
-        if let (Step::GetResource(r), Ok(()), Some(_)) = (step, result, caller) {
-            let ceiling = after.ceiling(r).unwrap_or(0);
-            if after.running_priority() != before.running_priority().map(|p| p.max(ceiling)) {
-                return Some("GetResource did not raise the priority to the ceiling");
-            }
-        }
-        // Waiting -> ready exactly when a waited event is set.
-        for t in self.tasks() {
-            let was = before.is_waiting(t);
-            let waited = before.wait_mask(t);
-            let released = was && !after.is_waiting(t);
-            let event_arrived = after.events(t) & waited != 0;
-            if released && !event_arrived {
-                return Some("a waiting task was released without its event");
-            }
-            if was && event_arrived && !released {
-                return Some("a waited event was set but the task still waits");
-            }
-        }
-        if let Some(rule) = self.check_fifo(before, after) {
-            return Some(rule);
-        }
-        None
-    }
-
-    /// Queue discipline per priority: after = [preempted]? ++ (before minus at most its head)
-    /// ++ new entries; at most one entry leaves all queues, and it is the task now running.
-    pub(crate) fn check_fifo(&self, before: &Os<T, R, C, A, Q>, after: &Os<T, R, C, A, Q>) -> Option<&'static str> {
-        let preempted = before.running().filter(|r| {
-            after.running() != Some(*r) && !after.is_waiting(*r) && before.is_started(*r) && after.is_started(*r)
-        });
-        let mut removed = 0;
-        for p in 0..=cw_core::os::MAX_PRIORITY {
-            let old: Vec<TaskId> = before.ready_at(p).collect();
-            let mut new: Vec<TaskId> = after.ready_at(p).collect();
-            if old.is_empty() && new.is_empty() {
-                continue;
-            }
-            if let Some(r) = preempted {
-                if after.saved_priority(r) == Some(p) {
-                    if new.first() != Some(&r) {
-                        return Some("a preempted task is not the oldest of its priority");
-                    }
-                    new.remove(0);
-                }
-            }
-            // Old entries keep their order at the front; anything after them is new (tail).
-            if new.len() >= old.len() && new[..old.len()] == old[..] {
-                continue;
-            }
-            if !old.is_empty() && new.len() >= old.len() - 1 && new[..old.len() - 1] == old[1..] {
-                removed += 1;
-                if after.running() != Some(old[0]) {
-                    return Some("an entry left a ready queue without being dispatched");
-                }
-            } else {
-                return Some("a ready queue lost its order (not FIFO)");
-            }
-        }
-        if removed > 1 {
-            return Some("more than one task was dispatched in one step");
-        }
-        None
+        (0..R as u8)
+            .map(ResourceId)
+            .chain(std::iter::once(RES_SCHEDULER))
     }
 }
 
-impl<const T: usize, const R: usize, const C: usize, const A: usize, const Q: usize> Model for OsModel<T, R, C, A, Q> {
+impl<const T: usize, const R: usize, const C: usize, const A: usize, const Q: usize> Model
+    for OsModel<T, R, C, A, Q>
+{
     type State = ModelState<T, R, C, A, Q>;
     type Action = Step;
 
@@ -249,11 +101,11 @@ impl<const T: usize, const R: usize, const C: usize, const A: usize, const Q: us
         }
         let os = &state.os;
         for c in 0..C as u8 {
-            actions.push(Step::Tick(CounterId(c)));
+            actions.push(Step::IsrTick(CounterId(c)));
         }
         if self.isr_services {
             for t in self.tasks() {
-                actions.push(Step::IsrActivate(t));
+                actions.push(Step::IsrActivateTask(t));
                 if self.cfg.tasks()[t.0 as usize].kind == TaskKind::Extended {
                     for &m in self.event_masks {
                         actions.push(Step::IsrSetEvent(t, m));
@@ -265,7 +117,7 @@ impl<const T: usize, const R: usize, const C: usize, const A: usize, const Q: us
             return;
         };
         let me = &self.cfg.tasks()[running.0 as usize];
-        actions.push(Step::Terminate);
+        actions.push(Step::TerminateTask);
         // The resources the task declares, taken and released; all of them when adversarial.
         for r in self.resources() {
             let declared = r == RES_SCHEDULER || (me.resources >> r.0) & 1 == 1;
@@ -276,7 +128,7 @@ impl<const T: usize, const R: usize, const C: usize, const A: usize, const Q: us
         }
         for &(caller, target) in self.activations {
             if caller == running {
-                actions.push(Step::Activate(target));
+                actions.push(Step::ActivateTask(target));
             }
         }
         if me.kind == TaskKind::Extended {
@@ -288,8 +140,8 @@ impl<const T: usize, const R: usize, const C: usize, const A: usize, const Q: us
         if self.adversarial {
             actions.push(Step::Schedule);
             for t in self.tasks() {
-                actions.push(Step::Activate(t));
-                actions.push(Step::Chain(t));
+                actions.push(Step::ActivateTask(t));
+                actions.push(Step::ChainTask(t));
                 if self.cfg.tasks()[t.0 as usize].kind == TaskKind::Extended {
                     for &m in self.event_masks {
                         actions.push(Step::SetEvent(t, m));
@@ -301,35 +153,46 @@ impl<const T: usize, const R: usize, const C: usize, const A: usize, const Q: us
 
     fn next_state(&self, last: &Self::State, step: Self::Action) -> Option<Self::State> {
         let mut os = last.os;
-        let result = Self::run(&mut os, step);
-        let violation = self.check_transition(&last.os, &os, step, result);
+        let result = spec::call(&mut os, step);
+        let violation = spec::transition_rules(&last.os, &os, step, result).err();
         Some(ModelState { os, violation })
     }
 
     fn properties(&self) -> Vec<Property<Self>> {
         vec![
-            Property::always("transition rules hold (FIFO, limits, LIFO, events)", |_, s: &Self::State| {
-                s.violation.is_none()
-            }),
-            Property::always("running task is a highest-priority ready task", |_, s: &Self::State| {
-                spec::running_is_highest_ready(&s.os) && spec::running_priority_is_ceiling(&s.os)
-            }),
-            Property::always("activations accounted, never above the limit", |_, s: &Self::State| {
-                spec::activations_accounted(&s.os)
-            }),
+            Property::always(
+                "transition rules hold (FIFO, limits, LIFO, events)",
+                |_, s: &Self::State| s.violation.is_none(),
+            ),
+            Property::always(
+                "running task is a highest-priority ready task",
+                |_, s: &Self::State| {
+                    spec::running_is_highest_ready(&s.os)
+                        && spec::running_priority_is_ceiling(&s.os)
+                },
+            ),
+            Property::always(
+                "activations accounted, never above the limit",
+                |_, s: &Self::State| spec::activations_accounted(&s.os),
+            ),
             Property::always("resource stacks consistent", |_, s: &Self::State| {
                 spec::resources_consistent(&s.os)
             }),
-            Property::always("waiting tasks are blocked on unset events", |_, s: &Self::State| {
-                spec::waiting_is_blocked(&s.os)
-            }),
+            Property::always(
+                "waiting tasks are blocked on unset events",
+                |_, s: &Self::State| spec::waiting_is_blocked(&s.os),
+            ),
             // Reachability: the checks above are not vacuous.
             Property::sometimes("a task is preempted", |_, s: &Self::State| {
-                (0..=cw_core::os::MAX_PRIORITY).any(|p| s.os.ready_at(p).any(|t| s.os.is_started(t)))
+                (0..=cw_core::os::MAX_PRIORITY)
+                    .any(|p| s.os.ready_at(p).any(|t| s.os.is_started(t)))
             }),
-            Property::sometimes("two activations are queued at one priority", |_, s: &Self::State| {
-                (0..=cw_core::os::MAX_PRIORITY).any(|p| s.os.ready_at(p).nth(1).is_some())
-            }),
+            Property::sometimes(
+                "two activations are queued at one priority",
+                |_, s: &Self::State| {
+                    (0..=cw_core::os::MAX_PRIORITY).any(|p| s.os.ready_at(p).nth(1).is_some())
+                },
+            ),
         ]
     }
 }
@@ -361,11 +224,15 @@ pub fn check<const T: usize, const R: usize, const C: usize, const A: usize, con
     for p in properties {
         let found = discoveries.get(p.name);
         let failed = match p.expectation {
-            stateright::Expectation::Always | stateright::Expectation::Eventually => found.is_some(),
+            stateright::Expectation::Always | stateright::Expectation::Eventually => {
+                found.is_some()
+            }
             stateright::Expectation::Sometimes => found.is_none(),
         };
         if failed {
-            let path = found.map(|path| format!("{:?}", path.clone().into_actions())).unwrap_or_default();
+            let path = found
+                .map(|path| format!("{:?}", path.clone().into_actions()))
+                .unwrap_or_default();
             failures.push(format!("{}: {:?} {}", p.name, p.expectation, path));
         }
     }
@@ -382,7 +249,9 @@ pub mod configs;
 #[cfg(test)]
 mod tests;
 
-impl<const T: usize, const R: usize, const C: usize, const A: usize, const Q: usize> Debug for OsModel<T, R, C, A, Q> {
+impl<const T: usize, const R: usize, const C: usize, const A: usize, const Q: usize> Debug
+    for OsModel<T, R, C, A, Q>
+{
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.write_str(self.name)
     }

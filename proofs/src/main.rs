@@ -29,7 +29,10 @@ fn main() -> ExitCode {
             failed = true;
         }
     }
-    println!("model check: {total} distinct scheduler states explored, all properties hold: {}", !failed);
+    println!(
+        "model check: {total} distinct scheduler states explored, all properties hold: {}",
+        !failed
+    );
     if failed {
         ExitCode::FAILURE
     } else {

@@ -417,7 +417,12 @@ pub mod spec {
     }
 
     /// The layout is acceptable: PDU of 1..=64 bytes, length 1..=64, every bit inside.
-    pub const fn layout_fits(pdu_len: usize, start_bit: u16, length_bits: u8, order: ByteOrder) -> bool {
+    pub const fn layout_fits(
+        pdu_len: usize,
+        start_bit: u16,
+        length_bits: u8,
+        order: ByteOrder,
+    ) -> bool {
         if pdu_len == 0 || pdu_len > 64 || length_bits == 0 || length_bits > 64 {
             return false;
         }
@@ -443,7 +448,13 @@ pub mod spec {
     }
 
     /// Reference pack: writes bit `i` of `raw` to its position, one bit at a time.
-    pub fn reference_pack(pdu: &mut [u8], start_bit: u16, length_bits: u8, order: ByteOrder, raw: u64) {
+    pub fn reference_pack(
+        pdu: &mut [u8],
+        start_bit: u16,
+        length_bits: u8,
+        order: ByteOrder,
+        raw: u64,
+    ) {
         for i in 0..length_bits {
             let p = bit_position(start_bit, length_bits, order, i);
             let bit = ((raw >> i) & 1) as u8;
@@ -453,7 +464,13 @@ pub mod spec {
 
     /// Reference unpack: gathers the bits one at a time, then sign-extends by arithmetic
     /// (`raw - 2^len` when the top bit is set) rather than by shifts.
-    pub fn reference_unpack(pdu: &[u8], start_bit: u16, length_bits: u8, order: ByteOrder, signedness: Signedness) -> i128 {
+    pub fn reference_unpack(
+        pdu: &[u8],
+        start_bit: u16,
+        length_bits: u8,
+        order: ByteOrder,
+        signedness: Signedness,
+    ) -> i128 {
         let mut raw: u128 = 0;
         for i in 0..length_bits {
             let p = bit_position(start_bit, length_bits, order, i);
@@ -470,7 +487,10 @@ pub mod spec {
     pub const fn value_range(length_bits: u8, signedness: Signedness) -> (i128, i128) {
         match signedness {
             Signedness::Unsigned => (0, (1i128 << length_bits) - 1),
-            Signedness::Signed => (-(1i128 << (length_bits - 1)), (1i128 << (length_bits - 1)) - 1),
+            Signedness::Signed => (
+                -(1i128 << (length_bits - 1)),
+                (1i128 << (length_bits - 1)) - 1,
+            ),
         }
     }
 }

@@ -342,7 +342,8 @@ impl<const T: usize, const R: usize, const C: usize, const A: usize> OsConfig<T,
             let action_ok = match alarm.action {
                 AlarmAction::ActivateTask(task) => (task.0 as usize) < T,
                 AlarmAction::SetEvent(task, _) => {
-                    (task.0 as usize) < T && matches!(tasks[task.0 as usize].kind, TaskKind::Extended)
+                    (task.0 as usize) < T
+                        && matches!(tasks[task.0 as usize].kind, TaskKind::Extended)
                 }
                 AlarmAction::Callback(cb) => cb < MAX_CALLBACKS,
             };

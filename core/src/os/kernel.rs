@@ -11,7 +11,9 @@
 //!   ticks after its predecessor's expiry. A tick with nothing due decrements one number and
 //!   compares it: O(1) whatever the number of alarms.
 
-use super::config::{cycle_ok, AlarmAction, AlarmAutostart, ConfigError, OsConfig, Preemption, TaskKind};
+use super::config::{
+    cycle_ok, AlarmAction, AlarmAutostart, ConfigError, OsConfig, Preemption, TaskKind,
+};
 use super::queue::ReadyQueue;
 use super::{
     AlarmId, CounterId, EventMask, OsError, ResourceId, TaskId, TaskState, TickType, RES_SCHEDULER,
@@ -78,9 +80,13 @@ enum Caller {
 /// The configuration, compared by identity: two kernels are equal only if they run the same
 /// configuration object, and hashing the state need not hash the tables.
 #[derive(Clone, Copy)]
-struct CfgRef<const T: usize, const R: usize, const C: usize, const A: usize>(&'static OsConfig<T, R, C, A>);
+struct CfgRef<const T: usize, const R: usize, const C: usize, const A: usize>(
+    &'static OsConfig<T, R, C, A>,
+);
 
-impl<const T: usize, const R: usize, const C: usize, const A: usize> PartialEq for CfgRef<T, R, C, A> {
+impl<const T: usize, const R: usize, const C: usize, const A: usize> PartialEq
+    for CfgRef<T, R, C, A>
+{
     fn eq(&self, other: &Self) -> bool {
         core::ptr::eq(self.0, other.0)
     }
@@ -89,7 +95,9 @@ impl<const T: usize, const R: usize, const C: usize, const A: usize> Eq for CfgR
 impl<const T: usize, const R: usize, const C: usize, const A: usize> Hash for CfgRef<T, R, C, A> {
     fn hash<H: Hasher>(&self, _state: &mut H) {}
 }
-impl<const T: usize, const R: usize, const C: usize, const A: usize> core::fmt::Debug for CfgRef<T, R, C, A> {
+impl<const T: usize, const R: usize, const C: usize, const A: usize> core::fmt::Debug
+    for CfgRef<T, R, C, A>
+{
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         f.write_str("OsConfig")
     }
@@ -121,7 +129,9 @@ pub struct Os<const T: usize, const R: usize, const C: usize, const A: usize, co
     alarm_cycle: [TickType; A],
 }
 
-impl<const T: usize, const R: usize, const C: usize, const A: usize, const Q: usize> Os<T, R, C, A, Q> {
+impl<const T: usize, const R: usize, const C: usize, const A: usize, const Q: usize>
+    Os<T, R, C, A, Q>
+{
     /// A kernel for `cfg`, before `StartOS`: no task is active, no alarm armed.
     ///
     /// # Errors
@@ -169,7 +179,8 @@ impl<const T: usize, const R: usize, const C: usize, const A: usize, const Q: us
     /// # Errors
     /// `E_OS_STATE` if called again after tasks or alarms are already active.
     pub fn start(&mut self) -> Result<(), OsError> {
-        if self.running != NONE || self.ready.bitmap() != 0 || self.alarm_active.iter().any(|a| *a) {
+        if self.running != NONE || self.ready.bitmap() != 0 || self.alarm_active.iter().any(|a| *a)
+        {
             return Err(OsError::State);
         }
         let cfg = self.cfg.0;
@@ -227,8 +238,13 @@ impl<const T: usize, const R: usize, const C: usize, const A: usize, const Q: us
         self.ready.highest()
     }
 
+    /// Bitmap of priorities with ready activations (bit `p` for priority `p`).
+    pub fn ready_bitmap(&self) -> u64 {
+        self.ready.bitmap()
+    }
+
     /// The ready activations at `prio`, oldest first.
-    pub fn ready_at(&self, prio: u8) -> impl Iterator<Item = TaskId> + '_ {
+    pub fn ready_at(&self, prio: u8) -> impl Iterator<Item = TaskId> + Clone + '_ {
         self.ready.iter(prio).map(TaskId)
     }
 
@@ -816,7 +832,12 @@ impl<const T: usize, const R: usize, const C: usize, const A: usize, const Q: us
     /// # Errors
     /// `E_OS_ID` invalid alarm; `E_OS_STATE` already armed; `E_OS_VALUE` increment not in
     /// `1 ..= maxallowedvalue`, or cycle neither 0 nor in `mincycle ..= maxallowedvalue`.
-    pub fn set_rel_alarm(&mut self, alarm: AlarmId, increment: TickType, cycle: TickType) -> Result<(), OsError> {
+    pub fn set_rel_alarm(
+        &mut self,
+        alarm: AlarmId,
+        increment: TickType,
+        cycle: TickType,
+    ) -> Result<(), OsError> {
         let a = Self::alarm_index(alarm)?;
         if self.alarm_active[a] {
             return Err(OsError::State);
@@ -836,7 +857,12 @@ impl<const T: usize, const R: usize, const C: usize, const A: usize, const Q: us
     /// # Errors
     /// `E_OS_ID` invalid alarm; `E_OS_STATE` already armed; `E_OS_VALUE` start above
     /// `maxallowedvalue`, or cycle neither 0 nor in `mincycle ..= maxallowedvalue`.
-    pub fn set_abs_alarm(&mut self, alarm: AlarmId, start: TickType, cycle: TickType) -> Result<(), OsError> {
+    pub fn set_abs_alarm(
+        &mut self,
+        alarm: AlarmId,
+        start: TickType,
+        cycle: TickType,
+    ) -> Result<(), OsError> {
         let a = Self::alarm_index(alarm)?;
         if self.alarm_active[a] {
             return Err(OsError::State);
@@ -926,7 +952,10 @@ impl<const T: usize, const R: usize, const C: usize, const A: usize, const Q: us
 
     /// Whether an alarm is armed.
     pub fn alarm_armed(&self, alarm: AlarmId) -> bool {
-        self.alarm_active.get(alarm.0 as usize).copied().unwrap_or(false)
+        self.alarm_active
+            .get(alarm.0 as usize)
+            .copied()
+            .unwrap_or(false)
     }
 
     /// Number of ready-queue records of `task` (activations not running or waiting).

@@ -116,21 +116,35 @@ impl<const Q: usize> ReadyQueue<Q> {
     }
 
     /// The tasks queued at `prio`, oldest first.
-    pub(crate) fn iter(&self, prio: u8) -> impl Iterator<Item = u8> + '_ {
-        let mut slot = self.head[(prio & 63) as usize];
-        core::iter::from_fn(move || {
-            let s = slot as usize;
-            if s >= Q {
-                return None;
-            }
-            slot = self.next[s];
-            Some(self.task[s])
-        })
+    pub(crate) fn iter(&self, prio: u8) -> Iter<'_, Q> {
+        Iter {
+            queue: self,
+            slot: self.head[(prio & 63) as usize],
+        }
     }
 
     /// Bitmap of non-empty priorities.
     pub(crate) fn bitmap(&self) -> u64 {
         self.bitmap
+    }
+}
+
+/// Iterator over one priority's entries, oldest first.
+#[derive(Clone)]
+pub(crate) struct Iter<'a, const Q: usize> {
+    queue: &'a ReadyQueue<Q>,
+    slot: u8,
+}
+
+impl<const Q: usize> Iterator for Iter<'_, Q> {
+    type Item = u8;
+    fn next(&mut self) -> Option<u8> {
+        let s = self.slot as usize;
+        if s >= Q {
+            return None;
+        }
+        self.slot = self.queue.next[s];
+        Some(self.queue.task[s])
     }
 }
 

@@ -57,7 +57,11 @@ fn check_case<const N: usize>(layout: &SignalLayout<N>, value: i128, background:
     let in_range = lo <= value && value <= hi;
     if !in_range {
         // Out of range: a clear error, and nothing lost or changed.
-        assert_eq!(result, Err(SignalError::OutOfRange), "{layout:?} value {value}");
+        assert_eq!(
+            result,
+            Err(SignalError::OutOfRange),
+            "{layout:?} value {value}"
+        );
         assert_eq!(&pdu, background, "{layout:?} changed the PDU on error");
         return false;
     }
@@ -66,17 +70,28 @@ fn check_case<const N: usize>(layout: &SignalLayout<N>, value: i128, background:
     // Agreement with the bit-by-bit reference.
     let mut expected = *background;
     spec::reference_pack(&mut expected, start, len, order, value as u64);
-    assert_eq!(pdu, expected, "{layout:?} value {value} bg {background:02x?}");
+    assert_eq!(
+        pdu, expected,
+        "{layout:?} value {value} bg {background:02x?}"
+    );
 
     // Non-interference: only the signal's bits may differ from the background.
     let mut occupied = [0u8; N];
     spec::occupied(&mut occupied, start, len, order);
     for i in 0..N {
-        assert_eq!((pdu[i] ^ background[i]) & !occupied[i], 0, "{layout:?} touched byte {i}");
+        assert_eq!(
+            (pdu[i] ^ background[i]) & !occupied[i],
+            0,
+            "{layout:?} touched byte {i}"
+        );
     }
 
     // Round trip, with sign extension, against both our unpack and the reference.
-    assert_eq!(layout.unpack(&pdu).as_i128(), value, "{layout:?} round trip");
+    assert_eq!(
+        layout.unpack(&pdu).as_i128(),
+        value,
+        "{layout:?} round trip"
+    );
     assert_eq!(spec::reference_unpack(&pdu, start, len, order, sign), value);
     assert_eq!(layout.unpack_raw(&pdu), (value as u64) & layout.mask());
     // Unpacking any PDU agrees with the reference too (here: the background).
@@ -92,10 +107,29 @@ fn interesting_values(len: u8, sign: Signedness) -> impl Iterator<Item = i128> {
     let (lo, hi) = spec::value_range(len, sign);
     let pattern_a = 0x5555_5555_5555_5555u64 as i128 & ((1i128 << len) - 1);
     let pattern_b = 0xAAAA_AAAA_AAAA_AAAAu64 as i128 & ((1i128 << len) - 1);
-    let wrap = |v: i128| if sign == Signedness::Signed && v > hi { v - (1i128 << len) } else { v };
-    [lo, lo + 1, -1, 0, 1, hi - 1, hi, hi / 2, wrap(pattern_a), wrap(pattern_b), lo - 1, hi + 1]
-        .into_iter()
-        .filter(move |v| (lo - 1..=hi + 1).contains(v))
+    let wrap = |v: i128| {
+        if sign == Signedness::Signed && v > hi {
+            v - (1i128 << len)
+        } else {
+            v
+        }
+    };
+    [
+        lo,
+        lo + 1,
+        -1,
+        0,
+        1,
+        hi - 1,
+        hi,
+        hi / 2,
+        wrap(pattern_a),
+        wrap(pattern_b),
+        lo - 1,
+        hi + 1,
+    ]
+    .into_iter()
+    .filter(move |v| (lo - 1..=hi + 1).contains(v))
 }
 
 fn for_every_layout<const N: usize>(mut f: impl FnMut(SignalLayout<N>)) -> (usize, usize) {
@@ -157,7 +191,12 @@ fn exhaustive_every_layout_of_short_and_odd_pdus() {
         let (valid, _) = for_every_layout::<N>(|layout| {
             let bg = rng.bytes::<N>();
             let (lo, hi) = spec::value_range(layout.length_bits(), layout.signedness());
-            for value in [lo, hi, hi + 1, (rng.next() as i128).rem_euclid(hi - lo + 1) + lo] {
+            for value in [
+                lo,
+                hi,
+                hi + 1,
+                (rng.next() as i128).rem_euclid(hi - lo + 1) + lo,
+            ] {
                 check_case(&layout, value, &bg);
             }
         });
@@ -185,7 +224,11 @@ fn exhaustive_every_value_up_to_16_bits() {
             starts.push((s, ByteOrder::Intel));
         }
         // Motorola: MSB at byte 0 bit 7, an unaligned MSB, and the last possible MSB.
-        for s in [7u16, 12, 7 + 8 * ((64 - u16::from(len)) / 8) - (64 - u16::from(len)) % 8] {
+        for s in [
+            7u16,
+            12,
+            7 + 8 * ((64 - u16::from(len)) / 8) - (64 - u16::from(len)) % 8,
+        ] {
             starts.push((s, ByteOrder::Motorola));
         }
         for (start, order) in starts {
@@ -213,7 +256,10 @@ fn dbc_examples() {
     let mut pdu = [0u8; 8];
     assert_eq!(distance.pack_u64(&mut pdu, 0x1234_5678), Ok(()));
     assert_eq!(pdu, [0x78, 0x56, 0x34, 0x12, 0, 0, 0, 0]);
-    assert_eq!(distance.pack_u64(&mut pdu, 1 << 32), Err(SignalError::OutOfRange));
+    assert_eq!(
+        distance.pack_u64(&mut pdu, 1 << 32),
+        Err(SignalError::OutOfRange)
+    );
     assert_eq!(pdu, [0x78, 0x56, 0x34, 0x12, 0, 0, 0, 0]);
 
     // Motorola 16-bit with MSB at bit 7 (byte 0 bit 7): bytes 0..2 big-endian.
@@ -232,7 +278,10 @@ fn dbc_examples() {
     // A Motorola signal whose LSB would fall past the end is refused.
     assert_eq!(
         SignalLayout::<8>::new(56 + 3, 5, ByteOrder::Motorola, Signedness::Unsigned),
-        Err(LayoutError::OutsidePdu { start_bit: 59, length_bits: 5 })
+        Err(LayoutError::OutsidePdu {
+            start_bit: 59,
+            length_bits: 5
+        })
     );
     assert_eq!(
         SignalLayout::<8>::new(0, 0, ByteOrder::Intel, Signedness::Unsigned),
@@ -257,9 +306,24 @@ fn saturating_and_masking_variants_are_explicit() {
     assert_eq!(pdu, [0xF0, 0x0F, 0, 0, 0, 0, 0, 0]);
 }
 
-fn bolero_case<const N: usize>(start: u16, len: u8, moto: bool, signed: bool, value: i128, bg: [u8; N]) {
-    let order = if moto { ByteOrder::Motorola } else { ByteOrder::Intel };
-    let sign = if signed { Signedness::Signed } else { Signedness::Unsigned };
+fn bolero_case<const N: usize>(
+    start: u16,
+    len: u8,
+    moto: bool,
+    signed: bool,
+    value: i128,
+    bg: [u8; N],
+) {
+    let order = if moto {
+        ByteOrder::Motorola
+    } else {
+        ByteOrder::Intel
+    };
+    let sign = if signed {
+        Signedness::Signed
+    } else {
+        Signedness::Unsigned
+    };
     let start = start % (8 * N as u16 + 8);
     let len = len % 66;
     match SignalLayout::<N>::new(start, len, order, sign) {
@@ -280,7 +344,9 @@ fn codec_matches_reference_classic_can() {
     bolero::check!()
         .with_type::<(u16, u8, bool, bool, i128, [u8; 8])>()
         .cloned()
-        .for_each(|(start, len, moto, signed, value, bg)| bolero_case::<8>(start, len, moto, signed, value, bg));
+        .for_each(|(start, len, moto, signed, value, bg)| {
+            bolero_case::<8>(start, len, moto, signed, value, bg)
+        });
 }
 
 #[test]
@@ -289,7 +355,9 @@ fn codec_matches_reference_can_fd() {
     bolero::check!()
         .with_type::<(u16, u8, bool, bool, i128, [u8; 64])>()
         .cloned()
-        .for_each(|(start, len, moto, signed, value, bg)| bolero_case::<64>(start, len, moto, signed, value, bg));
+        .for_each(|(start, len, moto, signed, value, bg)| {
+            bolero_case::<64>(start, len, moto, signed, value, bg)
+        });
 }
 
 #[test]
@@ -298,5 +366,7 @@ fn codec_matches_reference_odd_pdu() {
     bolero::check!()
         .with_type::<(u16, u8, bool, bool, i128, [u8; 11])>()
         .cloned()
-        .for_each(|(start, len, moto, signed, value, bg)| bolero_case::<11>(start, len, moto, signed, value, bg));
+        .for_each(|(start, len, moto, signed, value, bg)| {
+            bolero_case::<11>(start, len, moto, signed, value, bg)
+        });
 }
