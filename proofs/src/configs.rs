@@ -7,6 +7,8 @@ use cw_core::os::{
     TaskId,
 };
 
+// Evaluated only in `static` initialisers: a broken configuration stops the build.
+#[allow(clippy::panic)]
 const fn unwrap<const T: usize, const R: usize, const C: usize, const A: usize>(
     cfg: Result<OsConfig<T, R, C, A>, cw_core::os::ConfigError>,
 ) -> OsConfig<T, R, C, A> {

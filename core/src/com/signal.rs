@@ -146,15 +146,11 @@ impl<const N: usize> SignalLayout<N> {
         if start >= bits {
             return outside;
         }
-        // First byte the signal touches: where the window starts (clamped for N > 8).
-        let first_byte;
-        // Position of the LSB counted in the whole PDU read as one integer.
         match order {
             ByteOrder::Intel => {
                 if start + len > bits {
                     return outside;
                 }
-                first_byte = start / 8;
             }
             ByteOrder::Motorola => {
                 // Position of the MSB in the PDU read as a big-endian integer.
@@ -162,9 +158,11 @@ impl<const N: usize> SignalLayout<N> {
                 if msb_pos + 1 < len {
                     return outside;
                 }
-                first_byte = start / 8;
             }
         }
+        // First byte the signal touches (for both orders, the start bit's byte): where the
+        // window starts, clamped for N > 8.
+        let first_byte = start / 8;
         let (window_len, window_byte) = if N <= 8 {
             (8, 0)
         } else if N < 16 {
@@ -397,7 +395,7 @@ macro_rules! signal_layout {
 /// Named predicates and the reference formulation of the codec, written bit by bit from
 /// the DBC definition, independently of the window arithmetic above.
 pub mod spec {
-    use super::{ByteOrder, Signedness};
+    use super::{ByteOrder, SignalError, SignalLayout, SignalValue, Signedness};
 
     /// PDU bit number (`byte * 8 + bit`, LSB = 0) of the signal bit `i` counted from the
     /// signal's LSB (`i < length_bits`). It may lie beyond the PDU: see [`layout_fits`].
@@ -481,6 +479,80 @@ pub mod spec {
             Signedness::Signed if raw & top != 0 => raw as i128 - (1i128 << length_bits),
             _ => raw as i128,
         }
+    }
+
+    /// The whole contract of the codec for one case: `value` (in range or not) is packed
+    /// into `background` with `layout`, and
+    /// - out of range: a clear error and the PDU unchanged;
+    /// - in range: the bytes equal the bit-by-bit reference, no bit outside the signal
+    ///   changed, and unpacking (ours and the reference's) gives the value back,
+    ///   sign-extended; unpacking the background agrees with the reference too.
+    ///
+    /// Returns whether the value was in range, or the name of the broken property.
+    pub fn codec_contract<const N: usize>(
+        layout: &SignalLayout<N>,
+        value: i128,
+        background: &[u8; N],
+    ) -> Result<bool, &'static str> {
+        let (start, len, order, sign) = (
+            layout.start_bit(),
+            layout.length_bits(),
+            layout.byte_order(),
+            layout.signedness(),
+        );
+        if !layout_fits(N, start, len, order) {
+            return Err("a layout exists that does not fit its PDU");
+        }
+        let (lo, hi) = value_range(len, sign);
+        let mut pdu = *background;
+        let result = match (u64::try_from(value), i64::try_from(value)) {
+            (Ok(v), _) if sign == Signedness::Unsigned => {
+                layout.pack(&mut pdu, SignalValue::Unsigned(v))
+            }
+            (_, Ok(v)) => layout.pack(&mut pdu, SignalValue::Signed(v)),
+            (Ok(v), Err(_)) => layout.pack_u64(&mut pdu, v),
+            (Err(_), Err(_)) => Err(SignalError::OutOfRange),
+        };
+        let in_range = lo <= value && value <= hi;
+        if !in_range {
+            if result != Err(SignalError::OutOfRange) {
+                return Err("an out-of-range value was not refused");
+            }
+            if &pdu != background {
+                return Err("a refused value changed the PDU");
+            }
+            return Ok(false);
+        }
+        if result.is_err() {
+            return Err("an in-range value was refused");
+        }
+        let mut expected = *background;
+        reference_pack(&mut expected, start, len, order, value as u64);
+        if pdu != expected {
+            return Err("packed bytes differ from the bit-by-bit reference");
+        }
+        let mut occupied_bits = [0u8; N];
+        occupied(&mut occupied_bits, start, len, order);
+        for i in 0..N {
+            if (pdu[i] ^ background[i]) & !occupied_bits[i] != 0 {
+                return Err("a bit outside the signal changed");
+            }
+        }
+        if layout.unpack(&pdu).as_i128() != value {
+            return Err("unpack does not give the packed value back");
+        }
+        if reference_unpack(&pdu, start, len, order, sign) != value {
+            return Err("the reference unpack disagrees with the packed value");
+        }
+        if layout.unpack_raw(&pdu) != (value as u64) & layout.mask() {
+            return Err("unpack_raw is not the value's low bits");
+        }
+        if layout.unpack(background).as_i128()
+            != reference_unpack(background, start, len, order, sign)
+        {
+            return Err("unpack of an arbitrary PDU disagrees with the reference");
+        }
+        Ok(true)
     }
 
     /// The value range of a signal, as `i128` bounds computed by powers of two.

@@ -252,6 +252,13 @@ pub struct OsConfig<const T: usize, const R: usize, const C: usize, const A: usi
     pub(crate) scheduler_ceiling: u8,
     /// Derived: the sum of all tasks' activations (the ready-queue entries ever needed).
     pub(crate) total_activations: usize,
+    /// Derived, per task, for the hot paths: static priority.
+    pub(crate) priority: [u8; T],
+    /// Derived, per task: activation limit.
+    pub(crate) max_activations: [u8; T],
+    /// Derived, per task: the priority it runs at holding no resource (its own, or the
+    /// `RES_SCHEDULER` ceiling when non-preemptive).
+    pub(crate) dispatch_priority: [u8; T],
 }
 
 /// Whether a cycle is admissible for a counter: 0 (single shot) or within
@@ -319,6 +326,19 @@ impl<const T: usize, const R: usize, const C: usize, const A: usize> OsConfig<T,
             }
             t += 1;
         }
+        let mut priority = [0u8; T];
+        let mut max_activations = [0u8; T];
+        let mut dispatch_priority = [0u8; T];
+        let mut t = 0;
+        while t < T {
+            priority[t] = tasks[t].priority;
+            max_activations[t] = tasks[t].max_activations;
+            dispatch_priority[t] = match tasks[t].preemption {
+                Preemption::Full => tasks[t].priority,
+                Preemption::Non => scheduler_ceiling,
+            };
+            t += 1;
+        }
         let mut c = 0;
         while c < C {
             let k = &counters[c];
@@ -372,6 +392,9 @@ impl<const T: usize, const R: usize, const C: usize, const A: usize> OsConfig<T,
             ceilings,
             scheduler_ceiling,
             total_activations,
+            priority,
+            max_activations,
+            dispatch_priority,
         })
     }
 

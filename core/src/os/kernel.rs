@@ -11,9 +11,7 @@
 //!   ticks after its predecessor's expiry. A tick with nothing due decrements one number and
 //!   compares it: O(1) whatever the number of alarms.
 
-use super::config::{
-    cycle_ok, AlarmAction, AlarmAutostart, ConfigError, OsConfig, Preemption, TaskKind,
-};
+use super::config::{cycle_ok, AlarmAction, AlarmAutostart, ConfigError, OsConfig, TaskKind};
 use super::queue::ReadyQueue;
 use super::{
     AlarmId, CounterId, EventMask, OsError, ResourceId, TaskId, TaskState, TickType, RES_SCHEDULER,
@@ -344,15 +342,12 @@ impl<const T: usize, const R: usize, const C: usize, const A: usize, const Q: us
 
     #[inline(always)]
     fn base_prio(&self, t: usize) -> u8 {
-        self.cfg.0.tasks[t].priority
+        self.cfg.0.priority[t]
     }
 
     #[inline(always)]
     fn internal_prio(&self, t: usize) -> u8 {
-        match self.cfg.0.tasks[t].preemption {
-            Preemption::Full => self.cfg.0.tasks[t].priority,
-            Preemption::Non => self.cfg.0.scheduler_ceiling,
-        }
+        self.cfg.0.dispatch_priority[t]
     }
 
     #[inline(always)]
@@ -377,20 +372,19 @@ impl<const T: usize, const R: usize, const C: usize, const A: usize, const Q: us
     }
 
     /// Records one more activation of `t` (OSEK: suspended -> ready, or a queued request).
+    /// Returns the task's priority, which the caller needs for its scheduling decision.
     #[inline(always)]
-    fn activate(&mut self, t: usize) -> Result<(), OsError> {
-        let count = self.activations[t];
-        if count >= self.cfg.0.tasks[t].max_activations {
+    fn activate(&mut self, t: usize) -> Result<u8, OsError> {
+        let cfg = self.cfg.0;
+        let (count, max, prio) = (self.activations[t], cfg.max_activations[t], cfg.priority[t]);
+        if count >= max {
             return Err(OsError::Limit);
         }
-        if count == 0 && self.is_extended(t) {
-            self.events[t] = 0;
-        }
         self.ready
-            .push_back(self.base_prio(t), t as u8)
+            .push_back(prio, t as u8)
             .map_err(|_| OsError::Limit)?;
         self.activations[t] = count + 1;
-        Ok(())
+        Ok(prio)
     }
 
     /// The rescheduling point: keeps the running task unless a strictly higher priority is
@@ -403,23 +397,24 @@ impl<const T: usize, const R: usize, const C: usize, const A: usize, const Q: us
         let Some(top) = self.ready.highest() else {
             return;
         };
+        if self.running == NONE || self.running_prio < top {
+            self.switch_to(top);
+        }
+    }
+
+    /// Preempts the running task (if any) and dispatches the oldest task of `top`. Kept out
+    /// of line: the common decision "keep running" must not pay for it.
+    #[inline(never)]
+    fn switch_to(&mut self, top: u8) {
         if self.running != NONE {
-            if self.running_prio >= top {
-                return;
-            }
-            self.preempt();
+            let r = self.running as usize;
+            self.saved_prio[r] = self.running_prio;
+            // The running task's own record returns to the pool, so there is room for it.
+            let _ = self.ready.push_front(self.running_prio, r as u8);
+            self.running = NONE;
         }
         self.dispatch(top);
         debug_assert!(super::spec::kernel_invariants(self));
-    }
-
-    #[inline(never)]
-    fn preempt(&mut self) {
-        let r = self.running as usize;
-        self.saved_prio[r] = self.running_prio;
-        // The running task's own record returns to the pool, so there is room for it.
-        let _ = self.ready.push_front(self.running_prio, r as u8);
-        self.running = NONE;
     }
 
     #[inline(always)]
@@ -446,6 +441,13 @@ impl<const T: usize, const R: usize, const C: usize, const A: usize, const Q: us
     /// Ends the running instance of `t`.
     fn finish(&mut self, t: usize) {
         self.activations[t] = self.activations[t].saturating_sub(1);
+        if self.activations[t] == 0 {
+            // OSEK clears an extended task's events when it is next activated from the
+            // suspended state. Events cannot be set while it is suspended (E_OS_STATE), so
+            // clearing them here, as it becomes suspended, is the same and keeps the
+            // activation path short.
+            self.events[t] = 0;
+        }
         self.started[t] = false;
         self.saved_prio[t] = self.base_prio(t);
         self.running = NONE;
@@ -462,8 +464,13 @@ impl<const T: usize, const R: usize, const C: usize, const A: usize, const Q: us
     #[inline]
     pub fn activate_task(&mut self, task: TaskId) -> Result<(), OsError> {
         let t = Self::task_index(task)?;
-        self.activate(t)?;
-        self.reschedule();
+        let prio = self.activate(t)?;
+        // The running task was a highest-priority one before the call (the invariant), so the
+        // only entry that can outrank it now is the one just queued: compare with that
+        // priority instead of searching the bitmap.
+        if self.isr_depth == 0 && (self.running == NONE || self.running_prio < prio) {
+            self.switch_to(prio);
+        }
         Ok(())
     }
 
@@ -493,7 +500,7 @@ impl<const T: usize, const R: usize, const C: usize, const A: usize, const Q: us
             return Err(OsError::Resource);
         }
         let n = Self::task_index(task)?;
-        if n != t && self.activations[n] >= self.cfg.0.tasks[n].max_activations {
+        if n != t && self.activations[n] >= self.cfg.0.max_activations[n] {
             return Err(OsError::Limit);
         }
         self.finish(t);
@@ -937,7 +944,7 @@ impl<const T: usize, const R: usize, const C: usize, const A: usize, const Q: us
             }
             match self.cfg.0.alarms[a].action {
                 AlarmAction::ActivateTask(task) => {
-                    let result = Self::task_index(task).and_then(|t| self.activate(t));
+                    let result = Self::task_index(task).and_then(|t| self.activate(t).map(|_| ()));
                     report.record(result);
                 }
                 AlarmAction::SetEvent(task, mask) => {

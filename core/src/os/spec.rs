@@ -267,11 +267,9 @@ pub fn fifo_discipline<
         let p = levels.trailing_zeros() as u8;
         levels &= levels - 1;
         let mut new = after.ready_at(p).peekable();
-        if let Some(r) = preempted {
-            if after.saved_priority(r) == Some(p) {
-                if new.next() != Some(r) {
-                    return Err("a preempted task is not the oldest of its priority");
-                }
+        if let Some(r) = preempted.filter(|r| after.saved_priority(*r) == Some(p)) {
+            if new.next() != Some(r) {
+                return Err("a preempted task is not the oldest of its priority");
             }
         }
         // Either every old entry is still there, in order, at the front ...
