@@ -66,10 +66,14 @@ fn interesting_values(len: u8, sign: Signedness) -> impl Iterator<Item = i128> {
     .filter(move |v| (lo - 1..=hi + 1).contains(v))
 }
 
+/// Calls `f` with every valid layout of an `N`-byte PDU and checks that validity equals
+/// [`spec::layout_fits`] for every candidate, valid or not. Under Miri (about a thousand
+/// times slower) a strided subset of start bits and lengths is walked instead.
 fn for_every_layout<const N: usize>(mut f: impl FnMut(SignalLayout<N>)) -> (usize, usize) {
     let (mut valid, mut refused) = (0, 0);
-    for start in 0..(8 * N as u16 + 8) {
-        for len in 0..=65u8 {
+    let (start_step, len_step) = if cfg!(miri) { (13, 7) } else { (1, 1) };
+    for start in (0..(8 * N as u16 + 8)).step_by(start_step) {
+        for len in (0..=65u8).step_by(len_step) {
             for order in ORDERS {
                 for sign in SIGNS {
                     let made = SignalLayout::<N>::new(start, len, order, sign);
@@ -112,7 +116,9 @@ fn exhaustive_every_layout_of_an_8_byte_pdu() {
     });
     // Per byte order and signedness: Intel fits when start + len <= 64, Motorola when
     // len <= msb position + 1; both give sum over start of (positions left) = 64 * 65 / 2.
-    assert_eq!(valid, 4 * 64 * 65 / 2);
+    if !cfg!(miri) {
+        assert_eq!(valid, 4 * 64 * 65 / 2);
+    }
     assert!(refused > 0);
     std::println!("8-byte PDU: {valid} layouts, {cases} cases");
 }
