@@ -7,12 +7,15 @@
 use criterion::{criterion_group, criterion_main, Criterion};
 use cw_core::com::signal::{ByteOrder, SignalLayout, Signedness};
 use cw_core::os::{
-    AlarmAction, AlarmAutostart, AlarmConfig, AlarmId, CounterConfig, CounterId, Os, OsConfig, TaskConfig, TaskId,
+    AlarmAction, AlarmAutostart, AlarmConfig, AlarmId, CounterConfig, CounterId, Os, OsConfig,
+    TaskConfig, TaskId,
 };
 use std::hint::black_box;
 
-const DISTANCE: SignalLayout<8> = cw_core::signal_layout!(8; 0, 32, ByteOrder::Intel, Signedness::Unsigned);
-const MOTOROLA: SignalLayout<8> = cw_core::signal_layout!(8; 12, 16, ByteOrder::Motorola, Signedness::Signed);
+const DISTANCE: SignalLayout<8> =
+    cw_core::signal_layout!(8; 0, 32, ByteOrder::Intel, Signedness::Unsigned);
+const MOTOROLA: SignalLayout<8> =
+    cw_core::signal_layout!(8; 12, 16, ByteOrder::Motorola, Signedness::Signed);
 
 fn codec(c: &mut Criterion) {
     let mut g = c.benchmark_group("com_signal");
@@ -35,7 +38,11 @@ fn codec(c: &mut Criterion) {
 
 static CFG: OsConfig<2, 0, 1, 1> = match OsConfig::new(
     [TaskConfig::basic("Low", 1), TaskConfig::basic("High", 5)],
-    [CounterConfig { max_allowed_value: u32::MAX - 1, ticks_per_base: 1, min_cycle: 1 }],
+    [CounterConfig {
+        max_allowed_value: u32::MAX - 1,
+        ticks_per_base: 1,
+        min_cycle: 1,
+    }],
     [AlarmConfig {
         name: "Cb",
         counter: CounterId(0),
@@ -58,22 +65,28 @@ fn kernel() -> Os<2, 0, 1, 1, 2> {
 fn scheduler(c: &mut Criterion) {
     let mut g = c.benchmark_group("os");
     let mut os = kernel();
-    g.bench_function("ActivateTask + dispatch + TerminateTask (idle -> High -> idle)", |b| {
-        b.iter(|| {
-            let _ = os.activate_task(black_box(TaskId(1)));
-            let _ = os.terminate_task();
-        })
-    });
+    g.bench_function(
+        "ActivateTask + dispatch + TerminateTask (idle -> High -> idle)",
+        |b| {
+            b.iter(|| {
+                let _ = os.activate_task(black_box(TaskId(1)));
+                let _ = os.terminate_task();
+            })
+        },
+    );
     let mut os = kernel();
     let _ = os.activate_task(TaskId(1));
-    g.bench_function("ActivateTask, no preemption (+ drain, High keeps running)", |b| {
-        b.iter(|| {
-            let _ = os.activate_task(black_box(TaskId(0)));
-            let _ = os.terminate_task();
-            let _ = os.terminate_task();
-            let _ = os.activate_task(TaskId(1));
-        })
-    });
+    g.bench_function(
+        "ActivateTask, no preemption (+ drain, High keeps running)",
+        |b| {
+            b.iter(|| {
+                let _ = os.activate_task(black_box(TaskId(0)));
+                let _ = os.terminate_task();
+                let _ = os.terminate_task();
+                let _ = os.activate_task(TaskId(1));
+            })
+        },
+    );
     let mut os = kernel();
     let _ = os.set_rel_alarm(AlarmId(0), u32::MAX - 1, 0);
     g.bench_function("IncrementCounter, nothing due", |b| {

@@ -109,6 +109,12 @@ pub struct Os<const T: usize, const R: usize, const C: usize, const A: usize, co
     ready: ReadyQueue<Q>,
     running: u8,
     running_prio: u8,
+    /// Cached scheduling threshold: a ready priority at or above it preempts. 0 when idle,
+    /// the running priority + 1 when a task runs, `u8::MAX` at interrupt level (nothing
+    /// preempts there). Derived from `running`, `running_prio` and `isr_depth` by
+    /// `sync_threshold` after every change to them, so the hot paths decide with one
+    /// comparison.
+    preempt_at: u8,
     isr_depth: u8,
     activations: [u8; T],
     started: [bool; T],
@@ -152,6 +158,7 @@ impl<const T: usize, const R: usize, const C: usize, const A: usize, const Q: us
             ready: ReadyQueue::new(),
             running: NONE,
             running_prio: 0,
+            preempt_at: 0,
             isr_depth: 0,
             activations: [0; T],
             started: [false; T],
@@ -391,15 +398,30 @@ impl<const T: usize, const R: usize, const C: usize, const A: usize, const Q: us
     /// ready; then the running task becomes the oldest of its current priority.
     #[inline(always)]
     fn reschedule(&mut self) {
-        if self.isr_depth != 0 {
-            return;
-        }
+        self.sync_threshold();
         let Some(top) = self.ready.highest() else {
             return;
         };
-        if self.running == NONE || self.running_prio < top {
+        if top >= self.preempt_at {
             self.switch_to(top);
         }
+    }
+
+    /// The value `preempt_at` must hold.
+    #[inline(always)]
+    const fn threshold(&self) -> u8 {
+        if self.isr_depth != 0 {
+            u8::MAX
+        } else if self.running == NONE {
+            0
+        } else {
+            self.running_prio + 1
+        }
+    }
+
+    #[inline(always)]
+    fn sync_threshold(&mut self) {
+        self.preempt_at = self.threshold();
     }
 
     /// Preempts the running task (if any) and dispatches the oldest task of `top`. Kept out
@@ -414,6 +436,7 @@ impl<const T: usize, const R: usize, const C: usize, const A: usize, const Q: us
             self.running = NONE;
         }
         self.dispatch(top);
+        self.sync_threshold();
         debug_assert!(super::spec::kernel_invariants(self));
     }
 
@@ -468,7 +491,8 @@ impl<const T: usize, const R: usize, const C: usize, const A: usize, const Q: us
         // The running task was a highest-priority one before the call (the invariant), so the
         // only entry that can outrank it now is the one just queued: compare with that
         // priority instead of searching the bitmap.
-        if self.isr_depth == 0 && (self.running == NONE || self.running_prio < prio) {
+        debug_assert_eq!(self.preempt_at, self.threshold());
+        if prio >= self.preempt_at {
             self.switch_to(prio);
         }
         Ok(())
@@ -525,6 +549,7 @@ impl<const T: usize, const R: usize, const C: usize, const A: usize, const Q: us
         self.reschedule();
         if self.running as usize == t {
             self.running_prio = self.internal_prio(t);
+            self.sync_threshold();
         }
         Ok(())
     }
@@ -668,6 +693,7 @@ impl<const T: usize, const R: usize, const C: usize, const A: usize, const Q: us
         self.res_top[t] = res.0;
         if ceiling > self.running_prio {
             self.running_prio = ceiling;
+            self.sync_threshold();
         }
         Ok(())
     }
@@ -707,6 +733,7 @@ impl<const T: usize, const R: usize, const C: usize, const A: usize, const Q: us
     /// `E_OS_LIMIT` beyond 255 nesting levels.
     pub fn enter_isr(&mut self) -> Result<(), OsError> {
         self.isr_depth = self.isr_depth.checked_add(1).ok_or(OsError::Limit)?;
+        self.sync_threshold();
         Ok(())
     }
 

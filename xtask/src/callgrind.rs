@@ -1,0 +1,227 @@
+//! `cargo xtask callgrind`: instructions per call of each probe, counted by callgrind.
+//!
+//! The probe binary (`core/examples/callgrind_probe.rs`, release profile: fat LTO, one
+//! codegen unit) takes `<op> <iterations>` and calls the `#[inline(never)]` function
+//! `probe_<op>` that many times. Callgrind collects only inside that function
+//! (`--collect-atstart=no --toggle-collect=*probe_<op>*`), once with `LOW` and once with
+//! `HIGH` iterations; `(Ir(HIGH) - Ir(LOW)) / (HIGH - LOW)` cancels any fixed cost and is
+//! the exact instruction count of one call (x86-64 of this machine, not the MPC5748G).
+
+use crate::process::{target_dir, Cmd};
+use crate::{option_value, Result};
+use std::path::{Path, PathBuf};
+
+/// Probes, as (op, what one call does). `probe_<op>` must exist in the probe example.
+pub const PROBES: &[(&str, &str)] = &[
+    (
+        "pack_distance_const",
+        "Com pack of the 32-bit Intel distance, layout known at compile time",
+    ),
+    (
+        "unpack_distance_const",
+        "Com unpack of the 32-bit Intel distance, layout known at compile time",
+    ),
+    (
+        "pack_motorola_runtime",
+        "Com pack of a Motorola signal, layout chosen at run time",
+    ),
+    (
+        "unpack_motorola_runtime",
+        "Com unpack of a Motorola signal, layout chosen at run time",
+    ),
+    (
+        "pack_intel_runtime",
+        "Com pack of an Intel signal, layout chosen at run time",
+    ),
+    (
+        "activate_task",
+        "OS ActivateTask up to the scheduling decision, run-time task id, 2 tasks",
+    ),
+    (
+        "activate_task_64",
+        "OS ActivateTask up to the scheduling decision, run-time task id, 64 tasks",
+    ),
+    (
+        "activate_task_const_id",
+        "OS ActivateTask up to the scheduling decision, constant task id (as RTE calls it)",
+    ),
+    (
+        "alarm_tick_idle",
+        "OS counter tick with no alarm due, 1 alarm armed",
+    ),
+    (
+        "alarm_tick_idle_32",
+        "OS counter tick with no alarm due, 32 alarms armed",
+    ),
+    (
+        "alarm_tick_due",
+        "OS counter tick that expires a cyclic alarm (callback)",
+    ),
+];
+
+/// Iteration counts of the two runs per probe.
+const LOW: u64 = 1000;
+const HIGH: u64 = 2000;
+
+const EXAMPLE: &str = "callgrind_probe";
+
+/// Options of `cargo xtask callgrind`.
+#[derive(Default)]
+pub struct Options {
+    /// A prebuilt probe binary to measure instead of building the example.
+    pub binary: Option<PathBuf>,
+}
+
+impl Options {
+    /// Parses `--binary PATH`.
+    pub fn parse(args: &[String]) -> Result<Self> {
+        let mut options = Self::default();
+        let mut it = args.iter();
+        while let Some(arg) = it.next() {
+            match arg.as_str() {
+                "--binary" => options.binary = Some(PathBuf::from(option_value(arg, &mut it)?)),
+                other => return Err(format!("callgrind: unknown argument `{other}`")),
+            }
+        }
+        Ok(options)
+    }
+}
+
+/// Builds the probe binary (unless one is given) and prints instructions per call for
+/// every probe.
+pub fn run(options: &Options) -> Result {
+    let binary = match &options.binary {
+        Some(binary) => binary.clone(),
+        None => {
+            Cmd::new("cargo")
+                .args(["build", "--release", "-p", "cw-core", "--example", EXAMPLE])
+                .run()?;
+            target_dir().join("release").join("examples").join(EXAMPLE)
+        }
+    };
+    if !binary.exists() {
+        return Err(format!("probe binary {} not found", binary.display()));
+    }
+    let out_dir = target_dir().join("xtask-callgrind");
+    std::fs::create_dir_all(&out_dir)
+        .map_err(|e| format!("creating {}: {e}", out_dir.display()))?;
+
+    let mut rows = Vec::new();
+    let mut errors = Vec::new();
+    for &(op, description) in PROBES {
+        let measured = measure(&binary, &out_dir, op, LOW).and_then(|low| {
+            let high = measure(&binary, &out_dir, op, HIGH)?;
+            per_call(op, low, high)
+        });
+        match measured {
+            Ok(per_call) => rows.push((op, description, format!("{per_call:.2}"))),
+            Err(e) => {
+                rows.push((op, description, "ERROR".into()));
+                errors.push(format!("{op}: {e}"));
+            }
+        }
+    }
+
+    let w_op = rows.iter().map(|r| r.0.len()).max().unwrap_or(2).max(2);
+    let w_desc = rows.iter().map(|r| r.1.len()).max().unwrap_or(11).max(11);
+    println!(
+        "\ninstructions per call (callgrind Ir, ({HIGH} calls - {LOW} calls) / {}, x86-64 release build)",
+        HIGH - LOW
+    );
+    println!(
+        "{:<w_op$} | {:<w_desc$} | instructions/call",
+        "op", "description"
+    );
+    println!(
+        "{}-|-{}-|-{}",
+        "-".repeat(w_op),
+        "-".repeat(w_desc),
+        "-".repeat(17)
+    );
+    for (op, description, value) in &rows {
+        println!("{op:<w_op$} | {description:<w_desc$} | {value:>17}");
+    }
+    println!("callgrind output files: {}", out_dir.display());
+    if errors.is_empty() {
+        Ok(())
+    } else {
+        Err(format!(
+            "{} probe(s) failed:\n  {}",
+            errors.len(),
+            errors.join("\n  ")
+        ))
+    }
+}
+
+/// Runs one probe under callgrind and returns the collected instruction count.
+fn measure(binary: &Path, out_dir: &Path, op: &str, iterations: u64) -> Result<u64> {
+    let out_file = out_dir.join(format!("callgrind.out.{op}.{iterations}"));
+    let _ = std::fs::remove_file(&out_file);
+    let mut out_arg = std::ffi::OsString::from("--callgrind-out-file=");
+    out_arg.push(&out_file);
+    let run = Cmd::new("valgrind")
+        .args(["--tool=callgrind", "--collect-atstart=no"])
+        .arg(out_arg)
+        .arg(format!("--toggle-collect=*probe_{op}*"))
+        .arg(binary)
+        .arg(op)
+        .arg(iterations.to_string())
+        .capture()?;
+    if !run.success {
+        return Err(format!(
+            "the probe run failed:\n{}{}",
+            run.stdout,
+            tail(&run.stderr, 20)
+        ));
+    }
+    let text = std::fs::read_to_string(&out_file)
+        .map_err(|e| format!("reading {}: {e}", out_file.display()))?;
+    read_total(&text)
+        .ok_or_else(|| format!("no `totals:` or `summary:` line in {}", out_file.display()))
+}
+
+/// The instruction count of a callgrind output file: its `totals:` line, else `summary:`
+/// (first event, which is `Ir` with the default options).
+fn read_total(text: &str) -> Option<u64> {
+    let field = |prefix: &str| {
+        text.lines()
+            .find_map(|l| l.strip_prefix(prefix))
+            .and_then(|rest| rest.split_whitespace().next())
+            .and_then(|n| n.parse::<u64>().ok())
+    };
+    field("totals:").or_else(|| field("summary:"))
+}
+
+fn per_call(op: &str, low: u64, high: u64) -> Result<f64> {
+    if low == 0 || high <= low {
+        return Err(format!(
+            "Ir({LOW}) = {low}, Ir({HIGH}) = {high}: callgrind collected nothing that grows with the \
+             iterations; is `probe_{op}` in the binary (`nm -C` lists it), marked #[inline(never)], and not merged by LLVM with an identical probe body?"
+        ));
+    }
+    Ok((high - low) as f64 / (HIGH - LOW) as f64)
+}
+
+fn tail(text: &str, lines: usize) -> String {
+    let all: Vec<&str> = text.lines().collect();
+    all[all.len().saturating_sub(lines)..].join("\n")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn reads_totals_then_summary() {
+        let file = "version: 1\nevents: Ir\nsummary: 4200\nfn=(1) x\n0 4200\ntotals: 4100\n";
+        assert_eq!(read_total(file), Some(4100));
+        assert_eq!(read_total("events: Ir\nsummary: 77\n"), Some(77));
+        assert_eq!(read_total("events: Ir\n"), None);
+    }
+
+    #[test]
+    fn per_call_cancels_fixed_cost() {
+        assert_eq!(per_call("x", 1000 * 12 + 300, 2000 * 12 + 300), Ok(12.0));
+        assert!(per_call("x", 0, 0).is_err());
+    }
+}

@@ -1,0 +1,253 @@
+//! `cargo xtask ci`: every check, in order, each a named stage with a banner, its commands
+//! and its wall time, then a summary table. A missing tool is a failure, never a skip.
+
+use crate::process::Cmd;
+use crate::setup::NIGHTLY;
+use crate::{callgrind, differential, option_value, setup, Result};
+use std::time::Instant;
+
+/// Fuzz targets run by the `fuzz` stage: bolero tests in the `cw-fuzz` package. cargo-bolero
+/// selects the test with `cargo test <name> -- --exact`, so each name is the test's full
+/// libtest path (`codec_roundtrip` for a test at the root of an integration-test file,
+/// `tests::codec_roundtrip` for one in `mod tests` of the library).
+pub const FUZZ_TARGETS: &[&str] = &["targets::codec_roundtrip", "targets::scheduler_api"];
+
+/// How long the `fuzz` stage runs each target (cargo-bolero `-T`).
+const FUZZ_TIME: &str = "10s";
+
+/// Random iterations per bolero harness under Miri (bolero reads `BOLERO_RANDOM_ITERATIONS`
+/// in `bolero-engine`'s `rng::Options`; when it is set the 1 s default time limit is lifted,
+/// and it takes precedence over `.with_iterations(..)` in a harness).
+const MIRI_BOLERO_ITERATIONS: &str = "16";
+
+/// Big-endian target for Miri (like the MPC5748G's PowerPC cores).
+const MIRI_BIG_ENDIAN_TARGET: &str = "s390x-unknown-linux-gnu";
+
+/// Stage names, in the order they run.
+pub const STAGES: &[&str] = &[
+    "setup",
+    "fmt",
+    "clippy",
+    "test",
+    "cross",
+    "miri",
+    "model",
+    "differential",
+    "fuzz",
+    "bench",
+];
+
+/// Which stages to run.
+pub struct Options {
+    stages: Vec<&'static str>,
+    keep_going: bool,
+}
+
+impl Options {
+    /// Parses `--only A,B`, `--skip A,B` and `--keep-going`.
+    pub fn parse(args: &[String]) -> Result<Self> {
+        let mut only: Option<Vec<&'static str>> = None;
+        let mut skip: Vec<&'static str> = Vec::new();
+        let mut keep_going = false;
+        let mut it = args.iter();
+        while let Some(arg) = it.next() {
+            match arg.as_str() {
+                "--only" => only
+                    .get_or_insert_with(Vec::new)
+                    .extend(stage_list(option_value(arg, &mut it)?)?),
+                "--skip" => skip.extend(stage_list(option_value(arg, &mut it)?)?),
+                "--keep-going" => keep_going = true,
+                other => {
+                    if let Some(v) = other.strip_prefix("--only=") {
+                        only.get_or_insert_with(Vec::new).extend(stage_list(v)?);
+                    } else if let Some(v) = other.strip_prefix("--skip=") {
+                        skip.extend(stage_list(v)?);
+                    } else {
+                        return Err(format!(
+                            "ci: unknown argument `{other}`; see `cargo xtask help`"
+                        ));
+                    }
+                }
+            }
+        }
+        let stages: Vec<&'static str> = STAGES
+            .iter()
+            .copied()
+            .filter(|s| only.as_ref().is_none_or(|o| o.contains(s)))
+            .filter(|s| !skip.contains(s))
+            .collect();
+        if stages.is_empty() {
+            return Err("ci: --only/--skip leave no stage to run".into());
+        }
+        Ok(Self { stages, keep_going })
+    }
+}
+
+fn stage_list(list: &str) -> Result<Vec<&'static str>> {
+    list.split(',')
+        .map(str::trim)
+        .filter(|s| !s.is_empty())
+        .map(|name| {
+            STAGES.iter().copied().find(|s| *s == name).ok_or_else(|| {
+                format!(
+                    "ci: unknown stage `{name}`; stages are {}",
+                    STAGES.join(", ")
+                )
+            })
+        })
+        .collect()
+}
+
+enum Outcome {
+    Passed,
+    Failed(String),
+    NotRun,
+}
+
+/// Runs the selected stages and prints the summary; fails if any stage failed.
+pub fn run(options: &Options) -> Result {
+    println!(
+        "xtask ci: stages {} (CI={})",
+        options.stages.join(", "),
+        std::env::var("CI").unwrap_or_default()
+    );
+    let mut results: Vec<(&str, Outcome, f64)> = Vec::new();
+    let mut stop = false;
+    for &stage in &options.stages {
+        if stop {
+            results.push((stage, Outcome::NotRun, 0.0));
+            continue;
+        }
+        println!("\n== stage: {stage}");
+        let start = Instant::now();
+        let result = run_stage(stage);
+        let secs = start.elapsed().as_secs_f64();
+        match result {
+            Ok(()) => {
+                println!("== stage: {stage} passed in {secs:.1} s");
+                results.push((stage, Outcome::Passed, secs));
+            }
+            Err(e) => {
+                println!("== stage: {stage} FAILED in {secs:.1} s\n{e}");
+                results.push((stage, Outcome::Failed(e), secs));
+                stop = !options.keep_going;
+            }
+        }
+    }
+
+    let passed = results
+        .iter()
+        .filter(|r| matches!(r.1, Outcome::Passed))
+        .count();
+    let failed = results
+        .iter()
+        .filter(|r| matches!(r.1, Outcome::Failed(_)))
+        .count();
+    let not_run = results
+        .iter()
+        .filter(|r| matches!(r.1, Outcome::NotRun))
+        .count();
+    println!("\n== summary");
+    println!("{:<14} {:<8} {:>9}", "stage", "result", "seconds");
+    for (stage, outcome, secs) in &results {
+        let (word, secs) = match outcome {
+            Outcome::Passed => ("pass", format!("{secs:.1}")),
+            Outcome::Failed(_) => ("FAIL", format!("{secs:.1}")),
+            Outcome::NotRun => ("not run", "-".into()),
+        };
+        println!("{stage:<14} {word:<8} {secs:>9}");
+    }
+    let total: f64 = results.iter().map(|r| r.2).sum();
+    println!("{:<14} {:<8} {total:>9.1}", "total", "");
+    if not_run == 0 {
+        println!("{passed} passed, {failed} failed");
+    } else {
+        println!("{passed} passed, {failed} failed, {not_run} not run");
+    }
+    if failed == 0 {
+        Ok(())
+    } else {
+        let first = results
+            .iter()
+            .find_map(|(stage, outcome, _)| match outcome {
+                Outcome::Failed(e) => Some(format!("stage `{stage}`: {e}")),
+                _ => None,
+            })
+            .unwrap_or_default();
+        Err(format!("{failed} stage(s) failed; first: {first}"))
+    }
+}
+
+fn run_stage(stage: &str) -> Result {
+    match stage {
+        "setup" => setup::run(),
+        "fmt" => Cmd::new("cargo").args(["fmt", "--all", "--check"]).run(),
+        "clippy" => Cmd::new("cargo")
+            .args([
+                "clippy",
+                "--workspace",
+                "--all-targets",
+                "--",
+                "-D",
+                "warnings",
+            ])
+            .run(),
+        "test" => Cmd::new("cargo").args(["test", "--workspace"]).run(),
+        "cross" => {
+            for target in ["thumbv7em-none-eabihf", "powerpc-unknown-linux-gnu"] {
+                Cmd::new("cargo")
+                    .args(["build", "-p", "cw-core", "--release", "--target", target])
+                    .run()?;
+            }
+            Ok(())
+        }
+        "miri" => {
+            let toolchain = format!("+{NIGHTLY}");
+            for target in [None, Some(MIRI_BIG_ENDIAN_TARGET)] {
+                let mut cmd = Cmd::new("cargo")
+                    .arg(&toolchain)
+                    .args(["miri", "test", "-p", "cw-core"])
+                    .env("MIRIFLAGS", "-Zmiri-disable-isolation")
+                    .env("BOLERO_RANDOM_ITERATIONS", MIRI_BOLERO_ITERATIONS);
+                if let Some(target) = target {
+                    // criterion, whose build needs a target C compiler, is a dev-dependency
+                    // of cw-core only off s390x (see core/Cargo.toml).
+                    cmd = cmd.args(["--target", target]);
+                }
+                // Per-test wall time, so slow harnesses under Miri are visible in the log.
+                cmd.args(["--", "-Zunstable-options", "--report-time"])
+                    .run()?;
+            }
+            Ok(())
+        }
+        "model" => Cmd::new("cargo")
+            .args(["run", "--release", "-p", "cw-proofs"])
+            .run(),
+        "differential" => differential::run(&differential::Options::default()),
+        "fuzz" => {
+            for target in FUZZ_TARGETS {
+                // libFuzzer engine (the default) with AddressSanitizer: needs the nightly.
+                // Build: `--profile fuzz` (defined in the workspace Cargo.toml), target dir
+                // `target/fuzz/build_<hash of RUSTFLAGS>`. Corpus: `<dir of the test
+                // file>/__fuzz__/<test path with :: as __>/corpus`, crashes beside it.
+                Cmd::new("cargo")
+                    .args([
+                        "bolero",
+                        "test",
+                        "--toolchain",
+                        NIGHTLY,
+                        "--engine",
+                        "libfuzzer",
+                    ])
+                    .args(["-p", "cw-fuzz", target, "-T", FUZZ_TIME])
+                    .run()?;
+            }
+            Ok(())
+        }
+        "bench" => {
+            println!("$ cargo xtask callgrind   (in-process)");
+            callgrind::run(&callgrind::Options::default())
+        }
+        other => Err(format!("no such stage `{other}`")),
+    }
+}

@@ -1,0 +1,94 @@
+//! Task runner of the workspace (`cargo xtask ...`, alias in `.cargo/config.toml`).
+//!
+//! - `cargo xtask ci [--only S,..] [--skip S,..] [--keep-going]`: every check, in order,
+//!   from installing the tools (`setup`) to the instruction counts (`bench`);
+//! - `cargo xtask differential [--cases N] [--seed S]`: the Com signal codec against
+//!   cantools on random layouts, values and PDU lengths;
+//! - `cargo xtask callgrind`: instructions per call of the codec and scheduler probes.
+//!
+//! Every command the runner starts is printed first, prefixed with `$`. Child processes get
+//! no stdin, so the runner behaves the same in a terminal and under `CI=true`.
+
+mod callgrind;
+mod ci;
+mod differential;
+mod json;
+mod process;
+mod rng;
+mod setup;
+
+use std::process::ExitCode;
+
+/// What went wrong, in words meant for the person reading the CI log.
+pub type Error = String;
+/// Result of a task.
+pub type Result<T = ()> = std::result::Result<T, Error>;
+
+const USAGE: &str = "\
+usage: cargo xtask <command> [options]
+
+commands:
+  ci [--only STAGE[,STAGE..]] [--skip STAGE[,STAGE..]] [--keep-going]
+        run the checks in order; stages: setup, fmt, clippy, test, cross, miri, model,
+        differential, fuzz, bench. Stops at the first failing stage unless --keep-going.
+  differential [--cases N] [--seed SEED]
+        compare the Com signal codec with cantools on N random cases (default 20000)
+  callgrind [--binary PATH]
+        count instructions per call of each probe in core/examples/callgrind_probe.rs
+        (built in release), or in a prebuilt probe binary taking `<op> <iterations>`
+  setup
+        same as `ci --only setup`: install or check every tool the checks need
+  help
+        this text
+";
+
+fn main() -> ExitCode {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    match run(&args) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("\nxtask: error: {e}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+fn run(args: &[String]) -> Result {
+    let Some((command, rest)) = args.split_first() else {
+        print!("{USAGE}");
+        return Err("no command given".into());
+    };
+    match command.as_str() {
+        "ci" => ci::run(&ci::Options::parse(rest)?),
+        "setup" => {
+            no_options(rest)?;
+            ci::run(&ci::Options::parse(&["--only".into(), "setup".into()])?)
+        }
+        "differential" => differential::run(&differential::Options::parse(rest)?),
+        "callgrind" => callgrind::run(&callgrind::Options::parse(rest)?),
+        "help" | "--help" | "-h" => {
+            print!("{USAGE}");
+            Ok(())
+        }
+        other => {
+            print!("{USAGE}");
+            Err(format!("unknown command `{other}`"))
+        }
+    }
+}
+
+fn no_options(rest: &[String]) -> Result {
+    match rest.first() {
+        None => Ok(()),
+        Some(arg) => Err(format!(
+            "unexpected argument `{arg}`; see `cargo xtask help`"
+        )),
+    }
+}
+
+/// The value following an option such as `--cases`.
+fn option_value<'a>(name: &str, it: &mut impl Iterator<Item = &'a String>) -> Result<&'a str> {
+    it.next()
+        .map(String::as_str)
+        .ok_or_else(|| format!("option {name} needs a value"))
+}

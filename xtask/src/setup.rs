@@ -1,0 +1,262 @@
+//! The `setup` stage: check every tool the later stages use and install what is missing.
+//! Each check runs first, so a second run on a ready machine only reads versions.
+
+use crate::process::{root, Cmd};
+use crate::Result;
+use std::path::PathBuf;
+
+/// The pinned nightly used for Miri and the libFuzzer engine. `nightly-2026-05-20` is
+/// `rustc 1.97.0-nightly (e50aa6fba 2026-05-19)`: checked with
+/// `rustup toolchain install nightly-2026-05-20 --profile minimal` and `rustup run
+/// nightly-2026-05-20 rustc -V` (a dated channel carries the previous day's build).
+pub const NIGHTLY: &str = "nightly-2026-05-20";
+
+/// Components the pinned nightly needs (Miri, and the library sources Miri builds its
+/// sysroot from, for the host and for s390x).
+const NIGHTLY_COMPONENTS: &[&str] = &["miri", "rust-src"];
+
+/// Components of the default (stable) toolchain.
+const STABLE_COMPONENTS: &[&str] = &["rustfmt", "clippy"];
+
+/// Cross targets: the Cortex-M4F of the QEMU board, big-endian s390x for Miri, big-endian
+/// 32-bit PowerPC as the nearest rustup target to the MPC5748G (whose VLE encoding rustc
+/// cannot emit; see ARCHITECTURE.md §5).
+pub const TARGETS: &[&str] = &[
+    "thumbv7em-none-eabihf",
+    "s390x-unknown-linux-gnu",
+    "powerpc-unknown-linux-gnu",
+];
+
+/// The cargo-bolero version the fuzz stage is written against.
+pub const CARGO_BOLERO_VERSION: &str = "0.13.5";
+
+/// Python virtual environment for the cantools / python-can tools (gitignored).
+pub fn venv_dir() -> PathBuf {
+    root().join(".venv")
+}
+
+/// The venv's interpreter.
+pub fn venv_python() -> PathBuf {
+    venv_dir().join("bin").join("python")
+}
+
+/// Runs every check and installation of the `setup` stage.
+pub fn run() -> Result {
+    rustup_stable()?;
+    rustup_targets()?;
+    rustup_nightly()?;
+    cargo_bolero()?;
+    valgrind()?;
+    python_venv()?;
+    Ok(())
+}
+
+/// Names in `rustup ... list --installed` output (first word of each line).
+fn installed(list: &str) -> Vec<String> {
+    list.lines()
+        .filter_map(|l| l.split_whitespace().next())
+        .map(str::to_string)
+        .collect()
+}
+
+/// Whether a component named `name` (e.g. `miri` for `miri-x86_64-unknown-linux-gnu`) is
+/// in an installed-components list.
+fn has_component(installed: &[String], name: &str) -> bool {
+    installed
+        .iter()
+        .any(|c| c == name || c.starts_with(&format!("{name}-")))
+}
+
+fn rustup_stable() -> Result {
+    let list = installed(
+        &Cmd::new("rustup")
+            .args(["component", "list", "--installed"])
+            .read()?,
+    );
+    let missing: Vec<&str> = STABLE_COMPONENTS
+        .iter()
+        .copied()
+        .filter(|c| !has_component(&list, c))
+        .collect();
+    if missing.is_empty() {
+        println!("ok: components {} installed", STABLE_COMPONENTS.join(", "));
+        return Ok(());
+    }
+    Cmd::new("rustup")
+        .args(["component", "add"])
+        .args(STABLE_COMPONENTS)
+        .run()
+}
+
+fn rustup_targets() -> Result {
+    let list = installed(
+        &Cmd::new("rustup")
+            .args(["target", "list", "--installed"])
+            .read()?,
+    );
+    if TARGETS.iter().all(|t| list.iter().any(|i| i == t)) {
+        println!("ok: targets {} installed", TARGETS.join(", "));
+        return Ok(());
+    }
+    Cmd::new("rustup")
+        .args(["target", "add"])
+        .args(TARGETS)
+        .run()
+}
+
+fn rustup_nightly() -> Result {
+    let toolchains = installed(&Cmd::new("rustup").args(["toolchain", "list"]).read()?);
+    let present = toolchains
+        .iter()
+        .any(|t| t == NIGHTLY || t.starts_with(&format!("{NIGHTLY}-")));
+    let components_ok = present && {
+        let list = installed(
+            &Cmd::new("rustup")
+                .args(["component", "list", "--installed", "--toolchain", NIGHTLY])
+                .read()?,
+        );
+        NIGHTLY_COMPONENTS.iter().all(|c| has_component(&list, c))
+    };
+    if !components_ok {
+        Cmd::new("rustup")
+            .args([
+                "toolchain",
+                "install",
+                NIGHTLY,
+                "--profile",
+                "minimal",
+                "--component",
+            ])
+            .arg(NIGHTLY_COMPONENTS.join(","))
+            .run()?;
+    }
+    let version = Cmd::new("rustup")
+        .args(["run", NIGHTLY, "rustc", "-V"])
+        .read()?;
+    println!(
+        "ok: {NIGHTLY} is {} with {}",
+        version.trim(),
+        NIGHTLY_COMPONENTS.join(", ")
+    );
+    Ok(())
+}
+
+fn cargo_bolero() -> Result {
+    let wanted = format!("cargo-bolero {CARGO_BOLERO_VERSION}");
+    let out = Cmd::new("cargo").args(["bolero", "--version"]).capture()?;
+    let found = out.stdout.trim();
+    if out.success && found == wanted {
+        println!("ok: {found}");
+        return Ok(());
+    }
+    println!(
+        "cargo-bolero: wanted `{wanted}`, found {}",
+        if out.success {
+            format!("`{found}`")
+        } else {
+            "none".into()
+        }
+    );
+    Cmd::new("cargo")
+        .args([
+            "install",
+            "--locked",
+            "cargo-bolero",
+            "--version",
+            CARGO_BOLERO_VERSION,
+        ])
+        .run()?;
+    let found = Cmd::new("cargo").args(["bolero", "--version"]).read()?;
+    if found.trim() == wanted {
+        Ok(())
+    } else {
+        Err(format!(
+            "cargo-bolero: installed version {CARGO_BOLERO_VERSION} but `cargo bolero --version` says `{}` \
+             (is another cargo-bolero earlier on PATH?)",
+            found.trim()
+        ))
+    }
+}
+
+fn valgrind() -> Result {
+    let probe = Cmd::new("valgrind").arg("--version").capture();
+    if let Ok(out) = &probe {
+        if out.success {
+            println!("ok: {}", out.stdout.trim());
+            return Ok(());
+        }
+    }
+    let why = match probe {
+        Ok(out) => format!("`valgrind --version` failed: {}", out.stderr.trim()),
+        Err(e) => e,
+    };
+    let uid = Cmd::new("id").arg("-u").read().unwrap_or_default();
+    if uid.trim() != "0" {
+        return Err(format!(
+            "valgrind is missing ({why}); not running as root, so it cannot be installed here: \
+             install it (Debian/Ubuntu: `sudo apt-get install valgrind`) and run again"
+        ));
+    }
+    println!("valgrind missing ({why}); installing it with apt-get");
+    Cmd::new("apt-get")
+        .env("DEBIAN_FRONTEND", "noninteractive")
+        .arg("update")
+        .run()
+        .map_err(|e| format!("installing valgrind: {e}"))?;
+    Cmd::new("apt-get")
+        .env("DEBIAN_FRONTEND", "noninteractive")
+        .args(["install", "-y", "valgrind"])
+        .run()
+        .map_err(|e| format!("installing valgrind: {e}"))?;
+    let version = Cmd::new("valgrind").arg("--version").read()?;
+    println!("ok: {}", version.trim());
+    Ok(())
+}
+
+fn python_venv() -> Result {
+    let requirements_path = root().join("tools").join("requirements.txt");
+    let requirements = std::fs::read_to_string(&requirements_path)
+        .map_err(|e| format!("reading {}: {e}", requirements_path.display()))?;
+    let python = venv_python();
+    let stamp = venv_dir().join(".xtask-requirements.txt");
+    let up_to_date =
+        python.exists() && std::fs::read_to_string(&stamp).is_ok_and(|s| s == requirements);
+    if up_to_date {
+        // The stamp says pip installed exactly these pins; make sure they still import.
+        let check = Cmd::new(&python)
+            .args(["-c", "import cantools, can; print('cantools', cantools.__version__, '/ python-can', can.__version__)"])
+            .capture()?;
+        if check.success {
+            println!("ok: .venv has {}", check.stdout.trim());
+            return Ok(());
+        }
+        println!(
+            "the .venv does not import cantools/can any more; reinstalling:\n{}",
+            check.stderr
+        );
+    }
+    if !python.exists() {
+        Cmd::new("python3")
+            .args(["-m", "venv"])
+            .arg(venv_dir())
+            .run()
+            .map_err(|e| {
+                format!("{e}\n(on Debian/Ubuntu `python3 -m venv` needs the python3-venv package)")
+            })?;
+    }
+    Cmd::new(&python)
+        .args([
+            "-m",
+            "pip",
+            "install",
+            "--disable-pip-version-check",
+            "--no-input",
+            "-r",
+        ])
+        .arg(&requirements_path)
+        .run()?;
+    Cmd::new(&python)
+        .args(["-c", "import cantools, can; print('cantools', cantools.__version__, '/ python-can', can.__version__)"])
+        .run()?;
+    std::fs::write(&stamp, requirements).map_err(|e| format!("writing {}: {e}", stamp.display()))
+}
