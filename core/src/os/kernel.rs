@@ -666,21 +666,26 @@ impl<const T: usize, const R: usize, const C: usize, const A: usize, const Q: us
 
     // ---- resources (OSEK §13.4) ---------------------------------------------------------
 
+    /// The checks `GetResource` and `ReleaseResource` share: `E_OS_ID` for an unknown
+    /// resource, `E_OS_ACCESS` when the caller's static priority is above the ceiling (an
+    /// ISR's always is). Returns the calling task and the ceiling.
+    fn resource_caller(&self, res: ResourceId) -> Result<(usize, u8), OsError> {
+        let ceiling = self.ceiling(res).ok_or(OsError::Id)?;
+        match self.caller() {
+            Caller::Task(t) if self.base_prio(t) <= ceiling => Ok((t, ceiling)),
+            _ => Err(OsError::Access),
+        }
+    }
+
     /// `GetResource`: takes a resource, raising the caller to its ceiling.
     ///
     /// # Errors
     /// `E_OS_ID` invalid resource; `E_OS_ACCESS` the resource is occupied, or the caller's
     /// static priority is above its ceiling (always so at interrupt level).
     pub fn get_resource(&mut self, res: ResourceId) -> Result<(), OsError> {
-        let ceiling = self.ceiling(res).ok_or(OsError::Id)?;
-        let Caller::Task(t) = self.caller() else {
-            return Err(OsError::Access);
-        };
+        let (t, ceiling) = self.resource_caller(res)?;
         let running_prio = self.running_prio;
         let top = self.res_top[t];
-        if self.base_prio(t) > ceiling {
-            return Err(OsError::Access);
-        }
         let state = self.res_state_mut(res)?;
         if state.owner != NONE {
             return Err(OsError::Access);
@@ -706,13 +711,7 @@ impl<const T: usize, const R: usize, const C: usize, const A: usize, const Q: us
     /// ceiling (always so at interrupt level); `E_OS_NOFUNC` the caller does not hold it, or
     /// another resource must be released first.
     pub fn release_resource(&mut self, res: ResourceId) -> Result<(), OsError> {
-        let ceiling = self.ceiling(res).ok_or(OsError::Id)?;
-        let Caller::Task(t) = self.caller() else {
-            return Err(OsError::Access);
-        };
-        if self.base_prio(t) > ceiling {
-            return Err(OsError::Access);
-        }
+        let (t, _) = self.resource_caller(res)?;
         if self.res_top[t] != res.0 {
             return Err(OsError::NoFunc);
         }
