@@ -10,7 +10,9 @@
 //! - [`com::signal`]: the AUTOSAR Com signal codec (Intel and Motorola byte order, DBC
 //!   start-bit convention, signed and unsigned, PDUs up to 64 bytes);
 //! - [`os`]: an OSEK/VDX OS 2.2.3 scheduler state machine (tasks, events, resources with
-//!   immediate priority ceiling, counters and alarms).
+//!   immediate priority ceiling, counters and alarms);
+//! - [`can`] and [`canif`]: the CAN driver interface and the CAN Interface layer (transmit
+//!   with buffering, receive checks, controller and PDU modes, bus-off).
 //!
 //! Every kernel has a `spec` module of named, pure predicates. The same predicates are
 //! executed by the bolero harnesses beside the code (`cargo test`), by the fuzz targets
@@ -25,6 +27,8 @@
     warn(clippy::unwrap_used, clippy::expect_used, clippy::panic)
 )]
 
+pub mod can;
+pub mod canif;
 pub mod com;
 pub mod os;
 pub mod sonar;

@@ -1,0 +1,242 @@
+//! The CAN driver interface as the communication stack sees it (AUTOSAR SWS Can:
+//! `Can_Write`, `Can_SetControllerMode`, and the callbacks into CanIf). Boards implement
+//! [`CanDriver`]; the stack never touches a controller otherwise.
+//!
+//! Frames are classic CAN (up to 8 data bytes) and implement [`embedded_can::Frame`], so
+//! board crates and host tools share one vocabulary. [`CanId`] is a `const`-constructible
+//! identifier for static configuration tables; it converts to and from
+//! [`embedded_can::Id`].
+
+use embedded_can::{ExtendedId, Id, StandardId};
+
+/// A CAN identifier usable in `const` tables: 11-bit standard or 29-bit extended.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct CanId {
+    /// `raw | EXTENDED_FLAG` for extended ids: one number that orders and looks up both.
+    key: u32,
+}
+
+const EXTENDED_FLAG: u32 = 1 << 31;
+
+impl CanId {
+    /// An 11-bit standard identifier, `None` above `0x7FF`.
+    pub const fn standard(raw: u16) -> Option<Self> {
+        if raw > 0x7FF {
+            None
+        } else {
+            Some(Self { key: raw as u32 })
+        }
+    }
+
+    /// A 29-bit extended identifier, `None` above `0x1FFF_FFFF`.
+    pub const fn extended(raw: u32) -> Option<Self> {
+        if raw > 0x1FFF_FFFF {
+            None
+        } else {
+            Some(Self {
+                key: raw | EXTENDED_FLAG,
+            })
+        }
+    }
+
+    /// Whether this is a 29-bit identifier.
+    pub const fn is_extended(self) -> bool {
+        self.key & EXTENDED_FLAG != 0
+    }
+
+    /// The identifier's numeric value (without the standard/extended distinction).
+    pub const fn raw(self) -> u32 {
+        self.key & !EXTENDED_FLAG
+    }
+
+    /// A single number that distinguishes standard from extended ids, for lookups.
+    pub const fn key(self) -> u32 {
+        self.key
+    }
+}
+
+impl From<CanId> for Id {
+    fn from(id: CanId) -> Self {
+        if id.is_extended() {
+            ExtendedId::new(id.raw()).map_or(Id::Extended(ExtendedId::MAX), Id::Extended)
+        } else {
+            StandardId::new(id.raw() as u16).map_or(Id::Standard(StandardId::MAX), Id::Standard)
+        }
+    }
+}
+
+impl From<Id> for CanId {
+    fn from(id: Id) -> Self {
+        match id {
+            Id::Standard(s) => Self {
+                key: u32::from(s.as_raw()),
+            },
+            Id::Extended(e) => Self {
+                key: e.as_raw() | EXTENDED_FLAG,
+            },
+        }
+    }
+}
+
+/// A classic CAN data frame: identifier, DLC 0..=8 and the data bytes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub struct CanFrame {
+    id: CanId,
+    dlc: u8,
+    data: [u8; 8],
+}
+
+impl CanFrame {
+    /// A data frame; `None` if `data` is longer than 8 bytes.
+    pub fn from_parts(id: CanId, data: &[u8]) -> Option<Self> {
+        if data.len() > 8 {
+            return None;
+        }
+        let mut bytes = [0u8; 8];
+        bytes[..data.len()].copy_from_slice(data);
+        Some(Self {
+            id,
+            dlc: data.len() as u8,
+            data: bytes,
+        })
+    }
+
+    /// The identifier.
+    pub const fn can_id(&self) -> CanId {
+        self.id
+    }
+
+    /// The data length code (0..=8).
+    pub const fn len(&self) -> u8 {
+        self.dlc
+    }
+
+    /// Whether the frame carries no data.
+    pub const fn is_empty(&self) -> bool {
+        self.dlc == 0
+    }
+
+    /// The data bytes (`len()` of them).
+    pub fn bytes(&self) -> &[u8] {
+        &self.data[..usize::from(self.dlc.min(8))]
+    }
+}
+
+impl embedded_can::Frame for CanFrame {
+    fn new(id: impl Into<Id>, data: &[u8]) -> Option<Self> {
+        Self::from_parts(CanId::from(id.into()), data)
+    }
+
+    /// Remote frames are not used by this ECU: always `None`.
+    fn new_remote(_id: impl Into<Id>, _dlc: usize) -> Option<Self> {
+        None
+    }
+
+    fn is_extended(&self) -> bool {
+        self.id.is_extended()
+    }
+
+    fn is_remote_frame(&self) -> bool {
+        false
+    }
+
+    fn id(&self) -> Id {
+        self.id.into()
+    }
+
+    fn dlc(&self) -> usize {
+        usize::from(self.dlc)
+    }
+
+    fn data(&self) -> &[u8] {
+        self.bytes()
+    }
+}
+
+/// A hardware transmit handle: one transmit mailbox (or group) of the controller.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct Hth(pub u8);
+
+/// A hardware receive handle: one receive mailbox (or filter group) of the controller.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct Hrh(pub u8);
+
+/// `Can_Write` found the mailbox occupied (`CAN_BUSY`): nothing was sent or lost, the
+/// caller keeps the frame.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct CanBusy;
+
+/// Controller states (AUTOSAR `Can_ControllerStateType`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum ControllerMode {
+    /// Not participating in the bus; mailboxes idle.
+    Stopped,
+    /// Participating in the bus.
+    Started,
+    /// Low power.
+    Sleep,
+}
+
+/// A controller refused a mode change (e.g. sleep to started directly).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct ModeRefused;
+
+/// What the stack needs from a CAN controller driver.
+pub trait CanDriver {
+    /// `Can_Write`: puts `frame` into a free mailbox of `hth`. `pdu` is the stack's handle,
+    /// handed back with the transmit confirmation.
+    ///
+    /// # Errors
+    /// [`CanBusy`] when no mailbox of `hth` is free.
+    fn write(&mut self, hth: Hth, pdu: u16, frame: &CanFrame) -> Result<(), CanBusy>;
+
+    /// `Can_SetControllerMode`.
+    ///
+    /// # Errors
+    /// [`ModeRefused`] for a transition the controller does not allow.
+    fn set_controller_mode(&mut self, mode: ControllerMode) -> Result<(), ModeRefused>;
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use embedded_can::Frame;
+
+    #[test]
+    fn ids_convert_both_ways_and_keep_their_kind() {
+        for raw in [0u16, 0x100, 0x7FF] {
+            let Some(id) = CanId::standard(raw) else {
+                panic!("valid id refused")
+            };
+            assert!(!id.is_extended());
+            assert_eq!(CanId::from(Id::from(id)), id);
+            assert_eq!(id.raw(), u32::from(raw));
+        }
+        let Some(ext) = CanId::extended(0x100) else {
+            panic!("valid id refused")
+        };
+        assert_ne!(
+            CanId::standard(0x100),
+            Some(ext),
+            "0x100 standard is not 0x100 extended"
+        );
+        assert_eq!(CanId::from(Id::from(ext)), ext);
+        assert_eq!(CanId::standard(0x800), None);
+        assert_eq!(CanId::extended(0x2000_0000), None);
+    }
+
+    #[test]
+    fn frames_hold_at_most_eight_bytes() {
+        let Some(id) = CanId::standard(0x123) else {
+            panic!("valid id refused")
+        };
+        let Some(frame) = CanFrame::from_parts(id, &[1, 2, 3]) else {
+            panic!("3 bytes refused")
+        };
+        assert_eq!(frame.dlc(), 3);
+        assert_eq!(frame.data(), &[1, 2, 3]);
+        assert!(frame.is_standard() && frame.is_data_frame());
+        assert_eq!(CanFrame::from_parts(id, &[0; 9]), None);
+        assert!(CanFrame::new_remote(StandardId::ZERO, 1).is_none());
+    }
+}

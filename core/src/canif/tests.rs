@@ -1,0 +1,306 @@
+//! CanIf against a recording driver: transmit, buffering when busy, transmit confirmation,
+//! the receive checks, modes and bus-off.
+extern crate std;
+
+use super::*;
+use std::vec::Vec;
+
+const fn id(raw: u16) -> CanId {
+    match CanId::standard(raw) {
+        Some(id) => id,
+        None => panic!("test id out of range"),
+    }
+}
+
+static CFG: CanIfConfig<3, 3> = match CanIfConfig::new(
+    [
+        TxPduConfig {
+            name: "Distance",
+            id: id(0x100),
+            dlc: 8,
+            hth: Hth(0),
+        },
+        TxPduConfig {
+            name: "Status",
+            id: id(0x080),
+            dlc: 2,
+            hth: Hth(0),
+        },
+        TxPduConfig {
+            name: "Other",
+            id: id(0x300),
+            dlc: 8,
+            hth: Hth(1),
+        },
+    ],
+    [
+        RxPduConfig {
+            name: "Cmd",
+            id: id(0x200),
+            dlc: 4,
+            hrh: Hrh(0),
+        },
+        RxPduConfig {
+            name: "Time",
+            id: id(0x050),
+            dlc: 8,
+            hrh: Hrh(0),
+        },
+        RxPduConfig {
+            name: "Diag",
+            id: id(0x7DF),
+            dlc: 8,
+            hrh: Hrh(1),
+        },
+    ],
+) {
+    Ok(cfg) => cfg,
+    Err(e) => panic!("{}", e.describe()),
+};
+
+#[derive(Default)]
+struct Recorder {
+    busy: bool,
+    written: Vec<(Hth, u16, CanFrame)>,
+    mode: Option<ControllerMode>,
+}
+
+impl CanDriver for Recorder {
+    fn write(&mut self, hth: Hth, pdu: u16, frame: &CanFrame) -> Result<(), CanBusy> {
+        if self.busy {
+            return Err(CanBusy);
+        }
+        self.written.push((hth, pdu, *frame));
+        Ok(())
+    }
+
+    fn set_controller_mode(&mut self, mode: ControllerMode) -> Result<(), ModeRefused> {
+        if self.mode == Some(ControllerMode::Sleep) && mode == ControllerMode::Started {
+            return Err(ModeRefused);
+        }
+        self.mode = Some(mode);
+        Ok(())
+    }
+}
+
+fn online() -> (CanIf<3, 3>, Recorder) {
+    let mut canif = CanIf::new(&CFG);
+    let mut can = Recorder::default();
+    assert_eq!(
+        canif.set_controller_mode(&mut can, ControllerMode::Started),
+        Ok(())
+    );
+    canif.set_pdu_mode(PduMode::Online);
+    (canif, can)
+}
+
+fn frame(raw: u16, data: &[u8]) -> CanFrame {
+    match CanFrame::from_parts(id(raw), data) {
+        Some(f) => f,
+        None => panic!("test frame too long"),
+    }
+}
+
+#[test]
+fn configuration_rules() {
+    assert_eq!(CFG.rx_pdu_for(id(0x050)), Some(RxPduId(1)));
+    assert_eq!(CFG.rx_pdu_for(id(0x200)), Some(RxPduId(0)));
+    assert_eq!(CFG.rx_pdu_for(id(0x7DF)), Some(RxPduId(2)));
+    assert_eq!(CFG.rx_pdu_for(id(0x201)), None);
+    let rx = |raw, dlc| RxPduConfig {
+        name: "r",
+        id: id(raw),
+        dlc,
+        hrh: Hrh(0),
+    };
+    assert_eq!(
+        CanIfConfig::<0, 2>::new([], [rx(0x10, 8), rx(0x10, 8)]).err(),
+        Some(CanIfConfigError::DuplicateRxId { pdu: 1 })
+    );
+    assert_eq!(
+        CanIfConfig::<0, 1>::new([], [rx(0x10, 9)]).err(),
+        Some(CanIfConfigError::RxDlc { pdu: 0 })
+    );
+    let tx = TxPduConfig {
+        name: "t",
+        id: id(1),
+        dlc: 9,
+        hth: Hth(0),
+    };
+    assert_eq!(
+        CanIfConfig::<1, 0>::new([tx], []).err(),
+        Some(CanIfConfigError::TxDlc { pdu: 0 })
+    );
+}
+
+#[test]
+fn transmit_needs_a_started_controller_and_an_online_channel() {
+    let mut canif = CanIf::new(&CFG);
+    let mut can = Recorder::default();
+    assert_eq!(
+        canif.transmit(&mut can, TxPduId(0), &[1]),
+        Err(TransmitError::Offline)
+    );
+    assert_eq!(
+        canif.set_controller_mode(&mut can, ControllerMode::Started),
+        Ok(())
+    );
+    canif.set_pdu_mode(PduMode::TxOffline);
+    assert_eq!(
+        canif.transmit(&mut can, TxPduId(0), &[1]),
+        Err(TransmitError::Offline)
+    );
+    canif.set_pdu_mode(PduMode::Online);
+    assert_eq!(
+        canif.transmit(&mut can, TxPduId(9), &[1]),
+        Err(TransmitError::UnknownPdu)
+    );
+    assert_eq!(
+        canif.transmit(&mut can, TxPduId(1), &[1, 2, 3]),
+        Err(TransmitError::TooLong)
+    );
+    assert!(can.written.is_empty());
+    assert_eq!(
+        canif.transmit(&mut can, TxPduId(0), &[0xDC, 0x05, 0, 0, 0, 0, 0, 0]),
+        Ok(())
+    );
+    assert_eq!(
+        can.written,
+        [(Hth(0), 0, frame(0x100, &[0xDC, 0x05, 0, 0, 0, 0, 0, 0]))]
+    );
+}
+
+#[test]
+fn busy_mailbox_buffers_newest_data_and_confirmation_sends_highest_priority_first() {
+    let (mut canif, mut can) = online();
+    can.busy = true;
+    assert_eq!(canif.transmit(&mut can, TxPduId(0), &[1; 8]), Ok(()));
+    assert_eq!(canif.transmit(&mut can, TxPduId(0), &[2; 8]), Ok(()));
+    assert_eq!(canif.transmit(&mut can, TxPduId(1), &[3, 3]), Ok(()));
+    assert_eq!(canif.transmit(&mut can, TxPduId(2), &[4; 8]), Ok(()));
+    assert_eq!(canif.stats().tx_buffered, 4);
+    assert_eq!(canif.stats().tx_overwritten, 1);
+    assert!(can.written.is_empty());
+    can.busy = false;
+    // A confirmation on HTH 0 frees one mailbox: 0x080 (Status) outranks 0x100 (Distance).
+    assert_eq!(canif.tx_confirmation(&mut can, 0), Some(TxPduId(0)));
+    assert_eq!(can.written, [(Hth(0), 1, frame(0x080, &[3, 3]))]);
+    assert_eq!(canif.tx_confirmation(&mut can, 1), Some(TxPduId(1)));
+    assert_eq!(
+        can.written[1],
+        (Hth(0), 0, frame(0x100, &[2; 8])),
+        "newest data wins"
+    );
+    assert!(
+        canif.is_buffered(TxPduId(2)),
+        "HTH 1 has had no confirmation"
+    );
+    assert_eq!(canif.tx_confirmation(&mut can, 9), None);
+}
+
+#[test]
+fn receive_checks_drop_and_count_without_disturbing_anything() {
+    let (mut canif, _can) = online();
+    assert_eq!(
+        canif.rx_indication(Hrh(0), &frame(0x200, &[1, 2, 3, 4])),
+        Ok(RxPduId(0))
+    );
+    assert_eq!(
+        canif.rx_indication(Hrh(0), &frame(0x200, &[1, 2, 3, 4, 5])),
+        Ok(RxPduId(0))
+    );
+    assert_eq!(
+        canif.rx_indication(Hrh(0), &frame(0x201, &[0; 8])),
+        Err(RxDropped::UnknownId)
+    );
+    assert_eq!(
+        canif.rx_indication(Hrh(1), &frame(0x200, &[0; 8])),
+        Err(RxDropped::WrongHrh)
+    );
+    assert_eq!(
+        canif.rx_indication(Hrh(0), &frame(0x200, &[0; 3])),
+        Err(RxDropped::WrongDlc)
+    );
+    let stats = *canif.stats();
+    assert_eq!(
+        (stats.rx_unknown_id, stats.rx_wrong_hrh, stats.rx_wrong_dlc),
+        (1, 1, 1)
+    );
+    // Receive-only still receives; offline does not.
+    canif.set_pdu_mode(PduMode::TxOffline);
+    assert_eq!(
+        canif.rx_indication(Hrh(1), &frame(0x7DF, &[0; 8])),
+        Ok(RxPduId(2))
+    );
+    canif.set_pdu_mode(PduMode::Offline);
+    assert_eq!(
+        canif.rx_indication(Hrh(1), &frame(0x7DF, &[0; 8])),
+        Err(RxDropped::Offline)
+    );
+}
+
+#[test]
+fn bus_off_stops_the_controller_and_discards_buffers() {
+    let (mut canif, mut can) = online();
+    can.busy = true;
+    assert_eq!(canif.transmit(&mut can, TxPduId(0), &[1; 8]), Ok(()));
+    canif.controller_bus_off();
+    assert_eq!(canif.controller_mode(), ControllerMode::Stopped);
+    assert!(!canif.is_buffered(TxPduId(0)));
+    assert_eq!(canif.stats().tx_discarded, 1);
+    assert_eq!(
+        canif.transmit(&mut can, TxPduId(0), &[1; 8]),
+        Err(TransmitError::Offline)
+    );
+    // Recovery: started again, frames flow.
+    can.busy = false;
+    assert_eq!(
+        canif.set_controller_mode(&mut can, ControllerMode::Started),
+        Ok(())
+    );
+    assert_eq!(canif.transmit(&mut can, TxPduId(0), &[5; 8]), Ok(()));
+    assert_eq!(can.written.len(), 1);
+    // A refused mode change leaves the mode as it was.
+    assert_eq!(
+        canif.set_controller_mode(&mut can, ControllerMode::Sleep),
+        Ok(())
+    );
+    assert_eq!(
+        canif.set_controller_mode(&mut can, ControllerMode::Started),
+        Err(ModeRefused)
+    );
+    assert_eq!(canif.controller_mode(), ControllerMode::Sleep);
+}
+
+/// Any frame on any mailbox: accepted exactly when id, HRH and DLC match the table, and
+/// every drop is counted once.
+#[test]
+#[cfg_attr(kani, kani::proof, kani::unwind(9))]
+fn any_frame_is_accepted_or_dropped_and_counted() {
+    bolero::check!()
+        .with_type::<(u16, u8, u8, [u8; 8])>()
+        .cloned()
+        .for_each(|(raw, hrh, len, data)| {
+            let (mut canif, _) = online();
+            let f = frame(raw & 0x7FF, &data[..usize::from(len % 9)]);
+            let before = *canif.stats();
+            let verdict = canif.rx_indication(Hrh(hrh % 3), &f);
+            let after = *canif.stats();
+            let drops =
+                |s: &CanIfStats| s.rx_unknown_id + s.rx_wrong_hrh + s.rx_wrong_dlc + s.rx_offline;
+            let expected = CFG
+                .rx()
+                .iter()
+                .position(|p| p.id == f.can_id())
+                .map(|i| (i, CFG.rx()[i]));
+            match (verdict, expected) {
+                (Ok(pdu), Some((i, cfg))) => {
+                    assert_eq!(usize::from(pdu.0), i);
+                    assert!(cfg.hrh == Hrh(hrh % 3) && f.len() >= cfg.dlc);
+                    assert_eq!(drops(&after), drops(&before));
+                }
+                (Err(_), _) => assert_eq!(drops(&after), drops(&before) + 1),
+                (Ok(_), None) => panic!("a frame with an unconfigured id was accepted"),
+            }
+        });
+}
