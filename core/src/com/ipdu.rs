@@ -1,0 +1,854 @@
+//! Com I-PDUs and signals (AUTOSAR SWS COM): `Com_SendSignal`, `Com_ReceiveSignal`,
+//! `Com_InvalidateSignal`, `Com_RxIndication`, `Com_TxConfirmation`, `Com_MainFunctionTx`
+//! and `Com_MainFunctionRx`.
+//!
+//! Transmission modes (`ComTxModeMode`): periodic, direct (with `ComTxModeNumberOfRepetitions`
+//! and repetition period), mixed, none; signal transfer properties: pending, triggered,
+//! triggered on change, and their "without repetition" variants; the minimum delay time
+//! (MDT) between two transmissions of an I-PDU applies to every transmission. A triggered
+//! transmission is sent at once from `send_signal` when the MDT allows it (so the
+//! SWC-to-mailbox path is one call chain), and otherwise at the MDT's expiry.
+//!
+//! Reception: update bits (a signal whose update bit is clear is not taken over), deadline
+//! monitoring per I-PDU with replace-by-init of its signals and a timeout notification,
+//! and the invalidation value (`receive_signal` reports [`ComError::Invalid`]).
+//!
+//! Time: the main functions run every `main_period_ms` (configuration); every time in
+//! the tables is converted to main-function cycles when the configuration is built.
+//!
+//! Main-function cost: pending work sits in a timer wheel of [`WHEEL`] slots, one linked
+//! list per slot; a main function looks only at the slot of the current cycle, so an I-PDU
+//! with nothing due costs nothing. A reception does not move its I-PDU in the wheel: the
+//! stale entry is re-filed when its slot comes up (lazy deadline reset).
+
+use super::signal::{SignalLayout, SignalValue, Signedness};
+
+/// Slots of the timer wheel (a power of two). Deadlines further away than this many
+/// cycles wait in their slot for another turn.
+pub const WHEEL: usize = 64;
+const NIL: u8 = u8::MAX;
+
+/// A transmitted I-PDU of Com.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct TxIpduId(pub u16);
+/// A received I-PDU of Com.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct RxIpduId(pub u16);
+/// A Com signal.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct SignalId(pub u16);
+
+/// `ComTxModeMode` with its timing, in milliseconds.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum TxMode {
+    /// Never sent by Com itself (`NONE`).
+    None,
+    /// Sent every `period_ms`, first after `offset_ms`.
+    Periodic {
+        /// Cycle time.
+        period_ms: u32,
+        /// First transmission after start.
+        offset_ms: u32,
+    },
+    /// Sent when a triggering signal is written, then repeated `repetitions` times every
+    /// `repetition_period_ms`.
+    Direct {
+        /// Additional transmissions after the first.
+        repetitions: u8,
+        /// Time between repetitions.
+        repetition_period_ms: u32,
+    },
+    /// Periodic and direct together.
+    Mixed {
+        /// Cycle time.
+        period_ms: u32,
+        /// First periodic transmission after start.
+        offset_ms: u32,
+        /// Additional direct transmissions after the first.
+        repetitions: u8,
+        /// Time between repetitions.
+        repetition_period_ms: u32,
+    },
+}
+
+/// `ComTransferProperty` of a transmitted signal.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum TransferProperty {
+    /// Writing never triggers a transmission.
+    Pending,
+    /// Every write triggers a transmission (with repetitions).
+    Triggered,
+    /// A write that changes the value triggers a transmission (with repetitions).
+    TriggeredOnChange,
+    /// Every write triggers one transmission, no repetitions.
+    TriggeredWithoutRepetition,
+    /// A changing write triggers one transmission, no repetitions.
+    TriggeredOnChangeWithoutRepetition,
+}
+
+/// A transmitted I-PDU.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub struct TxIpduConfig {
+    /// Name, for traces.
+    pub name: &'static str,
+    /// Length in bytes.
+    pub len: u8,
+    /// Transmission mode.
+    pub mode: TxMode,
+    /// Minimum delay between two transmissions, ms (0: none).
+    pub mdt_ms: u32,
+}
+
+/// A received I-PDU.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub struct RxIpduConfig {
+    /// Name, for traces.
+    pub name: &'static str,
+    /// Length in bytes.
+    pub len: u8,
+    /// Reception deadline, ms (0: not monitored).
+    pub deadline_ms: u32,
+}
+
+/// Where a signal lives and how it behaves.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum SignalDirection {
+    /// Sent in this I-PDU, with this transfer property.
+    Tx(TxIpduId, TransferProperty),
+    /// Received in this I-PDU.
+    Rx(RxIpduId),
+}
+
+/// One signal.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub struct SignalConfig<const N: usize> {
+    /// Name, for traces.
+    pub name: &'static str,
+    /// Direction and I-PDU.
+    pub direction: SignalDirection,
+    /// Position in the I-PDU.
+    pub layout: SignalLayout<N>,
+    /// Initial raw value (and the replacement on a reception timeout).
+    pub init: u64,
+    /// Raw value that means "invalid", if any.
+    pub invalid: Option<u64>,
+    /// Bit position (DBC numbering) of the signal's update bit, if any.
+    pub update_bit: Option<u16>,
+}
+
+/// A broken configuration rule, naming the table and entry.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ComConfigError {
+    /// A table holds more than 254 entries, or the main period is 0.
+    Limits,
+    /// An I-PDU is longer than the PDU type `N` or empty.
+    IpduLength {
+        /// Index of the I-PDU (TX table first, then RX).
+        ipdu: u16,
+    },
+    /// A time is not a whole, non-zero number of main-function periods where one is needed.
+    Timing {
+        /// Index of the I-PDU (TX table first, then RX).
+        ipdu: u16,
+    },
+    /// A signal names a missing I-PDU, lies beyond its I-PDU's length, its update bit
+    /// overlaps it or lies outside, or its init/invalid values do not fit.
+    Signal {
+        /// Index of the signal.
+        signal: u16,
+    },
+}
+
+impl ComConfigError {
+    /// A sentence describing the broken rule.
+    pub const fn describe(&self) -> &'static str {
+        match self {
+            Self::Limits => "more than 254 Com I-PDUs or signals, or a zero main period",
+            Self::IpduLength { .. } => "a Com I-PDU is empty or longer than the PDU type",
+            Self::Timing { .. } => {
+                "a Com time is not a whole, non-zero number of main-function periods"
+            }
+            Self::Signal { .. } => {
+                "a Com signal does not fit its I-PDU, or its update bit or values are wrong"
+            }
+        }
+    }
+}
+
+/// Timing of one TX I-PDU in main-function cycles.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+struct TxTiming {
+    period: u32,
+    offset: u32,
+    repetitions: u8,
+    repetition_period: u32,
+    direct: bool,
+    mdt: u32,
+}
+
+/// Validated Com configuration for `N`-byte PDUs: `TX`/`RX` I-PDUs and `S` signals.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub struct ComConfig<const N: usize, const TX: usize, const RX: usize, const S: usize> {
+    tx: [TxIpduConfig; TX],
+    rx: [RxIpduConfig; RX],
+    signals: [SignalConfig<N>; S],
+    main_period_ms: u32,
+    tx_timing: [TxTiming; TX],
+    rx_deadline: [u32; RX],
+    /// Derived: whether any signal of an RX I-PDU has an update bit.
+    rx_update_bits: [bool; RX],
+}
+
+const fn cycles(ms: u32, period_ms: u32) -> Option<u32> {
+    if ms % period_ms == 0 {
+        Some(ms / period_ms)
+    } else {
+        None
+    }
+}
+
+const fn fits(value: u64, mask: u64) -> bool {
+    value & !mask == 0
+}
+
+impl<const N: usize, const TX: usize, const RX: usize, const S: usize> ComConfig<N, TX, RX, S> {
+    /// Validates the tables and converts times to main-function cycles.
+    ///
+    /// # Errors
+    /// The first [`ComConfigError`] found.
+    pub const fn new(
+        main_period_ms: u32,
+        tx: [TxIpduConfig; TX],
+        rx: [RxIpduConfig; RX],
+        signals: [SignalConfig<N>; S],
+    ) -> Result<Self, ComConfigError> {
+        if TX > 254 || RX > 254 || S > 254 || main_period_ms == 0 {
+            return Err(ComConfigError::Limits);
+        }
+        let mut tx_timing = [TxTiming {
+            period: 0,
+            offset: 0,
+            repetitions: 0,
+            repetition_period: 0,
+            direct: false,
+            mdt: 0,
+        }; TX];
+        let mut i = 0;
+        while i < TX {
+            let ipdu = i as u16;
+            if tx[i].len == 0 || tx[i].len as usize > N {
+                return Err(ComConfigError::IpduLength { ipdu });
+            }
+            let timing = &mut tx_timing[i];
+            let (period, offset, reps, rep_period, direct) = match tx[i].mode {
+                TxMode::None => (0, 0, 0, 0, false),
+                TxMode::Periodic {
+                    period_ms,
+                    offset_ms,
+                } => (period_ms, offset_ms, 0, 0, false),
+                TxMode::Direct {
+                    repetitions,
+                    repetition_period_ms,
+                } => (0, 0, repetitions, repetition_period_ms, true),
+                TxMode::Mixed {
+                    period_ms,
+                    offset_ms,
+                    repetitions,
+                    repetition_period_ms,
+                } => (
+                    period_ms,
+                    offset_ms,
+                    repetitions,
+                    repetition_period_ms,
+                    true,
+                ),
+            };
+            let (Some(p), Some(o), Some(r), Some(m)) = (
+                cycles(period, main_period_ms),
+                cycles(offset, main_period_ms),
+                cycles(rep_period, main_period_ms),
+                cycles(tx[i].mdt_ms, main_period_ms),
+            ) else {
+                return Err(ComConfigError::Timing { ipdu });
+            };
+            let periodic = !matches!(tx[i].mode, TxMode::None | TxMode::Direct { .. });
+            if (periodic && p == 0) || (reps > 0 && r == 0) {
+                return Err(ComConfigError::Timing { ipdu });
+            }
+            timing.period = p;
+            timing.offset = o;
+            timing.repetitions = reps;
+            timing.repetition_period = r;
+            timing.direct = direct;
+            timing.mdt = m;
+            i += 1;
+        }
+        let mut rx_deadline = [0u32; RX];
+        let mut i = 0;
+        while i < RX {
+            let ipdu = (TX + i) as u16;
+            if rx[i].len == 0 || rx[i].len as usize > N {
+                return Err(ComConfigError::IpduLength { ipdu });
+            }
+            match cycles(rx[i].deadline_ms, main_period_ms) {
+                Some(d) => rx_deadline[i] = d,
+                None => return Err(ComConfigError::Timing { ipdu }),
+            }
+            i += 1;
+        }
+        let mut rx_update_bits = [false; RX];
+        let mut s = 0;
+        while s < S {
+            let sig = &signals[s];
+            let err = Err(ComConfigError::Signal { signal: s as u16 });
+            let len = match sig.direction {
+                SignalDirection::Tx(id, _) if (id.0 as usize) < TX => tx[id.0 as usize].len,
+                SignalDirection::Rx(id) if (id.0 as usize) < RX => rx[id.0 as usize].len,
+                _ => return err,
+            };
+            if !super::signal::spec::layout_fits(
+                len as usize,
+                sig.layout.start_bit(),
+                sig.layout.length_bits(),
+                sig.layout.byte_order(),
+            ) {
+                return err;
+            }
+            let mask = sig.layout.mask();
+            if !fits(sig.init, mask) {
+                return err;
+            }
+            if let Some(invalid) = sig.invalid {
+                if !fits(invalid, mask) {
+                    return err;
+                }
+            }
+            if let Some(bit) = sig.update_bit {
+                if bit as usize >= len as usize * 8 {
+                    return err;
+                }
+                // The update bit must not be one of the signal's own bits.
+                let mut k = 0;
+                while k < sig.layout.length_bits() {
+                    let p = super::signal::spec::bit_position(
+                        sig.layout.start_bit(),
+                        sig.layout.length_bits(),
+                        sig.layout.byte_order(),
+                        k,
+                    );
+                    if p == bit as usize {
+                        return err;
+                    }
+                    k += 1;
+                }
+                if let SignalDirection::Rx(id) = sig.direction {
+                    rx_update_bits[id.0 as usize] = true;
+                }
+            }
+            s += 1;
+        }
+        Ok(Self {
+            tx,
+            rx,
+            signals,
+            main_period_ms,
+            tx_timing,
+            rx_deadline,
+            rx_update_bits,
+        })
+    }
+
+    /// The signal table.
+    pub const fn signals(&self) -> &[SignalConfig<N>; S] {
+        &self.signals
+    }
+
+    /// The TX I-PDU table.
+    pub const fn tx(&self) -> &[TxIpduConfig; TX] {
+        &self.tx
+    }
+
+    /// The RX I-PDU table.
+    pub const fn rx(&self) -> &[RxIpduConfig; RX] {
+        &self.rx
+    }
+
+    /// The main-function period, ms.
+    pub const fn main_period_ms(&self) -> u32 {
+        self.main_period_ms
+    }
+}
+
+/// Why a Com call was refused.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ComError {
+    /// No such signal, or the signal has the other direction.
+    UnknownSignal,
+    /// The value does not fit the signal.
+    OutOfRange,
+    /// The received value is the signal's invalidation value.
+    Invalid,
+    /// The signal has no invalidation value.
+    NoInvalidValue,
+}
+
+/// A timer wheel of `WHEEL` slots over `K` entries (I-PDUs): O(1) insert, and a main
+/// function visits only the entries filed in the current cycle's slot.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+struct Wheel<const K: usize> {
+    head: [u8; WHEEL],
+    next: [u8; K],
+    /// The cycle each filed entry is filed for.
+    filed_for: [Option<u32>; K],
+}
+
+impl<const K: usize> Wheel<K> {
+    const fn new() -> Self {
+        Self {
+            head: [NIL; WHEEL],
+            next: [NIL; K],
+            filed_for: [None; K],
+        }
+    }
+
+    /// Files entry `k` for cycle `due`. An entry already filed for the same or an earlier
+    /// cycle stays where it is (its slot re-files it when it comes up); one filed for a
+    /// later cycle is moved.
+    fn file(&mut self, k: usize, due: u32) {
+        if k >= K {
+            return;
+        }
+        if let Some(filed) = self.filed_for[k] {
+            if filed <= due {
+                return;
+            }
+            self.unlink(k, filed as usize % WHEEL);
+        }
+        let slot = due as usize % WHEEL;
+        self.next[k] = self.head[slot];
+        self.head[slot] = k as u8;
+        self.filed_for[k] = Some(due);
+    }
+
+    /// Removes entry `k` from the list of `slot`.
+    fn unlink(&mut self, k: usize, slot: usize) {
+        if self.head[slot] as usize == k {
+            self.head[slot] = self.next[k];
+        } else {
+            let mut node = self.head[slot] as usize;
+            while node < K {
+                if self.next[node] as usize == k {
+                    self.next[node] = self.next[k];
+                    break;
+                }
+                node = self.next[node] as usize;
+            }
+        }
+        self.filed_for[k] = None;
+    }
+
+    /// Detaches the current slot's list; the caller re-files what is not due yet.
+    fn take(&mut self, now: u32) -> u8 {
+        let slot = now as usize % WHEEL;
+        let list = self.head[slot];
+        self.head[slot] = NIL;
+        list
+    }
+
+    /// Next entry of a detached list, un-filing it.
+    fn pop(&mut self, list: &mut u8) -> Option<usize> {
+        let k = *list as usize;
+        if k >= K {
+            return None;
+        }
+        *list = self.next[k];
+        self.filed_for[k] = None;
+        Some(k)
+    }
+}
+
+/// The Com state for a configuration.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub struct Com<const N: usize, const TX: usize, const RX: usize, const S: usize> {
+    cfg: &'static ComConfig<N, TX, RX, S>,
+    tx_buf: [[u8; N]; TX],
+    rx_buf: [[u8; N]; RX],
+    /// Main-function calls so far: the current call is numbered `tx_now` (1-based), and a
+    /// write between calls happens at the time of the last call.
+    tx_now: u32,
+    rx_now: u32,
+    /// Next periodic transmission (cycle), per TX I-PDU.
+    tx_next_periodic: [u32; TX],
+    /// Repetitions still to send, and when the next is due.
+    tx_reps_left: [u8; TX],
+    tx_next_rep: [u32; TX],
+    /// A triggered transmission waiting for the MDT to expire.
+    tx_deferred: [bool; TX],
+    /// Cycle of the last transmission, or `None`.
+    tx_last: [Option<u32>; TX],
+    tx_wheel: Wheel<TX>,
+    /// Deadline (cycle) of each monitored RX I-PDU; timed-out flags.
+    rx_due: [u32; RX],
+    rx_timed_out: [bool; RX],
+    rx_wheel: Wheel<RX>,
+}
+
+impl<const N: usize, const TX: usize, const RX: usize, const S: usize> Com<N, TX, RX, S> {
+    /// `Com_Init`: every signal holds its init value; periodic I-PDUs start after their
+    /// offset; deadline monitoring starts now.
+    pub fn new(cfg: &'static ComConfig<N, TX, RX, S>) -> Self {
+        let mut com = Self {
+            cfg,
+            tx_buf: [[0; N]; TX],
+            rx_buf: [[0; N]; RX],
+            tx_now: 0,
+            rx_now: 0,
+            tx_next_periodic: [0; TX],
+            tx_reps_left: [0; TX],
+            tx_next_rep: [0; TX],
+            tx_deferred: [false; TX],
+            tx_last: [None; TX],
+            tx_wheel: Wheel::new(),
+            rx_due: [0; RX],
+            rx_timed_out: [false; RX],
+            rx_wheel: Wheel::new(),
+        };
+        for s in 0..S {
+            com.write_init(s);
+        }
+        for i in 0..TX {
+            let t = cfg.tx_timing[i];
+            if t.period > 0 {
+                // Offset 0: the first main function call (call number 1) transmits.
+                com.tx_next_periodic[i] = t.offset + 1;
+                com.tx_wheel.file(i, t.offset + 1);
+            }
+        }
+        for i in 0..RX {
+            let d = cfg.rx_deadline[i];
+            if d > 0 {
+                // Counted down by the main function: the d-th call without a reception.
+                com.rx_due[i] = d;
+                com.rx_wheel.file(i, d);
+            }
+        }
+        com
+    }
+
+    fn write_init(&mut self, s: usize) {
+        let sig = self.cfg.signals[s];
+        match sig.direction {
+            SignalDirection::Tx(id, _) => {
+                if let Some(buf) = self.tx_buf.get_mut(usize::from(id.0)) {
+                    sig.layout.pack_masked(buf, sig.init);
+                }
+            }
+            SignalDirection::Rx(id) => {
+                if let Some(buf) = self.rx_buf.get_mut(usize::from(id.0)) {
+                    sig.layout.pack_masked(buf, sig.init);
+                }
+            }
+        }
+    }
+
+    /// The current contents of a TX I-PDU (its configured length).
+    pub fn tx_ipdu(&self, id: TxIpduId) -> Option<&[u8]> {
+        let len = usize::from(self.cfg.tx.get(usize::from(id.0))?.len);
+        self.tx_buf.get(usize::from(id.0)).map(|b| &b[..len])
+    }
+
+    /// Whether an RX I-PDU's deadline expired since its last reception.
+    pub fn rx_timed_out(&self, id: RxIpduId) -> bool {
+        self.rx_timed_out
+            .get(usize::from(id.0))
+            .copied()
+            .unwrap_or(false)
+    }
+
+    /// `Com_SendSignal`: writes the value into its I-PDU and, if the transfer property and
+    /// the transmission mode say so, transmits through `transmit` now (or when the MDT
+    /// expires).
+    ///
+    /// # Errors
+    /// [`ComError::UnknownSignal`] or [`ComError::OutOfRange`]; nothing changes then.
+    #[inline]
+    pub fn send_signal(
+        &mut self,
+        signal: SignalId,
+        value: SignalValue,
+        transmit: impl FnMut(TxIpduId, &[u8]) -> bool,
+    ) -> Result<(), ComError> {
+        let sig = self
+            .cfg
+            .signals
+            .get(usize::from(signal.0))
+            .ok_or(ComError::UnknownSignal)?;
+        let SignalDirection::Tx(ipdu, property) = sig.direction else {
+            return Err(ComError::UnknownSignal);
+        };
+        let i = usize::from(ipdu.0);
+        let buf = self.tx_buf.get_mut(i).ok_or(ComError::UnknownSignal)?;
+        let old = sig.layout.unpack_raw(buf);
+        sig.layout
+            .pack(buf, value)
+            .map_err(|_| ComError::OutOfRange)?;
+        let changed = sig.layout.unpack_raw(buf) != old;
+        self.after_write(sig, i, property, changed, transmit);
+        Ok(())
+    }
+
+    /// `Com_InvalidateSignal`: writes the signal's invalidation value, with the same
+    /// transmission behaviour as a write.
+    ///
+    /// # Errors
+    /// [`ComError::UnknownSignal`] or [`ComError::NoInvalidValue`].
+    pub fn invalidate_signal(
+        &mut self,
+        signal: SignalId,
+        transmit: impl FnMut(TxIpduId, &[u8]) -> bool,
+    ) -> Result<(), ComError> {
+        let sig = self
+            .cfg
+            .signals
+            .get(usize::from(signal.0))
+            .ok_or(ComError::UnknownSignal)?;
+        let SignalDirection::Tx(ipdu, property) = sig.direction else {
+            return Err(ComError::UnknownSignal);
+        };
+        let invalid = sig.invalid.ok_or(ComError::NoInvalidValue)?;
+        let i = usize::from(ipdu.0);
+        let buf = self.tx_buf.get_mut(i).ok_or(ComError::UnknownSignal)?;
+        let changed = sig.layout.unpack_raw(buf) != invalid;
+        sig.layout.pack_masked(buf, invalid);
+        self.after_write(sig, i, property, changed, transmit);
+        Ok(())
+    }
+
+    #[inline(always)]
+    fn after_write(
+        &mut self,
+        sig: &SignalConfig<N>,
+        i: usize,
+        property: TransferProperty,
+        changed: bool,
+        transmit: impl FnMut(TxIpduId, &[u8]) -> bool,
+    ) {
+        if let Some(bit) = sig.update_bit {
+            set_bit(&mut self.tx_buf[i], bit, true);
+        }
+        let timing = self.cfg.tx_timing[i];
+        let (triggers, repeat) = match property {
+            TransferProperty::Pending => (false, false),
+            TransferProperty::Triggered => (true, true),
+            TransferProperty::TriggeredOnChange => (changed, true),
+            TransferProperty::TriggeredWithoutRepetition => (true, false),
+            TransferProperty::TriggeredOnChangeWithoutRepetition => (changed, false),
+        };
+        if triggers && timing.direct {
+            self.tx_reps_left[i] = if repeat { timing.repetitions } else { 0 };
+            self.request(i, transmit);
+        }
+    }
+
+    /// A triggered transmission of I-PDU `i`: now if the MDT allows, else at its expiry.
+    fn request(&mut self, i: usize, transmit: impl FnMut(TxIpduId, &[u8]) -> bool) {
+        let now = self.tx_now;
+        let mdt_end = self.mdt_end(i);
+        if now >= mdt_end {
+            self.send(i, transmit);
+            if self.tx_reps_left[i] > 0 {
+                self.tx_next_rep[i] = now + self.cfg.tx_timing[i].repetition_period;
+                self.tx_wheel.file(i, self.tx_next_rep[i]);
+            }
+        } else {
+            self.tx_deferred[i] = true;
+            self.tx_wheel.file(i, mdt_end);
+        }
+    }
+
+    fn mdt_end(&self, i: usize) -> u32 {
+        self.tx_last[i].map_or(0, |last| last + self.cfg.tx_timing[i].mdt)
+    }
+
+    /// Hands I-PDU `i` to the lower layer and clears its update bits.
+    fn send(&mut self, i: usize, mut transmit: impl FnMut(TxIpduId, &[u8]) -> bool) {
+        let len = usize::from(self.cfg.tx[i].len);
+        if transmit(TxIpduId(i as u16), &self.tx_buf[i][..len]) {
+            self.tx_last[i] = Some(self.tx_now);
+            for sig in self.cfg.signals.iter() {
+                if let (SignalDirection::Tx(id, _), Some(bit)) = (sig.direction, sig.update_bit) {
+                    if usize::from(id.0) == i {
+                        set_bit(&mut self.tx_buf[i], bit, false);
+                    }
+                }
+            }
+        }
+    }
+
+    /// `Com_MainFunctionTx`: one main-function period has passed; sends what is due
+    /// (periodic transmissions, repetitions, transmissions the MDT held back).
+    pub fn main_function_tx(&mut self, mut transmit: impl FnMut(TxIpduId, &[u8]) -> bool) {
+        self.tx_now = self.tx_now.wrapping_add(1);
+        let now = self.tx_now;
+        let mut list = self.tx_wheel.take(now);
+        while let Some(i) = self.tx_wheel.pop(&mut list) {
+            self.tx_due(i, now, &mut transmit);
+        }
+    }
+
+    fn tx_due(&mut self, i: usize, now: u32, transmit: &mut impl FnMut(TxIpduId, &[u8]) -> bool) {
+        let timing = self.cfg.tx_timing[i];
+        let periodic_due = timing.period > 0 && self.tx_next_periodic[i] <= now;
+        let rep_due = self.tx_reps_left[i] > 0 && self.tx_next_rep[i] <= now;
+        let deferred_due = self.tx_deferred[i];
+        if (periodic_due || rep_due || deferred_due) && now >= self.mdt_end(i) {
+            self.tx_deferred[i] = false;
+            if rep_due && !deferred_due {
+                self.tx_reps_left[i] -= 1;
+            }
+            self.send(i, &mut *transmit);
+            if periodic_due {
+                self.tx_next_periodic[i] = now + timing.period;
+            }
+            if self.tx_reps_left[i] > 0 && (rep_due || deferred_due) {
+                self.tx_next_rep[i] = now + timing.repetition_period;
+            }
+        } else if periodic_due || rep_due || deferred_due {
+            // Held back by the MDT: the periodic or repeated transmission happens at its end.
+            self.tx_deferred[i] = true;
+        }
+        // Re-file for the earliest pending event.
+        let mut next = u32::MAX;
+        if timing.period > 0 {
+            next = next.min(self.tx_next_periodic[i]);
+        }
+        if self.tx_reps_left[i] > 0 {
+            next = next.min(self.tx_next_rep[i]);
+        }
+        if self.tx_deferred[i] {
+            next = next.min(self.mdt_end(i).max(now + 1));
+        }
+        if next != u32::MAX {
+            self.tx_wheel.file(i, next.max(now + 1));
+        }
+    }
+
+    /// `Com_RxIndication`: an RX I-PDU arrived. Signals whose update bit is clear keep their
+    /// previous value; the deadline restarts.
+    #[inline]
+    pub fn rx_indication(&mut self, ipdu: RxIpduId, data: &[u8]) {
+        let i = usize::from(ipdu.0);
+        let Some(cfg) = self.cfg.rx.get(i) else {
+            return;
+        };
+        let len = usize::from(cfg.len).min(data.len());
+        if self.cfg.rx_update_bits[i] {
+            self.merge_updated(i, &data[..len]);
+        } else {
+            self.rx_buf[i][..len].copy_from_slice(&data[..len]);
+        }
+        self.rx_timed_out[i] = false;
+        let deadline = self.cfg.rx_deadline[i];
+        if deadline > 0 {
+            // The wheel entry stays where it is; its slot re-files it (lazy reset).
+            self.rx_due[i] = self.rx_now + deadline;
+        }
+    }
+
+    /// Takes over, from `data`, the signals of RX I-PDU `i` that have no update bit or
+    /// whose update bit is set.
+    fn merge_updated(&mut self, i: usize, data: &[u8]) {
+        let mut incoming = [0u8; N];
+        incoming[..data.len()].copy_from_slice(data);
+        for sig in self.cfg.signals.iter() {
+            if sig.direction != SignalDirection::Rx(RxIpduId(i as u16)) {
+                continue;
+            }
+            let take = sig.update_bit.is_none_or(|bit| get_bit(&incoming, bit));
+            if take {
+                let raw = sig.layout.unpack_raw(&incoming);
+                sig.layout.pack_masked(&mut self.rx_buf[i], raw);
+            }
+        }
+    }
+
+    /// `Com_MainFunctionRx`: one main-function period has passed; an RX I-PDU whose
+    /// deadline expired gets its signals replaced by their init values, and `on_timeout`
+    /// is told. Monitoring then restarts.
+    pub fn main_function_rx(&mut self, mut on_timeout: impl FnMut(RxIpduId)) {
+        self.rx_now = self.rx_now.wrapping_add(1);
+        let now = self.rx_now;
+        let mut list = self.rx_wheel.take(now);
+        while let Some(i) = self.rx_wheel.pop(&mut list) {
+            if self.rx_due[i] <= now {
+                self.replace_by_init(i);
+                self.rx_timed_out[i] = true;
+                on_timeout(RxIpduId(i as u16));
+                self.rx_due[i] = now + self.cfg.rx_deadline[i];
+            }
+            self.rx_wheel.file(i, self.rx_due[i]);
+        }
+    }
+
+    fn replace_by_init(&mut self, i: usize) {
+        for s in 0..S {
+            if self.cfg.signals[s].direction == SignalDirection::Rx(RxIpduId(i as u16)) {
+                self.write_init(s);
+            }
+        }
+    }
+
+    /// `Com_ReceiveSignal`: the signal's current value, sign-extended for signed signals.
+    ///
+    /// # Errors
+    /// [`ComError::UnknownSignal`]; [`ComError::Invalid`] when the value is the signal's
+    /// invalidation value.
+    #[inline]
+    pub fn receive_signal(&self, signal: SignalId) -> Result<SignalValue, ComError> {
+        let sig = self
+            .cfg
+            .signals
+            .get(usize::from(signal.0))
+            .ok_or(ComError::UnknownSignal)?;
+        let SignalDirection::Rx(ipdu) = sig.direction else {
+            return Err(ComError::UnknownSignal);
+        };
+        let buf = self
+            .rx_buf
+            .get(usize::from(ipdu.0))
+            .ok_or(ComError::UnknownSignal)?;
+        if let Some(invalid) = sig.invalid {
+            if sig.layout.unpack_raw(buf) == invalid {
+                return Err(ComError::Invalid);
+            }
+        }
+        Ok(sig.layout.unpack(buf))
+    }
+
+    /// The signedness of a signal, for callers that convert values.
+    pub fn signedness(&self, signal: SignalId) -> Option<Signedness> {
+        self.cfg
+            .signals
+            .get(usize::from(signal.0))
+            .map(|s| s.layout.signedness())
+    }
+}
+
+fn set_bit<const N: usize>(buf: &mut [u8; N], bit: u16, value: bool) {
+    let (byte, mask) = (usize::from(bit / 8), 1u8 << (bit % 8));
+    if let Some(b) = buf.get_mut(byte) {
+        if value {
+            *b |= mask;
+        } else {
+            *b &= !mask;
+        }
+    }
+}
+
+fn get_bit<const N: usize>(buf: &[u8; N], bit: u16) -> bool {
+    buf.get(usize::from(bit / 8))
+        .is_some_and(|b| b & (1 << (bit % 8)) != 0)
+}
+
+#[cfg(test)]
+mod tests;
