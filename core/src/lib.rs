@@ -11,8 +11,9 @@
 //!   start-bit convention, signed and unsigned, PDUs up to 64 bytes);
 //! - [`os`]: an OSEK/VDX OS 2.2.3 scheduler state machine (tasks, events, resources with
 //!   immediate priority ceiling, counters and alarms);
-//! - [`can`] and [`canif`]: the CAN driver interface and the CAN Interface layer (transmit
-//!   with buffering, receive checks, controller and PDU modes, bus-off).
+//! - [`can`], [`canif`], [`pdur`] and [`com::ipdu`]: the CAN driver interface, the CAN
+//!   Interface (transmit buffering, receive checks, modes, bus-off), the PDU Router's static
+//!   routes, and Com's I-PDUs and signals (transmission modes, update bits, deadlines).
 //!
 //! Every kernel has a `spec` module of named, pure predicates. The same predicates are
 //! executed by the bolero harnesses beside the code (`cargo test`), by the fuzz targets
@@ -31,5 +32,6 @@ pub mod can;
 pub mod canif;
 pub mod com;
 pub mod os;
+pub mod pdur;
 pub mod sonar;
 pub mod warning;
