@@ -13,7 +13,8 @@
 //!   immediate priority ceiling, counters and alarms);
 //! - [`can`], [`canif`], [`pdur`] and [`com::ipdu`]: the CAN driver interface, the CAN
 //!   Interface (transmit buffering, receive checks, modes, bus-off), the PDU Router's static
-//!   routes, and Com's I-PDUs and signals (transmission modes, update bits, deadlines).
+//!   routes, and Com's I-PDUs and signals (transmission modes, update bits, deadlines);
+//! - [`cansm`]: the CAN State Manager's communication modes and bus-off recovery.
 //!
 //! Every kernel has a `spec` module of named, pure predicates. The same predicates are
 //! executed by the bolero harnesses beside the code (`cargo test`), by the fuzz targets
@@ -30,6 +31,7 @@
 
 pub mod can;
 pub mod canif;
+pub mod cansm;
 pub mod com;
 pub mod os;
 pub mod pdur;
