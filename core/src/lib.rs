@@ -14,7 +14,9 @@
 //! - [`can`], [`canif`], [`pdur`] and [`com::ipdu`]: the CAN driver interface, the CAN
 //!   Interface (transmit buffering, receive checks, modes, bus-off), the PDU Router's static
 //!   routes, and Com's I-PDUs and signals (transmission modes, update bits, deadlines);
-//! - [`cansm`]: the CAN State Manager's communication modes and bus-off recovery.
+//! - [`cansm`]: the CAN State Manager's communication modes and bus-off recovery;
+//! - [`rte`]: typed sender-receiver ports (last-is-best and queued, with data-received
+//!   events) and client-server operations.
 //!
 //! Every kernel has a `spec` module of named, pure predicates. The same predicates are
 //! executed by the bolero harnesses beside the code (`cargo test`), by the fuzz targets
@@ -35,5 +37,6 @@ pub mod cansm;
 pub mod com;
 pub mod os;
 pub mod pdur;
+pub mod rte;
 pub mod sonar;
 pub mod warning;
