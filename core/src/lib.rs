@@ -15,6 +15,7 @@
 //!   Interface (transmit buffering, receive checks, modes, bus-off), the PDU Router's static
 //!   routes, and Com's I-PDUs and signals (transmission modes, update bits, deadlines);
 //! - [`cansm`]: the CAN State Manager's communication modes and bus-off recovery;
+//! - [`ecum`]: EcuM start-up/run/shutdown and BswM's action lists;
 //! - [`rte`]: typed sender-receiver ports (last-is-best and queued, with data-received
 //!   events) and client-server operations.
 //!
@@ -35,6 +36,7 @@ pub mod can;
 pub mod canif;
 pub mod cansm;
 pub mod com;
+pub mod ecum;
 pub mod os;
 pub mod pdur;
 pub mod rte;
