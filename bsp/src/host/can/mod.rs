@@ -1,0 +1,1116 @@
+//! A virtual classic-CAN bus with controllers that behave like real ones.
+//!
+//! [`VirtualBus`] is a shared handle on one bus segment at a configurable bitrate
+//! (default 500 kbit/s). Nodes attach to it:
+//!
+//! - [`HostCan`]: an ECU's CAN controller and its AUTOSAR `Can` driver
+//!   ([`CanDriver`]): transmit mailboxes grouped by hardware transmit handle (HTH), an
+//!   acceptance filter mapping CAN ids to hardware receive handles (HRH), controller modes,
+//!   a transmit error counter (TEC) and bus-off. What the interrupt handlers would report
+//!   is queued as [`TimedCanEvent`]s for the firmware to hand to CanIf.
+//! - [`Tester`]: an external node (a PC interface, another ECU) that puts arbitrary frames
+//!   on the bus, including ids and lengths no ECU table knows, and sees every frame.
+//!
+//! # Time
+//!
+//! Controllers take frames at the [`VirtualClock`]'s current time. The bus moves only when
+//! told: [`VirtualBus::run_until`] carries out every arbitration and transmission that
+//! finishes by then, and [`VirtualBus::next_event_us`] says when the next one would end,
+//! so an event-driven simulation can advance the clock from event to event. Run the bus up
+//! to the clock (not beyond it): arbitration decided ahead of the clock cannot see frames
+//! written later at an earlier time. Internally the bus counts nanoseconds so bit times add
+//! up exactly; events carry the microsecond at which they have happened (rounded up). The
+//! bit time is `1e9 / bitrate` rounded to a whole nanosecond, exact for all the usual
+//! rates (10 k to 1 Mbit/s; 33.3 kbit/s becomes 30 030 ns). Bus time saturates after
+//! about 584 years of virtual time; the bus then stops moving frames.
+//!
+//! # Frames on the wire
+//!
+//! See [`timing`]: 44 + 8 x DLC bits (standard) or 64 + 8 x DLC bits (extended) from SOF
+//! through EOF, plus stuff bits (counted exactly from the real bit pattern and CRC by
+//! default, or the worst case), then 3 bits of intermission. Events (confirmation,
+//! reception) happen at the end of EOF; the next SOF can follow the intermission.
+//!
+//! # Arbitration
+//!
+//! Whenever the bus is idle and frames are pending, every node that may transmit offers
+//! its highest-priority pending frame; the frame with the lowest arbitration field wins,
+//! compared bit by bit as on the wire: the 11-bit base id first, then a standard frame
+//! beats an extended frame with the same base id (its dominant RTR meets the recessive
+//! SRR), then the 18 id extension bits. Losers stay pending and contend again at the next
+//! idle bus. A controller offers the lowest-id frame among its mailboxes (ties: the lowest
+//! mailbox); a tester offers its frames in the order sent (a FIFO, like a SocketCAN
+//! queue).
+//!
+//! # Error confinement (ISO 11898-1, transmitter side)
+//!
+//! - A failed attempt raises TEC by 8 and the frame is retransmitted automatically. Failed
+//!   attempts come from [`VirtualBus::inject_tx_errors`] (the next n attempts of a node
+//!   fail) or from a missing acknowledgement (no other node is active: a lone node keeps
+//!   retransmitting; once error passive, at TEC >= 128, an ACK error no longer raises its
+//!   TEC, so it stays error passive and never reaches bus-off, as on a real bus).
+//! - A failed attempt occupies the bus up to the ACK slot, then an error frame (6 + 8
+//!   bits), then the intermission; nobody receives the frame.
+//! - Each successful transmission lowers TEC by 1.
+//! - An error-passive transmitter (TEC >= 128) waits 8 extra bit times (suspend
+//!   transmission) after each of its transmissions before it may start another; other
+//!   nodes may take the bus meanwhile.
+//! - TEC > 255: bus-off. The controller goes to `Stopped`, its pending mailboxes are
+//!   dropped without confirmation and a [`CanEvent::BusOff`] is queued. After
+//!   `set_controller_mode(Started)` it needs 128 x 11 recessive bits (modelled as 1408 bit
+//!   times of bus time from that call) before it transmits, receives or acknowledges again;
+//!   TEC is 0 from then on. Frames written meanwhile wait in their mailboxes.
+//! - A tester node counts its TEC too but never goes bus-off (its TEC stops at 255).
+//!
+//! # Controller modes (AUTOSAR SWS Can, `Can_SetControllerMode`)
+//!
+//! `Stopped -> Started`, `Started -> Stopped` (pending mailboxes are aborted without
+//! confirmation), `Stopped -> Sleep`, `Sleep -> Stopped` (wake-up by software). Refused with
+//! [`ModeRefused`]: `Sleep -> Started` and `Started -> Sleep`. Requesting the current mode
+//! is accepted and changes nothing (AUTOSAR flags `Started -> Started` as a development
+//! error only; the hardware state is the same either way). Only a started controller that
+//! is not bus-off transmits, receives and acknowledges.
+//!
+//! # Writes that cannot be taken
+//!
+//! [`HostCan::try_write`] says why ([`WriteError`]); through [`CanDriver::write`] every
+//! refusal is [`CanBusy`]: a full mailbox, a controller that is not started, and an HTH the
+//! controller does not have (it has no free mailbox, so nothing is sent and the caller
+//! keeps the frame).
+//!
+//! # Deliberately simplified
+//!
+//! Receive errors (REC) and error frames caused by receivers, overload frames, remote
+//! frames, CAN FD, receive FIFO overruns (event queues are unbounded), acceptance masks
+//! (filters match exact ids), single-shot mode, wake-up by bus activity, and transmission of
+//! the in-flight frame being cut short: a controller stopped while its frame is on the wire
+//! lets the frame finish (the others receive it) but gets no confirmation.
+
+pub mod timing;
+
+use core::cell::RefCell;
+use core::fmt;
+use std::collections::VecDeque;
+use std::rc::Rc;
+use std::vec::Vec;
+
+use cw_core::can::{CanBusy, CanDriver, CanFrame, CanId, ControllerMode, Hrh, Hth, ModeRefused};
+
+use super::clock::VirtualClock;
+pub use timing::Stuffing;
+use timing::{
+    failed_attempt_bits, frame_bits, BUS_OFF_RECOVERY_BITS, INTERMISSION_BITS,
+    SUSPEND_TRANSMISSION_BITS,
+};
+
+/// TEC at and above which a node is error passive.
+const ERROR_PASSIVE_TEC: u16 = 128;
+/// TEC above which a node goes bus-off.
+const BUS_OFF_TEC: u16 = 255;
+/// TEC increment of a failed transmission.
+const TEC_PER_ERROR: u16 = 8;
+
+/// A node on a [`VirtualBus`], numbered in order of attachment.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct NodeId(usize);
+
+impl NodeId {
+    /// Position in attachment order (0 for the first node).
+    pub const fn index(self) -> usize {
+        self.0
+    }
+}
+
+/// Bus parameters.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub struct BusConfig {
+    /// Bitrate in bit/s, 1..=1 000 000 (classic CAN).
+    pub bitrate_bps: u32,
+    /// How stuff bits are counted.
+    pub stuffing: Stuffing,
+}
+
+impl BusConfig {
+    /// 500 kbit/s, exact stuffing.
+    pub const DEFAULT: Self = Self {
+        bitrate_bps: 500_000,
+        stuffing: Stuffing::Exact,
+    };
+}
+
+impl Default for BusConfig {
+    fn default() -> Self {
+        Self::DEFAULT
+    }
+}
+
+/// A refused [`BusConfig`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum BusConfigError {
+    /// The bitrate is 0 or above 1 Mbit/s.
+    Bitrate {
+        /// The refused bitrate, bit/s.
+        bitrate_bps: u32,
+    },
+}
+
+impl fmt::Display for BusConfigError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Self::Bitrate { bitrate_bps } => write!(
+                f,
+                "CAN bitrate {bitrate_bps} bit/s is outside 1..=1000000 bit/s"
+            ),
+        }
+    }
+}
+
+impl std::error::Error for BusConfigError {}
+
+/// What a controller reports to the driver's upper layer (what its interrupts signal).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum CanEvent {
+    /// A frame written with this PDU handle was sent (`CanIf_TxConfirmation`).
+    TxConfirmation {
+        /// The handle given to `write`.
+        pdu: u16,
+    },
+    /// A frame passed the acceptance filter into this receive handle (`CanIf_RxIndication`).
+    Received {
+        /// The receive handle the filter chose.
+        hrh: Hrh,
+        /// The frame.
+        frame: CanFrame,
+    },
+    /// The controller went bus-off (`CanIf_ControllerBusOff`).
+    BusOff,
+}
+
+/// A [`CanEvent`] and the virtual time at which it happened.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub struct TimedCanEvent {
+    /// End of the frame (or of the error frame) that caused it, µs, rounded up.
+    pub time_us: u64,
+    /// What happened.
+    pub event: CanEvent,
+}
+
+/// A frame that completed on the bus.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub struct BusRecord {
+    /// End of the frame's EOF, µs, rounded up.
+    pub time_us: u64,
+    /// The node that sent it.
+    pub sender: NodeId,
+    /// The frame.
+    pub frame: CanFrame,
+}
+
+/// Bus-wide counters.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+pub struct BusStats {
+    /// Frames transmitted successfully.
+    pub frames: u64,
+    /// Failed attempts (each followed by an error frame).
+    pub error_frames: u64,
+}
+
+/// Counters of one controller.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+pub struct HostCanStats {
+    /// Frames sent and confirmed.
+    pub tx_confirmed: u64,
+    /// Pending frames dropped by a stop or bus-off.
+    pub tx_aborted: u64,
+    /// Frames that passed the acceptance filter.
+    pub rx_accepted: u64,
+    /// Frames the acceptance filter discarded.
+    pub rx_filtered: u64,
+}
+
+/// Why [`HostCan::try_write`] did not take a frame. Nothing was queued.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum WriteError {
+    /// The controller is not started.
+    NotStarted,
+    /// The controller has no such HTH.
+    UnknownHth,
+    /// Every mailbox of the HTH holds a pending frame.
+    Busy,
+}
+
+impl From<WriteError> for CanBusy {
+    fn from(_: WriteError) -> Self {
+        CanBusy
+    }
+}
+
+/// No node with this id is attached to the bus.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub struct UnknownNode;
+
+/// The hardware configuration of one [`HostCan`] controller.
+#[derive(Debug, Clone, PartialEq, Eq, Hash)]
+pub struct HostCanConfig {
+    hth_count: u8,
+    mailboxes_per_hth: u8,
+    acceptance: Vec<(CanId, Hrh)>,
+    catch_all: Option<Hrh>,
+}
+
+impl HostCanConfig {
+    /// One HTH (`Hth(0)`) with one mailbox, and this acceptance table: a frame whose id is
+    /// in the table goes to that entry's HRH (the first entry wins if an id repeats); any
+    /// other frame is discarded by the hardware filter.
+    pub fn new(acceptance: &[(CanId, Hrh)]) -> Self {
+        Self {
+            hth_count: 1,
+            mailboxes_per_hth: 1,
+            acceptance: acceptance.to_vec(),
+            catch_all: None,
+        }
+    }
+
+    /// Sets the number of HTHs: `Hth(0)` to `Hth(count - 1)`.
+    pub fn with_hths(mut self, count: u8) -> Self {
+        self.hth_count = count;
+        self
+    }
+
+    /// Sets the number of transmit mailboxes behind each HTH (0 makes every write busy).
+    pub fn with_mailboxes_per_hth(mut self, mailboxes: u8) -> Self {
+        self.mailboxes_per_hth = mailboxes;
+        self
+    }
+
+    /// Frames that match no acceptance entry go to `hrh` instead of being discarded, so
+    /// unknown ids reach CanIf (whose own checks are then under test).
+    pub fn with_catch_all(mut self, hrh: Hrh) -> Self {
+        self.catch_all = Some(hrh);
+        self
+    }
+}
+
+#[derive(Debug, Clone, Copy)]
+struct Pending {
+    frame: CanFrame,
+    pdu: u16,
+    since_ns: u64,
+    seq: u64,
+}
+
+#[derive(Debug)]
+struct Controller {
+    mode: ControllerMode,
+    bus_off: bool,
+    /// Set by a start after bus-off: when the 128 x 11 recessive bits are complete.
+    recovery_end_ns: Option<u64>,
+    hth_count: usize,
+    mailboxes_per_hth: usize,
+    /// `hth_count * mailboxes_per_hth` slots, HTH-major.
+    mailboxes: Vec<Option<Pending>>,
+    /// Acceptance table as `(CanId::key, hrh)`, sorted, one entry per key.
+    acceptance: Vec<(u32, Hrh)>,
+    catch_all: Option<Hrh>,
+    events: VecDeque<TimedCanEvent>,
+    stats: HostCanStats,
+}
+
+impl Controller {
+    fn new(config: &HostCanConfig) -> Self {
+        let mut acceptance: Vec<(u32, Hrh)> = config
+            .acceptance
+            .iter()
+            .map(|&(id, hrh)| (id.key(), hrh))
+            .collect();
+        // Stable: among equal ids the first table entry stays first and survives dedup.
+        acceptance.sort_by_key(|&(key, _)| key);
+        acceptance.dedup_by_key(|&mut (key, _)| key);
+        let slots = usize::from(config.hth_count) * usize::from(config.mailboxes_per_hth);
+        Self {
+            mode: ControllerMode::Stopped,
+            bus_off: false,
+            recovery_end_ns: None,
+            hth_count: usize::from(config.hth_count),
+            mailboxes_per_hth: usize::from(config.mailboxes_per_hth),
+            mailboxes: std::vec![None; slots],
+            acceptance,
+            catch_all: config.catch_all,
+            events: VecDeque::new(),
+            stats: HostCanStats::default(),
+        }
+    }
+
+    fn filter(&self, id: CanId) -> Option<Hrh> {
+        match self.acceptance.binary_search_by_key(&id.key(), |&(k, _)| k) {
+            Ok(i) => self.acceptance.get(i).map(|&(_, hrh)| hrh),
+            Err(_) => self.catch_all,
+        }
+    }
+
+    fn abort_all(&mut self) {
+        for slot in &mut self.mailboxes {
+            if slot.take().is_some() {
+                self.stats.tx_aborted += 1;
+            }
+        }
+    }
+
+    /// Active on the bus at `t_ns`: started and not bus-off (or recovered by then).
+    fn is_active_at(&self, t_ns: u64) -> bool {
+        self.mode == ControllerMode::Started
+            && (!self.bus_off || self.recovery_end_ns.is_some_and(|r| r <= t_ns))
+    }
+}
+
+#[derive(Debug, Default)]
+struct TesterState {
+    queue: VecDeque<Pending>,
+    received: Vec<BusRecord>,
+}
+
+#[derive(Debug)]
+enum Role {
+    Controller(Controller),
+    Tester(TesterState),
+}
+
+#[derive(Debug)]
+struct Node {
+    tec: u16,
+    injected_errors: u32,
+    /// Error-passive suspend: no new transmission before this time.
+    ready_at_ns: u64,
+    role: Role,
+}
+
+impl Node {
+    /// Earliest time the node may start a transmission, `None` if it may not at all.
+    fn transmit_ready_ns(&self) -> Option<u64> {
+        match &self.role {
+            Role::Controller(c) => {
+                if c.mode != ControllerMode::Started {
+                    return None;
+                }
+                let recovered = if c.bus_off { c.recovery_end_ns? } else { 0 };
+                Some(recovered.max(self.ready_at_ns))
+            }
+            Role::Tester(_) => Some(self.ready_at_ns),
+        }
+    }
+
+    /// The frames this node could offer: `(slot, pending)`.
+    fn pending(&self) -> impl Iterator<Item = (usize, &Pending)> {
+        let (mailboxes, queue_head) = match &self.role {
+            Role::Controller(c) => (c.mailboxes.as_slice(), None),
+            Role::Tester(t) => (&[][..], t.queue.front()),
+        };
+        mailboxes
+            .iter()
+            .enumerate()
+            .filter_map(|(i, m)| m.as_ref().map(|p| (i, p)))
+            .chain(queue_head.map(|p| (0, p)))
+    }
+
+    fn pending_at(&self, slot: usize) -> Option<&Pending> {
+        match &self.role {
+            Role::Controller(c) => c.mailboxes.get(slot).and_then(Option::as_ref),
+            Role::Tester(t) => t.queue.front().filter(|_| slot == 0),
+        }
+    }
+
+    fn can_ack_at(&self, t_ns: u64) -> bool {
+        match &self.role {
+            Role::Controller(c) => c.is_active_at(t_ns),
+            Role::Tester(_) => true,
+        }
+    }
+
+    /// Completes a bus-off recovery that has ended by `t_ns`.
+    fn settle(&mut self, t_ns: u64) {
+        if let Role::Controller(c) = &mut self.role {
+            if let Some(end_ns) = c.recovery_end_ns.filter(|&r| c.bus_off && r <= t_ns) {
+                c.bus_off = false;
+                c.recovery_end_ns = None;
+                self.tec = 0;
+                // Settling early (an accessor at `t_ns`) must not let a frame start before
+                // the recovery ended.
+                self.ready_at_ns = self.ready_at_ns.max(end_ns);
+            }
+        }
+    }
+
+    /// Removes the pending frame `seq` from `slot`; false if it is no longer there.
+    fn remove_pending(&mut self, slot: usize, seq: u64) -> bool {
+        match &mut self.role {
+            Role::Controller(c) => match c.mailboxes.get_mut(slot) {
+                Some(m) if m.is_some_and(|p| p.seq == seq) => {
+                    *m = None;
+                    true
+                }
+                _ => false,
+            },
+            Role::Tester(t) => {
+                if t.queue.front().is_some_and(|p| p.seq == seq) {
+                    t.queue.pop_front();
+                    true
+                } else {
+                    false
+                }
+            }
+        }
+    }
+}
+
+/// Whether the attempt on the wire will succeed, decided when it starts.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Outcome {
+    Sent,
+    InjectedError,
+    NoAck,
+}
+
+/// The next transmission: who, when, and how it ends.
+#[derive(Debug, Clone, Copy)]
+struct Plan {
+    node: usize,
+    slot: usize,
+    start_ns: u64,
+    end_ns: u64,
+    outcome: Outcome,
+}
+
+#[derive(Debug, Clone, Copy)]
+struct InFlight {
+    node: usize,
+    slot: usize,
+    seq: u64,
+    frame: CanFrame,
+    pdu: u16,
+    end_ns: u64,
+    outcome: Outcome,
+}
+
+/// Bitwise arbitration order: the 11-bit base id, then standard before extended (RTR
+/// dominant against SRR recessive), then the 18-bit extension.
+fn arbitration_key(id: CanId) -> u32 {
+    if id.is_extended() {
+        let raw = id.raw();
+        ((raw >> 18) << 19) | (1 << 18) | (raw & 0x3_FFFF)
+    } else {
+        id.raw() << 19
+    }
+}
+
+fn ns_to_us_ceil(ns: u64) -> u64 {
+    ns.div_ceil(1_000)
+}
+
+#[derive(Debug)]
+struct Bus {
+    clock: VirtualClock,
+    config: BusConfig,
+    bit_ns: u64,
+    nodes: Vec<Node>,
+    /// The bus is free for the next SOF from here.
+    idle_at_ns: u64,
+    in_flight: Option<InFlight>,
+    next_seq: u64,
+    tracing: bool,
+    trace: Vec<BusRecord>,
+    stats: BusStats,
+}
+
+impl Bus {
+    fn now_ns(&self) -> u64 {
+        self.clock.now_us().saturating_mul(1_000)
+    }
+
+    fn bits_ns(&self, bits: u32) -> u64 {
+        u64::from(bits) * self.bit_ns
+    }
+
+    fn attach(&mut self, role: Role) -> usize {
+        self.nodes.push(Node {
+            tec: 0,
+            injected_errors: 0,
+            ready_at_ns: 0,
+            role,
+        });
+        self.nodes.len() - 1
+    }
+
+    fn new_pending(&mut self, frame: &CanFrame, pdu: u16) -> Pending {
+        let seq = self.next_seq;
+        self.next_seq += 1;
+        Pending {
+            frame: *frame,
+            pdu,
+            since_ns: self.now_ns(),
+            seq,
+        }
+    }
+
+    /// The next transmission if nothing else is written meanwhile.
+    fn plan(&self) -> Option<Plan> {
+        let offers = || {
+            self.nodes.iter().enumerate().flat_map(|(i, node)| {
+                let ready = node.transmit_ready_ns();
+                node.pending()
+                    .filter_map(move |(slot, p)| ready.map(|r| (i, slot, p, p.since_ns.max(r))))
+            })
+        };
+        let earliest_ns = offers().map(|(_, _, _, t)| t).min()?;
+        let start_ns = earliest_ns.max(self.idle_at_ns);
+        let (node, slot, pending, _) = offers()
+            .filter(|&(_, _, _, t)| t <= start_ns)
+            .min_by_key(|&(i, slot, p, _)| (arbitration_key(p.frame.can_id()), i, slot))?;
+        let sender = self.nodes.get(node)?;
+        let acked = self
+            .nodes
+            .iter()
+            .enumerate()
+            .any(|(j, other)| j != node && other.can_ack_at(start_ns));
+        let outcome = if sender.injected_errors > 0 {
+            Outcome::InjectedError
+        } else if !acked {
+            Outcome::NoAck
+        } else {
+            Outcome::Sent
+        };
+        let bits = match outcome {
+            Outcome::Sent => frame_bits(&pending.frame, self.config.stuffing),
+            Outcome::InjectedError | Outcome::NoAck => {
+                failed_attempt_bits(&pending.frame, self.config.stuffing)
+            }
+        };
+        Some(Plan {
+            node,
+            slot,
+            start_ns,
+            end_ns: start_ns.saturating_add(self.bits_ns(bits)),
+            outcome,
+        })
+    }
+
+    fn commit(&mut self, plan: Plan) {
+        let Some(node) = self.nodes.get_mut(plan.node) else {
+            return;
+        };
+        node.settle(plan.start_ns);
+        if plan.outcome == Outcome::InjectedError {
+            node.injected_errors -= 1;
+        }
+        let Some(p) = node.pending_at(plan.slot).copied() else {
+            return;
+        };
+        self.in_flight = Some(InFlight {
+            node: plan.node,
+            slot: plan.slot,
+            seq: p.seq,
+            frame: p.frame,
+            pdu: p.pdu,
+            end_ns: plan.end_ns,
+            outcome: plan.outcome,
+        });
+    }
+
+    fn run_until_ns(&mut self, t_ns: u64) {
+        loop {
+            if self.in_flight.is_none() {
+                match self.plan() {
+                    Some(plan) if plan.start_ns <= t_ns => self.commit(plan),
+                    _ => return,
+                }
+            }
+            match self.in_flight.take() {
+                Some(f) if f.end_ns <= t_ns => {
+                    self.complete(f);
+                    if self.idle_at_ns == u64::MAX {
+                        // Time has saturated (after about 584 years): nothing can follow.
+                        return;
+                    }
+                }
+                Some(f) => {
+                    self.in_flight = Some(f);
+                    return;
+                }
+                None => return,
+            }
+        }
+    }
+
+    fn complete(&mut self, f: InFlight) {
+        self.idle_at_ns = f.end_ns.saturating_add(self.bits_ns(INTERMISSION_BITS));
+        let suspend_until_ns = self
+            .idle_at_ns
+            .saturating_add(self.bits_ns(SUSPEND_TRANSMISSION_BITS));
+        let time_us = ns_to_us_ceil(f.end_ns);
+        for node in &mut self.nodes {
+            node.settle(f.end_ns);
+        }
+        let sent = f.outcome == Outcome::Sent;
+        if sent {
+            self.stats.frames += 1;
+        } else {
+            self.stats.error_frames += 1;
+        }
+        let Some(sender) = self.nodes.get_mut(f.node) else {
+            return;
+        };
+        if sent {
+            sender.tec = sender.tec.saturating_sub(1);
+            if sender.remove_pending(f.slot, f.seq) {
+                if let Role::Controller(c) = &mut sender.role {
+                    c.stats.tx_confirmed += 1;
+                    c.events.push_back(TimedCanEvent {
+                        time_us,
+                        event: CanEvent::TxConfirmation { pdu: f.pdu },
+                    });
+                }
+            }
+        } else if f.outcome == Outcome::InjectedError || sender.tec < ERROR_PASSIVE_TEC {
+            // An error-passive transmitter's ACK error leaves its TEC unchanged.
+            sender.tec += TEC_PER_ERROR;
+        }
+        if sender.tec > BUS_OFF_TEC {
+            match &mut sender.role {
+                Role::Controller(c) => {
+                    c.bus_off = true;
+                    c.recovery_end_ns = None;
+                    c.mode = ControllerMode::Stopped;
+                    c.abort_all();
+                    c.events.push_back(TimedCanEvent {
+                        time_us,
+                        event: CanEvent::BusOff,
+                    });
+                }
+                Role::Tester(_) => sender.tec = BUS_OFF_TEC,
+            }
+        } else if sender.tec >= ERROR_PASSIVE_TEC {
+            sender.ready_at_ns = suspend_until_ns;
+        }
+        if !sent {
+            return;
+        }
+        let sender_id = NodeId(f.node);
+        for (j, node) in self.nodes.iter_mut().enumerate() {
+            if j == f.node {
+                continue;
+            }
+            match &mut node.role {
+                Role::Controller(c) => {
+                    if !c.is_active_at(f.end_ns) {
+                        continue;
+                    }
+                    match c.filter(f.frame.can_id()) {
+                        Some(hrh) => {
+                            c.stats.rx_accepted += 1;
+                            c.events.push_back(TimedCanEvent {
+                                time_us,
+                                event: CanEvent::Received {
+                                    hrh,
+                                    frame: f.frame,
+                                },
+                            });
+                        }
+                        None => c.stats.rx_filtered += 1,
+                    }
+                }
+                Role::Tester(t) => t.received.push(BusRecord {
+                    time_us,
+                    sender: sender_id,
+                    frame: f.frame,
+                }),
+            }
+        }
+        if self.tracing {
+            self.trace.push(BusRecord {
+                time_us,
+                sender: sender_id,
+                frame: f.frame,
+            });
+        }
+    }
+
+    fn controller_mut(&mut self, node: usize) -> Option<&mut Controller> {
+        match &mut self.nodes.get_mut(node)?.role {
+            Role::Controller(c) => Some(c),
+            Role::Tester(_) => None,
+        }
+    }
+
+    fn controller(&self, node: usize) -> Option<&Controller> {
+        match &self.nodes.get(node)?.role {
+            Role::Controller(c) => Some(c),
+            Role::Tester(_) => None,
+        }
+    }
+}
+
+/// A shared handle on one virtual CAN bus. Clones are handles on the same bus.
+#[derive(Debug, Clone)]
+pub struct VirtualBus {
+    bus: Rc<RefCell<Bus>>,
+}
+
+impl VirtualBus {
+    /// A 500 kbit/s bus with exact stuffing, timed by `clock`.
+    pub fn new(clock: &VirtualClock) -> Self {
+        Self::build(clock, BusConfig::DEFAULT)
+    }
+
+    /// A bus with the given parameters.
+    ///
+    /// # Errors
+    /// [`BusConfigError::Bitrate`] for a bitrate of 0 or above 1 Mbit/s.
+    pub fn with_config(clock: &VirtualClock, config: BusConfig) -> Result<Self, BusConfigError> {
+        if config.bitrate_bps == 0 || config.bitrate_bps > 1_000_000 {
+            return Err(BusConfigError::Bitrate {
+                bitrate_bps: config.bitrate_bps,
+            });
+        }
+        Ok(Self::build(clock, config))
+    }
+
+    fn build(clock: &VirtualClock, config: BusConfig) -> Self {
+        let bps = u64::from(config.bitrate_bps.max(1));
+        let bit_ns = (1_000_000_000 + bps / 2) / bps;
+        Self {
+            bus: Rc::new(RefCell::new(Bus {
+                clock: clock.clone(),
+                config,
+                bit_ns,
+                nodes: Vec::new(),
+                idle_at_ns: 0,
+                in_flight: None,
+                next_seq: 0,
+                tracing: false,
+                trace: Vec::new(),
+                stats: BusStats::default(),
+            })),
+        }
+    }
+
+    /// The bus parameters.
+    pub fn config(&self) -> BusConfig {
+        self.bus.borrow().config
+    }
+
+    /// One bit time, ns.
+    pub fn bit_time_ns(&self) -> u64 {
+        self.bus.borrow().bit_ns
+    }
+
+    /// The clock the bus runs on.
+    pub fn clock(&self) -> VirtualClock {
+        self.bus.borrow().clock.clone()
+    }
+
+    /// How long `frame` occupies the bus from SOF through EOF when sent successfully, ns
+    /// (the intermission adds 3 bit times before the next frame).
+    pub fn frame_duration_ns(&self, frame: &CanFrame) -> u64 {
+        let bus = self.bus.borrow();
+        bus.bits_ns(frame_bits(frame, bus.config.stuffing))
+    }
+
+    /// Attaches a controller (initially `Stopped`, TEC 0).
+    pub fn attach(&self, config: &HostCanConfig) -> HostCan {
+        let node = self
+            .bus
+            .borrow_mut()
+            .attach(Role::Controller(Controller::new(config)));
+        HostCan {
+            bus: Rc::clone(&self.bus),
+            node,
+        }
+    }
+
+    /// Attaches a tester node (always active, receives every frame).
+    pub fn attach_tester(&self) -> Tester {
+        let node = self
+            .bus
+            .borrow_mut()
+            .attach(Role::Tester(TesterState::default()));
+        Tester {
+            bus: Rc::clone(&self.bus),
+            node,
+        }
+    }
+
+    /// Carries out every arbitration and transmission that ends by `time_us`; a frame
+    /// still on the wire then finishes in a later call.
+    pub fn run_until(&self, time_us: u64) {
+        self.bus
+            .borrow_mut()
+            .run_until_ns(time_us.saturating_mul(1_000));
+    }
+
+    /// [`Self::run_until`] the clock's current time.
+    pub fn run_until_now(&self) {
+        let mut bus = self.bus.borrow_mut();
+        let now_ns = bus.now_ns();
+        bus.run_until_ns(now_ns);
+    }
+
+    /// When the frame (or failed attempt) now on the wire, or else the next one, ends, µs
+    /// (rounded up), if nothing else is written meanwhile; `None` when nothing is pending.
+    pub fn next_event_us(&self) -> Option<u64> {
+        let bus = self.bus.borrow();
+        match &bus.in_flight {
+            Some(f) => Some(ns_to_us_ceil(f.end_ns)),
+            None => bus.plan().map(|p| ns_to_us_ceil(p.end_ns)),
+        }
+    }
+
+    /// Makes the next `count` transmission attempts of `node` fail (added to any already
+    /// injected).
+    ///
+    /// # Errors
+    /// [`UnknownNode`] if no such node is attached.
+    pub fn inject_tx_errors(&self, node: NodeId, count: u32) -> Result<(), UnknownNode> {
+        let mut bus = self.bus.borrow_mut();
+        let n = bus.nodes.get_mut(node.0).ok_or(UnknownNode)?;
+        n.injected_errors = n.injected_errors.saturating_add(count);
+        Ok(())
+    }
+
+    /// The transmit error counter of `node` (`None` if no such node).
+    pub fn tec(&self, node: NodeId) -> Option<u16> {
+        let mut bus = self.bus.borrow_mut();
+        let now_ns = bus.now_ns();
+        let n = bus.nodes.get_mut(node.0)?;
+        n.settle(now_ns);
+        Some(n.tec)
+    }
+
+    /// Starts or stops recording completed frames for [`Self::take_trace`].
+    pub fn set_tracing(&self, on: bool) {
+        self.bus.borrow_mut().tracing = on;
+    }
+
+    /// The frames completed since the last call (while tracing), in bus order.
+    pub fn take_trace(&self) -> Vec<BusRecord> {
+        core::mem::take(&mut self.bus.borrow_mut().trace)
+    }
+
+    /// Bus-wide counters.
+    pub fn stats(&self) -> BusStats {
+        self.bus.borrow().stats
+    }
+}
+
+/// One CAN controller on a [`VirtualBus`] and its AUTOSAR `Can` driver.
+#[derive(Debug)]
+pub struct HostCan {
+    bus: Rc<RefCell<Bus>>,
+    node: usize,
+}
+
+impl HostCan {
+    /// The node's id on its bus.
+    pub fn node(&self) -> NodeId {
+        NodeId(self.node)
+    }
+
+    fn with<R>(&self, default: R, f: impl FnOnce(&Node) -> R) -> R {
+        let mut bus = self.bus.borrow_mut();
+        let now_ns = bus.now_ns();
+        match bus.nodes.get_mut(self.node) {
+            Some(node) => {
+                node.settle(now_ns);
+                f(node)
+            }
+            None => default,
+        }
+    }
+
+    /// `Can_Write` with the reason for a refusal.
+    ///
+    /// # Errors
+    /// [`WriteError`]; nothing was queued.
+    pub fn try_write(&mut self, hth: Hth, pdu: u16, frame: &CanFrame) -> Result<(), WriteError> {
+        let mut bus = self.bus.borrow_mut();
+        let pending = bus.new_pending(frame, pdu);
+        let c = bus
+            .controller_mut(self.node)
+            .ok_or(WriteError::NotStarted)?;
+        if c.mode != ControllerMode::Started {
+            return Err(WriteError::NotStarted);
+        }
+        if usize::from(hth.0) >= c.hth_count {
+            return Err(WriteError::UnknownHth);
+        }
+        let first = usize::from(hth.0) * c.mailboxes_per_hth;
+        let free = c
+            .mailboxes
+            .iter_mut()
+            .skip(first)
+            .take(c.mailboxes_per_hth)
+            .find(|m| m.is_none())
+            .ok_or(WriteError::Busy)?;
+        *free = Some(pending);
+        Ok(())
+    }
+
+    /// The controller mode.
+    pub fn mode(&self) -> ControllerMode {
+        self.with(ControllerMode::Stopped, |n| match &n.role {
+            Role::Controller(c) => c.mode,
+            Role::Tester(_) => ControllerMode::Started,
+        })
+    }
+
+    /// The transmit error counter (above 255 while bus-off, 0 once recovered).
+    pub fn tec(&self) -> u16 {
+        self.with(0, |n| n.tec)
+    }
+
+    /// Whether the controller is bus-off now (until its recovery after a restart is done).
+    pub fn is_bus_off(&self) -> bool {
+        self.with(false, |n| match &n.role {
+            Role::Controller(c) => c.bus_off,
+            Role::Tester(_) => false,
+        })
+    }
+
+    /// Whether the controller is error passive (TEC >= 128, not bus-off).
+    pub fn is_error_passive(&self) -> bool {
+        self.with(false, |n| {
+            (ERROR_PASSIVE_TEC..=BUS_OFF_TEC).contains(&n.tec)
+        })
+    }
+
+    /// Frames waiting in the transmit mailboxes.
+    pub fn pending_count(&self) -> usize {
+        self.with(0, |n| n.pending().count())
+    }
+
+    /// Makes the next `count` transmission attempts fail.
+    pub fn inject_tx_errors(&self, count: u32) {
+        let mut bus = self.bus.borrow_mut();
+        if let Some(n) = bus.nodes.get_mut(self.node) {
+            n.injected_errors = n.injected_errors.saturating_add(count);
+        }
+    }
+
+    /// Counters of this controller.
+    pub fn stats(&self) -> HostCanStats {
+        let bus = self.bus.borrow();
+        bus.controller(self.node)
+            .map_or_else(HostCanStats::default, |c| c.stats)
+    }
+
+    /// Takes the queued events, oldest first.
+    pub fn take_events(&mut self) -> Vec<TimedCanEvent> {
+        let mut out = Vec::new();
+        self.drain_events_into(&mut out);
+        out
+    }
+
+    /// Moves the queued events, oldest first, to the end of `out`.
+    pub fn drain_events_into(&mut self, out: &mut Vec<TimedCanEvent>) {
+        let mut bus = self.bus.borrow_mut();
+        if let Some(c) = bus.controller_mut(self.node) {
+            out.extend(c.events.drain(..));
+        }
+    }
+
+    /// Takes the oldest queued event.
+    pub fn pop_event(&mut self) -> Option<TimedCanEvent> {
+        self.bus
+            .borrow_mut()
+            .controller_mut(self.node)?
+            .events
+            .pop_front()
+    }
+}
+
+impl CanDriver for HostCan {
+    /// Every refusal of [`HostCan::try_write`] is [`CanBusy`], including an HTH the
+    /// controller does not have and a controller that is not started.
+    fn write(&mut self, hth: Hth, pdu: u16, frame: &CanFrame) -> Result<(), CanBusy> {
+        self.try_write(hth, pdu, frame).map_err(CanBusy::from)
+    }
+
+    fn set_controller_mode(&mut self, mode: ControllerMode) -> Result<(), ModeRefused> {
+        use ControllerMode::{Sleep, Started, Stopped};
+        let mut bus = self.bus.borrow_mut();
+        let now_ns = bus.now_ns();
+        let recovery_ns = bus.bits_ns(BUS_OFF_RECOVERY_BITS);
+        let node = bus.nodes.get_mut(self.node).ok_or(ModeRefused)?;
+        node.settle(now_ns);
+        let Role::Controller(c) = &mut node.role else {
+            return Err(ModeRefused);
+        };
+        match (c.mode, mode) {
+            (Started, Started) | (Stopped, Stopped) | (Sleep, Sleep) => {}
+            (Stopped, Started) => {
+                if c.bus_off {
+                    c.recovery_end_ns = Some(now_ns.saturating_add(recovery_ns));
+                }
+                c.mode = Started;
+            }
+            (Started, Stopped) => {
+                c.abort_all();
+                c.mode = Stopped;
+            }
+            (Stopped, Sleep) | (Sleep, Stopped) => c.mode = mode,
+            (Sleep, Started) | (Started, Sleep) => return Err(ModeRefused),
+        }
+        Ok(())
+    }
+}
+
+/// An external node that puts arbitrary frames on the bus and sees every frame.
+#[derive(Debug)]
+pub struct Tester {
+    bus: Rc<RefCell<Bus>>,
+    node: usize,
+}
+
+impl Tester {
+    /// The node's id on its bus.
+    pub fn node(&self) -> NodeId {
+        NodeId(self.node)
+    }
+
+    /// Queues `frame` for transmission from now; frames go out in the order sent. Any id
+    /// and any length 0..=8 is fine: the ECU's filters and CanIf decide what to make of it.
+    pub fn send(&mut self, frame: &CanFrame) {
+        let mut bus = self.bus.borrow_mut();
+        let pending = bus.new_pending(frame, 0);
+        if let Some(Node {
+            role: Role::Tester(t),
+            ..
+        }) = bus.nodes.get_mut(self.node)
+        {
+            t.queue.push_back(pending);
+        }
+    }
+
+    /// Frames queued and not yet sent.
+    pub fn queued(&self) -> usize {
+        match self.bus.borrow().nodes.get(self.node) {
+            Some(Node {
+                role: Role::Tester(t),
+                ..
+            }) => t.queue.len(),
+            _ => 0,
+        }
+    }
+
+    /// Takes the frames other nodes sent since the last call, in bus order.
+    pub fn take_received(&mut self) -> Vec<BusRecord> {
+        match self.bus.borrow_mut().nodes.get_mut(self.node) {
+            Some(Node {
+                role: Role::Tester(t),
+                ..
+            }) => core::mem::take(&mut t.received),
+            _ => Vec::new(),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests;

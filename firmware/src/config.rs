@@ -1,0 +1,210 @@
+//! The ECU configuration: every static table of the paper's collision-warning ECU in one
+//! place (paper §3.2, ARCHITECTURE §1). A rule broken here is a build error naming the
+//! table entry.
+//!
+//! | task | priority | activation | runnables |
+//! |---|---|---|---|
+//! | `OsStartupTask` | 7, non-preemptive | autostart, once | EcuM start-up two, ModeManagerInit |
+//! | `OsLEDTask` | 6 | every 10 ms | LEDActuator (YellowLED, RedLED) |
+//! | `OsBswServiceTask` | 5 | every 10 ms | Com, CanSM, EcuM/BswM main functions |
+//! | `OsObstacleDetectionTask` | 4 | every 20 ms | ObstacleDetection |
+//! | `OsComTask` | 3 | data received on SonarRecv | CanTranslate |
+//! | `OsSonarTask` | 2 | every 40 ms | UltraSonic |
+//!
+//! `OsComTask` sits just above the sonar task: the sample the sonar task writes leaves as a
+//! CAN frame as soon as the sonar task's write completes, and the periodic tasks, which
+//! keep the LEDs in time, still outrank it.
+
+use cw_core::can::{CanId, Hrh, Hth};
+use cw_core::canif::{CanIfConfig, RxPduConfig, TxPduConfig, TxPduId};
+use cw_core::cansm::CanSmConfig;
+use cw_core::com::ipdu::{
+    ComConfig, RxIpduConfig, RxIpduId, SignalConfig, SignalDirection, SignalId, TransferProperty,
+    TxIpduConfig, TxIpduId, TxMode,
+};
+use cw_core::com::signal::{ByteOrder, Signedness};
+use cw_core::os::{
+    AlarmAction, AlarmAutostart, AlarmConfig, CounterConfig, CounterId, OsConfig, TaskConfig,
+    TaskId,
+};
+use cw_core::pdur::{PduRConfig, RxRoute};
+
+/// `OsStartupTask`.
+pub const STARTUP_TASK: TaskId = TaskId(0);
+/// `OsLEDTask`.
+pub const LED_TASK: TaskId = TaskId(1);
+/// `OsBswServiceTask`.
+pub const BSW_TASK: TaskId = TaskId(2);
+/// `OsObstacleDetectionTask`.
+pub const OBSTACLE_TASK: TaskId = TaskId(3);
+/// `OsComTask`.
+pub const COM_TASK: TaskId = TaskId(4);
+/// `OsSonarTask`.
+pub const SONAR_TASK: TaskId = TaskId(5);
+/// The 1 ms system counter.
+pub const SYSTEM_COUNTER: CounterId = CounterId(0);
+
+/// Task periods in ms (0: not periodic), indexed by task.
+pub const PERIOD_MS: [u32; 6] = [0, 10, 10, 20, 0, 40];
+
+const fn cyclic(name: &'static str, task: TaskId, period_ms: u32) -> AlarmConfig {
+    AlarmConfig {
+        name,
+        counter: SYSTEM_COUNTER,
+        action: AlarmAction::ActivateTask(task),
+        autostart: AlarmAutostart::Relative {
+            increment: period_ms,
+            cycle: period_ms,
+        },
+    }
+}
+
+/// The OS: six tasks, four cyclic alarms on a 1 ms counter.
+pub static OS: OsConfig<6, 0, 1, 4> = match OsConfig::new(
+    [
+        TaskConfig::basic("OsStartupTask", 7)
+            .non_preemptive()
+            .autostart(),
+        TaskConfig::basic("OsLEDTask", 6),
+        TaskConfig::basic("OsBswServiceTask", 5),
+        TaskConfig::basic("OsObstacleDetectionTask", 4),
+        TaskConfig::basic("OsComTask", 3),
+        TaskConfig::basic("OsSonarTask", 2),
+    ],
+    [CounterConfig {
+        max_allowed_value: 0xFFFF,
+        ticks_per_base: 1,
+        min_cycle: 1,
+    }],
+    [
+        cyclic("LedAlarm", LED_TASK, 10),
+        cyclic("BswAlarm", BSW_TASK, 10),
+        cyclic("ObstacleAlarm", OBSTACLE_TASK, 20),
+        cyclic("SonarAlarm", SONAR_TASK, 40),
+    ],
+) {
+    Ok(cfg) => cfg,
+    Err(e) => panic!("{}", e.describe()),
+};
+
+/// The OS kernel type for [`OS`].
+pub type Kernel = cw_core::os::Os<6, 0, 1, 4, 6>;
+
+const fn std_id(raw: u16) -> CanId {
+    match CanId::standard(raw) {
+        Some(id) => id,
+        None => panic!("CAN id above 0x7FF"),
+    }
+}
+
+/// CAN id of the distance frame (DBC `DistanceFrame`).
+pub const DISTANCE_FRAME_ID: CanId = std_id(0x100);
+/// CAN id of the threshold configuration frame (DBC `ThresholdConfig`).
+pub const THRESHOLD_FRAME_ID: CanId = std_id(0x200);
+
+/// CanIf: one TX L-PDU (the distance frame), one RX L-PDU (thresholds from the PC).
+pub static CANIF: CanIfConfig<1, 1> = match CanIfConfig::new(
+    [TxPduConfig {
+        name: "DistanceFrame",
+        id: DISTANCE_FRAME_ID,
+        dlc: 8,
+        hth: Hth(0),
+    }],
+    [RxPduConfig {
+        name: "ThresholdConfig",
+        id: THRESHOLD_FRAME_ID,
+        dlc: 4,
+        hrh: Hrh(0),
+    }],
+) {
+    Ok(cfg) => cfg,
+    Err(e) => panic!("{}", e.describe()),
+};
+
+/// Com TX I-PDU of the distance frame.
+pub const DISTANCE_IPDU: TxIpduId = TxIpduId(0);
+/// Com RX I-PDU of the threshold frame.
+pub const THRESHOLD_IPDU: RxIpduId = RxIpduId(0);
+/// Com signal: the distance, mm (DBC `Distance`, 0|32@1+).
+pub const SIG_DISTANCE: SignalId = SignalId(0);
+/// Com signal: the warning level (DBC `WarningLevel`, 32|8@1+).
+pub const SIG_WARNING_LEVEL: SignalId = SignalId(1);
+/// Com signal: red threshold, mm (DBC `RedBelow`).
+pub const SIG_RED_BELOW: SignalId = SignalId(2);
+/// Com signal: yellow threshold, mm (DBC `YellowBelow`).
+pub const SIG_YELLOW_BELOW: SignalId = SignalId(3);
+/// The distance's invalidation value: all 32 bits set.
+pub const DISTANCE_INVALID: u64 = 0xFFFF_FFFF;
+
+/// The Com main functions run in `OsBswServiceTask`, every 10 ms.
+pub const BSW_PERIOD_MS: u32 = 10;
+
+/// Com: the distance frame is sent directly, once per sonar sample (the distance
+/// triggers, the level travels with it); the thresholds arrive from the PC.
+pub static COM: ComConfig<8, 1, 1, 4> = match ComConfig::new(
+    BSW_PERIOD_MS,
+    [TxIpduConfig {
+        name: "DistanceFrame",
+        len: 8,
+        mode: TxMode::Direct {
+            repetitions: 0,
+            repetition_period_ms: 0,
+        },
+        mdt_ms: 0,
+    }],
+    [RxIpduConfig {
+        name: "ThresholdConfig",
+        len: 4,
+        deadline_ms: 0,
+    }],
+    [
+        SignalConfig {
+            name: "Distance",
+            direction: SignalDirection::Tx(DISTANCE_IPDU, TransferProperty::Triggered),
+            layout: cw_core::signal_layout!(8; 0, 32, ByteOrder::Intel, Signedness::Unsigned),
+            init: DISTANCE_INVALID,
+            invalid: Some(DISTANCE_INVALID),
+            update_bit: None,
+        },
+        SignalConfig {
+            name: "WarningLevel",
+            direction: SignalDirection::Tx(DISTANCE_IPDU, TransferProperty::Pending),
+            layout: cw_core::signal_layout!(8; 32, 8, ByteOrder::Intel, Signedness::Unsigned),
+            init: 3,
+            invalid: None,
+            update_bit: None,
+        },
+        SignalConfig {
+            name: "RedBelow",
+            direction: SignalDirection::Rx(THRESHOLD_IPDU),
+            layout: cw_core::signal_layout!(8; 0, 16, ByteOrder::Intel, Signedness::Unsigned),
+            init: 1000,
+            invalid: None,
+            update_bit: None,
+        },
+        SignalConfig {
+            name: "YellowBelow",
+            direction: SignalDirection::Rx(THRESHOLD_IPDU),
+            layout: cw_core::signal_layout!(8; 16, 16, ByteOrder::Intel, Signedness::Unsigned),
+            init: 2000,
+            invalid: None,
+            update_bit: None,
+        },
+    ],
+) {
+    Ok(cfg) => cfg,
+    Err(e) => panic!("{}", e.describe()),
+};
+
+/// PduR: the distance I-PDU onto CanIf PDU 0; CanIf RX PDU 0 onto the threshold I-PDU.
+pub static PDUR: PduRConfig<1, 1, 1, 1> =
+    match PduRConfig::new([TxPduId(0)], [RxRoute::One(THRESHOLD_IPDU)]) {
+        Ok(cfg) => cfg,
+        Err(e) => panic!("{}", e.describe()),
+    };
+
+/// CanSM: two fast recoveries after 10 ms, then 1 s; 100 ms on the bus ensures recovery.
+pub const CANSM: CanSmConfig = match CanSmConfig::from_ms(BSW_PERIOD_MS, 2, 10, 1000, 100) {
+    Ok(cfg) => cfg,
+    Err(_) => panic!("CanSM timing is not a whole number of BSW periods"),
+};

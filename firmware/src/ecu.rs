@@ -1,0 +1,380 @@
+//! The ECU: the OSEK kernel executing the paper's tasks, the BSW (EcuM/BswM, ComM/CanSM,
+//! Com, PduR, CanIf) and the SWCs connected through the RTE, on any [`Board`].
+//!
+//! Execution model: the kernel decides who runs; [`Ecu::dispatch`] executes it. Tasks are
+//! basic and run to completion, so a task that another one preempts (the sonar task
+//! activating `OsComTask`) is simply suspended on the Rust stack while the higher one runs,
+//! exactly as a single-stack OSEK kernel does. The timer and CAN interrupts enter the
+//! kernel at interrupt level ([`Ecu::tick`], [`Ecu::can_event`]) and rescheduling happens
+//! when they leave.
+
+use cw_core::can::ControllerMode;
+use cw_core::canif::{CanIf, PduMode, RxDropped, TxPduId};
+use cw_core::cansm::{Actions, CanSm, ComMode};
+use cw_core::com::ipdu::Com;
+use cw_core::com::signal::SignalValue;
+use cw_core::ecum::{bswm_actions, BswMAction, BswMRequest, EcuM};
+use cw_core::os::{OsError, TaskId};
+use cw_core::sonar::SonarConfig;
+use cw_core::warning::{Measurement, WarningLevel};
+use embedded_hal::digital::OutputPin;
+
+use crate::board::Board;
+use crate::config::{self, Kernel};
+use crate::rte::Rte;
+use crate::swc::{can_translate, LedActuator, LedColor, ObstacleDetection, UltraSonic};
+
+/// A CAN controller event, delivered by the board's CAN interrupt.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum CanInterrupt {
+    /// The frame of this CanIf PDU handle was sent.
+    TxConfirmation(u16),
+    /// A frame arrived in this receive mailbox.
+    Received(cw_core::can::Hrh, cw_core::can::CanFrame),
+    /// The controller went bus-off.
+    BusOff,
+}
+
+/// Counters an engineer looks at after a run.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct EcuStats {
+    /// Distance frames handed to CanIf (sent or buffered).
+    pub frames_requested: u32,
+    /// Distance frames CanIf refused (controller stopped or off-line, e.g. during bus-off).
+    pub frames_refused: u32,
+    /// Received frames dropped by CanIf (unknown id, wrong DLC, wrong mailbox, off-line).
+    pub rx_dropped: u32,
+    /// Kernel services that returned an error (none expected).
+    pub os_errors: u32,
+}
+
+/// The whole ECU except the board.
+pub struct Ecu {
+    os: Kernel,
+    ecum: EcuM,
+    canif: CanIf<1, 1>,
+    cansm: CanSm,
+    com: Com<8, 1, 1, 4>,
+    rte: Rte,
+    ultrasonic: UltraSonic,
+    obstacle: ObstacleDetection,
+    red: LedActuator,
+    yellow: LedActuator,
+    /// The last threshold pair received from the PC and applied (raw), to apply each once.
+    applied_thresholds: (u64, u64),
+    last_measurement: Measurement,
+    stats: EcuStats,
+}
+
+impl Ecu {
+    /// The ECU before power-on.
+    ///
+    /// # Errors
+    /// [`cw_core::os::ConfigError`] if the kernel's queue capacity does not match the
+    /// configuration (a build-configuration mistake, reported rather than panicking).
+    pub fn new(sensor: SonarConfig) -> Result<Self, cw_core::os::ConfigError> {
+        Ok(Self {
+            os: Kernel::new(&config::OS)?,
+            ecum: EcuM::new(),
+            canif: CanIf::new(&config::CANIF),
+            cansm: CanSm::new(config::CANSM),
+            com: Com::new(&config::COM),
+            rte: Rte::new(),
+            ultrasonic: UltraSonic::new(sensor),
+            obstacle: ObstacleDetection::new(),
+            red: LedActuator::new(LedColor::Red),
+            yellow: LedActuator::new(LedColor::Yellow),
+            applied_thresholds: (1000, 2000),
+            last_measurement: Measurement::Invalid,
+            stats: EcuStats::default(),
+        })
+    }
+
+    /// The kernel (for inspection).
+    pub const fn os(&self) -> &Kernel {
+        &self.os
+    }
+
+    /// The CanIf state (drop counters, modes).
+    pub const fn canif(&self) -> &CanIf<1, 1> {
+        &self.canif
+    }
+
+    /// The CanSM state (bus-off counters).
+    pub const fn cansm(&self) -> &CanSm {
+        &self.cansm
+    }
+
+    /// The EcuM state.
+    pub const fn ecum(&self) -> &EcuM {
+        &self.ecum
+    }
+
+    /// The newest measurement UltraSonic published.
+    pub const fn measurement(&self) -> Measurement {
+        self.last_measurement
+    }
+
+    /// The level ObstacleDetection decided last.
+    pub fn level(&self) -> WarningLevel {
+        self.rte.led_request.read()
+    }
+
+    /// The warning thresholds in use.
+    pub const fn thresholds(&self) -> cw_core::warning::Thresholds {
+        self.obstacle.thresholds()
+    }
+
+    /// Run counters.
+    pub const fn stats(&self) -> &EcuStats {
+        &self.stats
+    }
+
+    fn os_result(&mut self, result: Result<(), OsError>) {
+        if result.is_err() {
+            self.stats.os_errors = self.stats.os_errors.saturating_add(1);
+        }
+    }
+
+    /// Power-on: `EcuM_Init` (start-up one), then `StartOS`, which runs `OsStartupTask`.
+    pub fn start<B: Board>(&mut self, board: &mut B) {
+        if self.ecum.init().is_err() {
+            return;
+        }
+        // Start-up one: Mcu, Port, Dio, Gpt. On every board here the LEDs start low.
+        for color in [LedColor::Red, LedColor::Yellow] {
+            let _ = board.led(color).set_low();
+        }
+        let started = self.os.start();
+        self.os_result(started);
+        self.dispatch(board);
+    }
+
+    /// The 1 ms timer interrupt: the system counter advances and due alarms activate tasks,
+    /// which then run.
+    pub fn tick<B: Board>(&mut self, board: &mut B) {
+        let entered = self.os.enter_isr();
+        self.os_result(entered);
+        let ticked = self
+            .os
+            .increment_counter(config::SYSTEM_COUNTER)
+            .map(|report| {
+                // Every alarm action is an activation of a task at its limit if it fails: a
+                // period overrun, which the paper's Table 1 would show as a missed period.
+                report.failed_actions
+            });
+        if let Ok(failed) = ticked {
+            self.stats.os_errors = self.stats.os_errors.saturating_add(u32::from(failed));
+        }
+        let left = self.os.exit_isr();
+        self.os_result(left);
+        self.dispatch(board);
+    }
+
+    /// The CAN interrupt: one controller event into CanIf and upwards.
+    pub fn can_event<B: Board>(&mut self, board: &mut B, event: CanInterrupt) {
+        let entered = self.os.enter_isr();
+        self.os_result(entered);
+        match event {
+            CanInterrupt::TxConfirmation(pdu) => {
+                if let Some(TxPduId(p)) = self.canif.tx_confirmation(board.can(), pdu) {
+                    let _ = config::PDUR.canif_tx_confirmation(TxPduId(p));
+                }
+            }
+            CanInterrupt::Received(hrh, frame) => match self.canif.rx_indication(hrh, &frame) {
+                Ok(pdu) => {
+                    config::PDUR.canif_rx_indication(&mut self.com, pdu, frame.bytes());
+                }
+                Err(
+                    RxDropped::Offline
+                    | RxDropped::UnknownId
+                    | RxDropped::WrongHrh
+                    | RxDropped::WrongDlc,
+                ) => {
+                    self.stats.rx_dropped = self.stats.rx_dropped.saturating_add(1);
+                }
+            },
+            CanInterrupt::BusOff => {
+                self.canif.controller_bus_off();
+                let actions = self.cansm.controller_bus_off();
+                self.apply(board, actions);
+            }
+        }
+        let left = self.os.exit_isr();
+        self.os_result(left);
+        self.dispatch(board);
+    }
+
+    /// Runs tasks while the kernel has one to run that is not already on the stack.
+    fn dispatch<B: Board>(&mut self, board: &mut B) {
+        while let Some(task) = self.os.running() {
+            self.run_task(board, task);
+        }
+    }
+
+    /// Runs the task the kernel just chose until the current one (`me`) is chosen again:
+    /// the nested execution of a preempting task.
+    fn run_preempting<B: Board>(&mut self, board: &mut B, me: TaskId) {
+        while let Some(task) = self.os.running() {
+            if task == me {
+                return;
+            }
+            self.run_task(board, task);
+        }
+    }
+
+    fn run_task<B: Board>(&mut self, board: &mut B, task: TaskId) {
+        board.task_started(task);
+        match task {
+            config::STARTUP_TASK => self.startup_task(board),
+            config::LED_TASK => self.led_task(board),
+            config::BSW_TASK => self.bsw_task(board),
+            config::OBSTACLE_TASK => self.obstacle_task(),
+            config::COM_TASK => self.com_task(board),
+            config::SONAR_TASK => self.sonar_task(board),
+            _ => {}
+        }
+        let ended = self.os.terminate_task();
+        self.os_result(ended);
+    }
+
+    /// `OsStartupTask`: `EcuM_StartupTwo`, then the ModeManagerInit runnable asks BswM for
+    /// the run mode.
+    fn startup_task<B: Board>(&mut self, board: &mut B) {
+        // Start-up two: Can, CanIf, CanSM, PduR, Com, ComM, BswM, IoHwAb. Each is already in
+        // its initial state (constructed in `new`); the order is EcuM's to keep.
+        if self.ecum.startup_two().is_err() {
+            return;
+        }
+        for action in bswm_actions(BswMRequest::EcuRun) {
+            match action {
+                BswMAction::ComMFullCommunication => {
+                    let actions = self.cansm.request(ComMode::Full);
+                    self.apply(board, actions);
+                }
+                BswMAction::ComMNoCommunication => {
+                    let actions = self.cansm.request(ComMode::No);
+                    self.apply(board, actions);
+                }
+                BswMAction::EcuMRequestRun => {
+                    let _ = self.ecum.request_run(0);
+                }
+                BswMAction::EcuMReleaseRun => {
+                    let _ = self.ecum.release_run(0);
+                }
+            }
+        }
+    }
+
+    /// Carries out CanSM's decisions on CanIf and the controller.
+    fn apply<B: Board>(&mut self, board: &mut B, actions: Actions) {
+        if let Some(mode) = actions.controller {
+            if self.canif.set_controller_mode(board.can(), mode).is_err()
+                && mode == ControllerMode::Started
+            {
+                // The controller refused to start; CanSM retries at its next bus-off or
+                // request. Nothing is sent meanwhile (CanIf stays stopped).
+            }
+        }
+        if let Some(mode) = actions.pdu {
+            self.canif.set_pdu_mode(mode);
+        }
+    }
+
+    /// `OsLEDTask`: LEDActuator, prototypes RedLED and YellowLED.
+    fn led_task<B: Board>(&mut self, board: &mut B) {
+        let level = self.rte.led_request.read();
+        let now_ms = board.now_ms();
+        for (swc, color) in [(self.red, LedColor::Red), (self.yellow, LedColor::Yellow)] {
+            let pin = board.led(color);
+            let _ = if swc.run(level, now_ms) {
+                pin.set_high()
+            } else {
+                pin.set_low()
+            };
+        }
+    }
+
+    /// `OsBswServiceTask`: the BSW main functions.
+    fn bsw_task<B: Board>(&mut self, board: &mut B) {
+        self.com.main_function_rx(|_timed_out| {});
+        let (canif, stats) = (&mut self.canif, &mut self.stats);
+        self.com.main_function_tx(|ipdu, sdu| {
+            let sent = config::PDUR
+                .com_transmit(canif, board.can(), ipdu, sdu)
+                .is_ok();
+            count_frame(stats, sent);
+            sent
+        });
+        let actions = self.cansm.main_function();
+        self.apply(board, actions);
+        if self.canif.pdu_mode() == PduMode::Offline && self.cansm.current_mode() == ComMode::Full {
+            self.canif.set_pdu_mode(PduMode::Online);
+        }
+    }
+
+    /// `OsObstacleDetectionTask`: ObstacleDetection (and the thresholds from the PC).
+    fn obstacle_task(&mut self) {
+        let red = self.com.receive_signal(config::SIG_RED_BELOW);
+        let yellow = self.com.receive_signal(config::SIG_YELLOW_BELOW);
+        if let (Ok(SignalValue::Unsigned(r)), Ok(SignalValue::Unsigned(y))) = (red, yellow) {
+            if (r, y) != self.applied_thresholds {
+                self.applied_thresholds = (r, y);
+                self.obstacle.configure(r as u32, y as u32);
+            }
+        }
+        let level = self.obstacle.run(self.rte.sonar_to_obstacle.read());
+        let _ = self.rte.led_request.write(level);
+    }
+
+    /// `OsSonarTask`: UltraSonic; its write to SonarRecv activates `OsComTask`.
+    fn sonar_task<B: Board>(&mut self, board: &mut B) {
+        let measurement = self.ultrasonic.run(board.sonar_echo());
+        self.last_measurement = measurement;
+        let _ = self.rte.sonar_to_obstacle.write(measurement);
+        if self.rte.sonar_to_can.write(measurement).0 {
+            let activated = self.os.activate_task(config::COM_TASK);
+            self.os_result(activated);
+            self.run_preempting(board, config::SONAR_TASK);
+        }
+    }
+
+    /// `OsComTask`: CanTranslate.
+    fn com_task<B: Board>(&mut self, board: &mut B) {
+        let Ok(measurement) = self.rte.sonar_to_can.take() else {
+            return;
+        };
+        let (distance, level) = can_translate(measurement, self.rte.led_request.read());
+        let (canif, stats) = (&mut self.canif, &mut self.stats);
+        let mut transmit = |ipdu, sdu: &[u8]| {
+            let sent = config::PDUR
+                .com_transmit(canif, board.can(), ipdu, sdu)
+                .is_ok();
+            count_frame(stats, sent);
+            sent
+        };
+        let _ = self.com.send_signal(
+            config::SIG_WARNING_LEVEL,
+            SignalValue::Unsigned(level),
+            &mut transmit,
+        );
+        let _ = match distance {
+            Some(mm) => self.com.send_signal(
+                config::SIG_DISTANCE,
+                SignalValue::Unsigned(mm),
+                &mut transmit,
+            ),
+            None => self
+                .com
+                .invalidate_signal(config::SIG_DISTANCE, &mut transmit),
+        };
+    }
+}
+
+fn count_frame(stats: &mut EcuStats, sent: bool) {
+    if sent {
+        stats.frames_requested = stats.frames_requested.saturating_add(1);
+    } else {
+        stats.frames_refused = stats.frames_refused.saturating_add(1);
+    }
+}

@@ -1,0 +1,12 @@
+//! The collision-warning ECU of the paper, composed: its configuration ([`config`]), its
+//! SWCs ([`swc`]), its RTE ([`rte`]) and the ECU that runs them on a [`board::Board`]
+//! ([`ecu`]). Everything here is `no_std` and builds for `thumbv7em-none-eabihf`; the host
+//! simulation (feature `host`) adds the simulated board and the command-line tool.
+#![cfg_attr(not(any(test, feature = "host")), no_std)]
+#![forbid(unsafe_code)]
+
+pub mod board;
+pub mod config;
+pub mod ecu;
+pub mod rte;
+pub mod swc;
