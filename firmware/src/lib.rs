@@ -8,5 +8,7 @@
 pub mod board;
 pub mod config;
 pub mod ecu;
+#[cfg(feature = "host")]
+pub mod host;
 pub mod rte;
 pub mod swc;

@@ -1,0 +1,219 @@
+//! `cw-ecu`: the collision-warning ECU on the simulated host board (the main job).
+//!
+//! Runs a scenario (by default the paper's Figure 7) in virtual time and prints, per
+//! obstacle position, the distance measured and the LEDs lit, as the paper reports it,
+//! then a summary. See `--help`.
+
+use std::io::Write;
+use std::process::ExitCode;
+use std::time::{Duration, Instant};
+
+use cw_bsp::host::CandumpLog;
+use cw_core::warning::{Measurement, WarningLevel};
+use cw_firmware::host::{Scenario, Simulation, TraceRow};
+
+const HELP: &str = "\
+cw-ecu: the collision-warning ECU (Kim et al., open-source AUTOSAR on an MPC5748G),
+simulated on a host board in virtual time.
+
+USAGE: cargo run --release [-- OPTIONS]
+
+OPTIONS:
+  --scenario FILE    run this scenario instead of the paper's Figure 7
+                     (format: firmware/src/host/scenario.rs, examples in scenarios/)
+  --trace FILE       write a CSV row every 10 ms:
+                     time_ms,true_distance_mm,measured_distance_mm,level,red,yellow
+  --can-log FILE     write every CAN frame on the bus in candump log format
+  --duration SECONDS run this long instead of the scenario's length
+  --seed N           seed of the sensor noise (default 1)
+  --realtime         pace the simulation to the wall clock
+  --help             this text
+";
+
+struct Options {
+    scenario: Option<String>,
+    trace: Option<String>,
+    can_log: Option<String>,
+    duration_ms: Option<u64>,
+    seed: u64,
+    realtime: bool,
+}
+
+fn parse_args(args: &[String]) -> Result<Option<Options>, String> {
+    let mut o = Options {
+        scenario: None,
+        trace: None,
+        can_log: None,
+        duration_ms: None,
+        seed: 1,
+        realtime: false,
+    };
+    let mut it = args.iter();
+    while let Some(arg) = it.next() {
+        let mut value = |name: &str| {
+            it.next()
+                .cloned()
+                .ok_or_else(|| format!("{name} needs a value"))
+        };
+        match arg.as_str() {
+            "--help" | "-h" => return Ok(None),
+            "--scenario" => o.scenario = Some(value("--scenario")?),
+            "--trace" => o.trace = Some(value("--trace")?),
+            "--can-log" => o.can_log = Some(value("--can-log")?),
+            "--seed" => {
+                let v = value("--seed")?;
+                o.seed = v
+                    .parse()
+                    .map_err(|_| format!("--seed: `{v}` is not a whole number"))?;
+            }
+            "--duration" => {
+                let v = value("--duration")?;
+                let seconds: f64 = v
+                    .parse()
+                    .map_err(|_| format!("--duration: `{v}` is not a number of seconds"))?;
+                if !(seconds > 0.0 && seconds <= 1.0e7) {
+                    return Err(format!("--duration: {v} s is not between 0 and 10^7 s"));
+                }
+                o.duration_ms = Some((seconds * 1000.0).round() as u64);
+            }
+            "--realtime" => o.realtime = true,
+            other => return Err(format!("unknown option `{other}` (see --help)")),
+        }
+    }
+    Ok(Some(o))
+}
+
+fn on_off(lit: bool) -> &'static str {
+    if lit {
+        "ON"
+    } else {
+        "off"
+    }
+}
+
+/// The Figure-7 table: for each held position, the state at the end of the hold.
+fn figure7_table(scenario: &Scenario, trace: &[TraceRow]) -> String {
+    let mut out = String::from(
+        "Obstacle held at each distance (paper Figure 7; state at the end of each hold)\n\
+         distance   measured   level    red   yellow\n",
+    );
+    for seg in scenario.segments.iter().filter(|s| s.from_mm == s.to_mm) {
+        let end = seg.start_ms + seg.duration_ms;
+        let Some(row) = trace
+            .iter()
+            .rev()
+            .find(|r| r.time_ms < end && r.time_ms > seg.start_ms)
+        else {
+            continue;
+        };
+        let measured = match row.measured {
+            Measurement::Distance { distance_mm } => format!("{distance_mm} mm"),
+            Measurement::NothingInRange => "none".into(),
+            Measurement::Invalid => "invalid".into(),
+        };
+        let level = match row.level {
+            WarningLevel::Off => "off",
+            WarningLevel::Yellow => "yellow",
+            WarningLevel::Red => "red",
+            WarningLevel::Fault => "FAULT",
+        };
+        out.push_str(&format!(
+            "{:>5.2} m   {:>9}   {:<7}  {:<4}  {}\n",
+            f64::from(seg.from_mm) / 1000.0,
+            measured,
+            level,
+            on_off(row.red),
+            on_off(row.yellow)
+        ));
+    }
+    out
+}
+
+fn run(o: &Options) -> Result<(), String> {
+    let scenario = match &o.scenario {
+        Some(path) => {
+            let text = std::fs::read_to_string(path)
+                .map_err(|e| format!("cannot read scenario {path}: {e}"))?;
+            Scenario::parse(&text).map_err(|e| format!("scenario {path}: {e}"))?
+        }
+        None => Scenario::figure7(),
+    };
+    let end_ms = o.duration_ms.unwrap_or_else(|| scenario.duration_ms());
+    let mut sim = Simulation::new(scenario, o.seed).map_err(|e| e.to_string())?;
+    let started = Instant::now();
+    if o.realtime {
+        while sim.now_ms() < end_ms {
+            let next = (sim.now_ms() + 10).min(end_ms);
+            sim.run_until_ms(next);
+            let due = Duration::from_millis(next);
+            if let Some(wait) = due.checked_sub(started.elapsed()) {
+                std::thread::sleep(wait);
+            }
+        }
+    } else {
+        sim.run_until_ms(end_ms);
+    }
+    let wall = started.elapsed();
+
+    if let Some(path) = &o.trace {
+        let mut text = String::from(TraceRow::CSV_HEADER);
+        text.push('\n');
+        for row in sim.trace() {
+            text.push_str(&row.csv());
+            text.push('\n');
+        }
+        std::fs::write(path, text).map_err(|e| format!("cannot write trace {path}: {e}"))?;
+    }
+    if let Some(path) = &o.can_log {
+        let file =
+            std::fs::File::create(path).map_err(|e| format!("cannot write CAN log {path}: {e}"))?;
+        let mut log = CandumpLog::new(std::io::BufWriter::new(file));
+        log.record_all(sim.frames())
+            .and_then(|()| log.flush())
+            .map_err(|e| format!("cannot write CAN log {path}: {e}"))?;
+    }
+
+    let mut out = std::io::stdout().lock();
+    let ecu = sim.ecu();
+    let stats = ecu.stats();
+    let simulated_s = sim.now_ms() as f64 / 1000.0;
+    let ratio = simulated_s / wall.as_secs_f64().max(1e-9);
+    let text = format!(
+        "{}\nsummary: {:.1} s of ECU time simulated in {:.1} ms of wall time ({:.0}x real time)\n\
+         \x20        {} CAN frames on the bus; distance frames sent {}, refused {}; received frames dropped {}\n\
+         \x20        bus-offs {}, kernel errors {}, thresholds red < {} mm, yellow < {} mm\n",
+        figure7_table(sim.scenario(), sim.trace()),
+        simulated_s,
+        wall.as_secs_f64() * 1000.0,
+        ratio,
+        sim.frames().len(),
+        stats.frames_requested,
+        stats.frames_refused,
+        stats.rx_dropped,
+        ecu.cansm().bus_off_total(),
+        stats.os_errors,
+        ecu.thresholds().red_below_mm(),
+        ecu.thresholds().yellow_below_mm(),
+    );
+    out.write_all(text.as_bytes())
+        .map_err(|e| format!("cannot write to stdout: {e}"))
+}
+
+fn main() -> ExitCode {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let result = match parse_args(&args) {
+        Ok(None) => {
+            print!("{HELP}");
+            Ok(())
+        }
+        Ok(Some(options)) => run(&options),
+        Err(e) => Err(e),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("cw-ecu: {e}");
+            ExitCode::FAILURE
+        }
+    }
+}
