@@ -1,0 +1,222 @@
+//! End to end on the host board: scenario in, LEDs, trace and CAN frames out, through
+//! every layer (sensor, UltraSonic, RTE, ObstacleDetection, LEDActuator, CanTranslate, Com,
+//! PduR, CanIf, the CAN controller and the bus), scheduled by the OSEK kernel.
+
+use cw_core::warning::{Measurement, WarningLevel};
+use cw_firmware::config;
+use cw_firmware::host::{Scenario, Simulation, TraceRow};
+
+fn run(text: &str) -> Simulation {
+    let scenario = Scenario::parse(text).expect("test scenario parses");
+    let mut sim = Simulation::new(scenario, 1).expect("ECU configuration is consistent");
+    sim.run();
+    sim
+}
+
+/// Rows of the second half of `[start_ms, end_ms)`: the settled state.
+fn settled(trace: &[TraceRow], start_ms: u64, end_ms: u64) -> Vec<TraceRow> {
+    let mid = start_ms + (end_ms - start_ms) / 2;
+    trace
+        .iter()
+        .filter(|r| r.time_ms >= mid && r.time_ms < end_ms)
+        .copied()
+        .collect()
+}
+
+fn leds(level: WarningLevel) -> (bool, bool) {
+    (level == WarningLevel::Red, level == WarningLevel::Yellow)
+}
+
+#[test]
+fn figure7_red_only_yellow_only_and_off() {
+    let sim = run("hold 500 2000\nhold 1000 2000\nhold 1500 2000\nhold 2000 2000\nhold 2500 2000");
+    let expected = [
+        (true, false),
+        (false, true),
+        (false, true),
+        (false, false),
+        (false, false),
+    ];
+    for (i, want) in expected.into_iter().enumerate() {
+        let start = 2000 * i as u64;
+        let rows = settled(sim.trace(), start, start + 2000);
+        assert!(!rows.is_empty());
+        for r in rows {
+            assert_eq!(
+                (r.red, r.yellow),
+                want,
+                "at {} mm, t = {} ms",
+                r.true_distance_mm,
+                r.time_ms
+            );
+        }
+    }
+}
+
+#[test]
+fn exact_thresholds_through_the_whole_stack() {
+    let sim = run(&std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../scenarios/boundaries.txt"
+    ))
+    .expect("scenario file"));
+    let want = [
+        (999, WarningLevel::Red),
+        (1000, WarningLevel::Yellow),
+        (1999, WarningLevel::Yellow),
+        (2000, WarningLevel::Off),
+    ];
+    for (i, (mm, level)) in want.into_iter().enumerate() {
+        let start = 1000 * i as u64;
+        for r in settled(sim.trace(), start, start + 1000) {
+            assert_eq!(r.measured, Measurement::Distance { distance_mm: mm });
+            assert_eq!(r.level, level, "{mm} mm");
+            assert_eq!((r.red, r.yellow), leds(level), "{mm} mm");
+        }
+    }
+}
+
+#[test]
+fn leds_follow_the_decision_within_one_led_task_period() {
+    let sim = run("hold 2500 500\nramp 2500 300 4000\nramp 300 2500 4000");
+    let rows = sim.trace();
+    for pair in rows.windows(2) {
+        let decided = pair[0].level;
+        if decided == WarningLevel::Fault {
+            continue;
+        }
+        assert_eq!(
+            (pair[1].red, pair[1].yellow),
+            leds(decided),
+            "10 ms after t = {} ms",
+            pair[0].time_ms
+        );
+    }
+}
+
+#[test]
+fn periodic_tasks_run_exactly_on_their_periods_and_every_sample_leaves_as_a_frame() {
+    let sim = run("ramp 300 3000 5000");
+    let starts = sim.task_starts();
+    for (task, period_ms) in [
+        (config::LED_TASK, 10),
+        (config::BSW_TASK, 10),
+        (config::OBSTACLE_TASK, 20),
+        (config::SONAR_TASK, 40),
+    ] {
+        let times: Vec<u64> = starts
+            .iter()
+            .filter(|(t, _)| *t == task)
+            .map(|(_, us)| *us)
+            .collect();
+        assert!(times.len() > 100 / period_ms as usize);
+        assert_eq!(times[0], period_ms * 1000, "{task:?} first activation");
+        for w in times.windows(2) {
+            assert_eq!(w[1] - w[0], period_ms * 1000, "{task:?} period");
+        }
+    }
+    // CanTranslate runs right after every sonar sample, at the same instant.
+    let sonar: Vec<u64> = starts
+        .iter()
+        .filter(|(t, _)| *t == config::SONAR_TASK)
+        .map(|(_, us)| *us)
+        .collect();
+    let com: Vec<u64> = starts
+        .iter()
+        .filter(|(t, _)| *t == config::COM_TASK)
+        .map(|(_, us)| *us)
+        .collect();
+    assert_eq!(sonar, com);
+    // And its frame completes on the bus within a millisecond, every time.
+    let frames: Vec<u64> = sim
+        .frames()
+        .iter()
+        .filter(|f| f.frame.can_id() == config::DISTANCE_FRAME_ID)
+        .map(|f| f.time_us)
+        .collect();
+    let sent_by_end: Vec<u64> = sonar
+        .iter()
+        .copied()
+        .filter(|t| *t + 1000 <= 5000 * 1000)
+        .collect();
+    assert_eq!(frames.len(), sent_by_end.len());
+    for (frame_us, sample_us) in frames.iter().zip(&sent_by_end) {
+        assert!(
+            *frame_us > *sample_us && *frame_us - *sample_us < 1000,
+            "frame {frame_us} after sample {sample_us}"
+        );
+    }
+}
+
+#[test]
+fn sensor_dropout_gives_fault_blinking_and_the_invalidation_value_then_recovers() {
+    let sim = run("hold 1500 6000\ndropout 1000 2000");
+    let rows = sim.trace();
+    let during = settled(rows, 1000, 3000);
+    assert!(during.iter().all(|r| r.level == WarningLevel::Fault));
+    assert!(
+        during.iter().any(|r| r.red && r.yellow) && during.iter().any(|r| !r.red && !r.yellow),
+        "blinking"
+    );
+    let invalid_frames = sim
+        .frames()
+        .iter()
+        .filter(|f| f.time_us > 1_200_000 && f.time_us < 3_000_000)
+        .filter(|f| f.frame.bytes()[..4] == [0xFF; 4])
+        .count();
+    assert!(
+        invalid_frames > 20,
+        "the distance carries the invalidation value ({invalid_frames} frames)"
+    );
+    for r in settled(rows, 3000, 6000) {
+        assert_eq!(
+            (r.level, r.red, r.yellow),
+            (WarningLevel::Yellow, false, true),
+            "recovered at {} ms",
+            r.time_ms
+        );
+    }
+}
+
+#[test]
+fn bus_off_is_recovered_by_cansm_and_frames_flow_again() {
+    let sim = run("hold 1500 3000\ncan-errors 1000 40");
+    assert_eq!(sim.ecu().cansm().bus_off_total(), 1);
+    let after: Vec<_> = sim
+        .frames()
+        .iter()
+        .filter(|f| f.time_us > 1_100_000)
+        .collect();
+    assert!(after.len() > 40, "frames after recovery: {}", after.len());
+    assert_eq!(sim.ecu().stats().os_errors, 0);
+}
+
+#[test]
+fn malformed_frames_are_dropped_and_counted_and_disturb_nothing() {
+    let sim = run("hold 800 3000\nframe 1000 200#E803\nframe 1100 7FF#0102030405060708\nframe 2000 200#F401E803");
+    assert_eq!(
+        sim.ecu().stats().rx_dropped,
+        2,
+        "short frame and unknown id"
+    );
+    assert_eq!(sim.ecu().canif().stats().rx_wrong_dlc, 1);
+    assert_eq!(sim.ecu().canif().stats().rx_unknown_id, 1);
+    // Before the valid threshold frame: red; after (red < 500, yellow < 1000): yellow.
+    assert!(settled(sim.trace(), 1000, 2000)
+        .iter()
+        .all(|r| r.level == WarningLevel::Red));
+    assert!(settled(sim.trace(), 2000, 3000)
+        .iter()
+        .all(|r| r.level == WarningLevel::Yellow));
+    assert_eq!(sim.ecu().stats().frames_refused, 0);
+}
+
+#[test]
+fn thresholds_the_pc_sends_are_refused_when_invalid() {
+    let sim = run("hold 800 2000\nframe 500 200#D007E803");
+    assert_eq!(
+        sim.ecu().thresholds(),
+        cw_core::warning::Thresholds::PAPER,
+        "2000 < 1000 is refused"
+    );
+}
