@@ -22,7 +22,7 @@ OPTIONS:
   --scenario FILE    run this scenario instead of the paper's Figure 7
                      (format: firmware/src/host/scenario.rs, examples in scenarios/)
   --trace FILE       write a CSV row every 10 ms:
-                     time_ms,true_distance_mm,measured_distance_mm,level,red,yellow
+                     time_ms,true_distance_mm,measured_distance_mm,level,red,yellow,measurement
   --can-log FILE     write every CAN frame on the bus in candump log format
   --duration SECONDS run this long instead of the scenario's length
   --seed N           seed of the sensor noise (default 1)

@@ -33,6 +33,7 @@ pub const STAGES: &[&str] = &[
     "miri",
     "model",
     "differential",
+    "interop",
     "fuzz",
     "bench",
 ];
@@ -199,7 +200,19 @@ fn run_stage(stage: &str) -> Result {
                     .args(["build", "-p", "cw-core", "--release", "--target", target])
                     .run()?;
             }
-            Ok(())
+            // The whole ECU except the host board, for the Cortex-M4F.
+            Cmd::new("cargo")
+                .args([
+                    "build",
+                    "-p",
+                    "cw-firmware",
+                    "--lib",
+                    "--no-default-features",
+                    "--release",
+                    "--target",
+                    "thumbv7em-none-eabihf",
+                ])
+                .run()
         }
         "miri" => {
             let toolchain = format!("+{NIGHTLY}");
@@ -224,6 +237,7 @@ fn run_stage(stage: &str) -> Result {
             .args(["run", "--release", "-p", "cw-proofs"])
             .run(),
         "differential" => differential::run(&differential::Options::default()),
+        "interop" => interop(),
         "fuzz" => {
             for target in FUZZ_TARGETS {
                 // libFuzzer engine (the default) with AddressSanitizer: needs the nightly.
@@ -246,8 +260,57 @@ fn run_stage(stage: &str) -> Result {
         }
         "bench" => {
             println!("$ cargo xtask callgrind   (in-process)");
-            callgrind::run(&callgrind::Options::default())
+            callgrind::run(&callgrind::Options::default())?;
+            // Simulation speed: the paper ran its ECU for 30 minutes.
+            Cmd::new("cargo")
+                .args([
+                    "run",
+                    "--release",
+                    "-p",
+                    "cw-firmware",
+                    "--bin",
+                    "cw-ecu",
+                    "--",
+                ])
+                .args(["--scenario", "scenarios/approach.txt", "--duration", "1800"])
+                .run()
         }
         other => Err(format!("no such stage `{other}`")),
     }
+}
+
+/// The ECU's CAN log and trace, read back by python-can and cantools with the DBC: every
+/// distance on the bus equals what the ECU measured, for each example scenario.
+fn interop() -> Result {
+    let out = crate::process::root().join("target").join("interop");
+    std::fs::create_dir_all(&out).map_err(|e| format!("cannot create {}: {e}", out.display()))?;
+    for scenario in ["figure7", "faults", "approach"] {
+        let trace = out.join(format!("{scenario}.csv"));
+        let log = out.join(format!("{scenario}.log"));
+        Cmd::new("cargo")
+            .args([
+                "run",
+                "--quiet",
+                "--release",
+                "-p",
+                "cw-firmware",
+                "--bin",
+                "cw-ecu",
+                "--",
+            ])
+            .arg("--scenario")
+            .arg(format!("scenarios/{scenario}.txt"))
+            .arg("--trace")
+            .arg(&trace)
+            .arg("--can-log")
+            .arg(&log)
+            .run()?;
+        Cmd::new(crate::setup::venv_python())
+            .arg("tools/interop_check.py")
+            .arg("firmware/ecu.dbc")
+            .arg(&log)
+            .arg(&trace)
+            .run()?;
+    }
+    Ok(())
 }

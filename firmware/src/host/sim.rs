@@ -76,23 +76,25 @@ pub struct TraceRow {
 impl TraceRow {
     /// The CSV header.
     pub const CSV_HEADER: &'static str =
-        "time_ms,true_distance_mm,measured_distance_mm,level,red,yellow";
+        "time_ms,true_distance_mm,measured_distance_mm,level,red,yellow,measurement";
 
-    /// The row as CSV; the measured distance is empty when there is none (nothing in range
-    /// or invalid; the level tells which).
+    /// The row as CSV; the measured distance is empty when there is none, and the last
+    /// column says why (`distance`, `nothing_in_range` or `invalid`).
     pub fn csv(&self) -> String {
-        let measured = match self.measured {
-            Measurement::Distance { distance_mm } => distance_mm.to_string(),
-            Measurement::NothingInRange | Measurement::Invalid => String::new(),
+        let (measured, kind) = match self.measured {
+            Measurement::Distance { distance_mm } => (distance_mm.to_string(), "distance"),
+            Measurement::NothingInRange => (String::new(), "nothing_in_range"),
+            Measurement::Invalid => (String::new(), "invalid"),
         };
         format!(
-            "{},{},{},{:?},{},{}",
+            "{},{},{},{:?},{},{},{}",
             self.time_ms,
             self.true_distance_mm,
             measured,
             self.level,
             u8::from(self.red),
-            u8::from(self.yellow)
+            u8::from(self.yellow),
+            kind
         )
     }
 }
