@@ -59,11 +59,44 @@ pub const PROBES: &[(&str, &str)] = &[
     ),
 ];
 
+/// Probes of the communication stack per layer (the paper's Figure 10), in
+/// `firmware/examples/stack_probe.rs`, with the ECU's own configuration.
+pub const STACK_PROBES: &[(&str, &str)] = &[
+    (
+        "tx_path",
+        "TX: SWC write -> RTE -> CanTranslate -> Com -> PduR -> CanIf -> mailbox",
+    ),
+    (
+        "tx_com_down",
+        "TX: Com_SendSignal -> PduR -> CanIf -> mailbox",
+    ),
+    (
+        "tx_com_only",
+        "TX: Com_SendSignal alone (pack, transfer property, MDT)",
+    ),
+    ("tx_pdur_down", "TX: PduR_ComTransmit -> CanIf -> mailbox"),
+    ("tx_can", "TX: Can_Write alone (frame into the mailbox)"),
+    (
+        "rx_path",
+        "RX: mailbox -> CanIf -> PduR -> Com -> Com_ReceiveSignal",
+    ),
+    (
+        "rx_canif",
+        "RX: CanIf_RxIndication alone (lookup, HRH, DLC)",
+    ),
+    (
+        "rx_pdur_com",
+        "RX: PduR_CanIfRxIndication -> Com_RxIndication",
+    ),
+    ("rx_com_read", "RX: Com_ReceiveSignal alone (unpack)"),
+];
+
 /// Iteration counts of the two runs per probe.
 const LOW: u64 = 1000;
 const HIGH: u64 = 2000;
 
 const EXAMPLE: &str = "callgrind_probe";
+const STACK_EXAMPLE: &str = "stack_probe";
 
 /// Options of `cargo xtask callgrind`.
 #[derive(Default)]
@@ -106,11 +139,30 @@ pub fn run(options: &Options) -> Result {
     std::fs::create_dir_all(&out_dir)
         .map_err(|e| format!("creating {}: {e}", out_dir.display()))?;
 
+    Cmd::new("cargo")
+        .args([
+            "build",
+            "--release",
+            "-p",
+            "cw-firmware",
+            "--example",
+            STACK_EXAMPLE,
+        ])
+        .run()?;
+    let stack_binary = target_dir()
+        .join("release")
+        .join("examples")
+        .join(STACK_EXAMPLE);
+    let probes = PROBES
+        .iter()
+        .map(|p| (&binary, p))
+        .chain(STACK_PROBES.iter().map(|p| (&stack_binary, p)));
+
     let mut rows = Vec::new();
     let mut errors = Vec::new();
-    for &(op, description) in PROBES {
-        let measured = measure(&binary, &out_dir, op, LOW).and_then(|low| {
-            let high = measure(&binary, &out_dir, op, HIGH)?;
+    for (binary, &(op, description)) in probes {
+        let measured = measure(binary, &out_dir, op, LOW).and_then(|low| {
+            let high = measure(binary, &out_dir, op, HIGH)?;
             per_call(op, low, high)
         });
         match measured {

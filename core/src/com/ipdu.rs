@@ -197,6 +197,8 @@ pub struct ComConfig<const N: usize, const TX: usize, const RX: usize, const S: 
     rx_deadline: [u32; RX],
     /// Derived: whether any signal of an RX I-PDU has an update bit.
     rx_update_bits: [bool; RX],
+    /// Derived: per TX I-PDU, the update bits of its signals (cleared after sending).
+    tx_update_mask: [[u8; N]; TX],
 }
 
 const fn cycles(ms: u32, period_ms: u32) -> Option<u32> {
@@ -297,6 +299,7 @@ impl<const N: usize, const TX: usize, const RX: usize, const S: usize> ComConfig
             i += 1;
         }
         let mut rx_update_bits = [false; RX];
+        let mut tx_update_mask = [[0u8; N]; TX];
         let mut s = 0;
         while s < S {
             let sig = &signals[s];
@@ -341,8 +344,11 @@ impl<const N: usize, const TX: usize, const RX: usize, const S: usize> ComConfig
                     }
                     k += 1;
                 }
-                if let SignalDirection::Rx(id) = sig.direction {
-                    rx_update_bits[id.0 as usize] = true;
+                match sig.direction {
+                    SignalDirection::Rx(id) => rx_update_bits[id.0 as usize] = true,
+                    SignalDirection::Tx(id, _) => {
+                        tx_update_mask[id.0 as usize][bit as usize / 8] |= 1 << (bit % 8);
+                    }
                 }
             }
             s += 1;
@@ -355,6 +361,7 @@ impl<const N: usize, const TX: usize, const RX: usize, const S: usize> ComConfig
             tx_timing,
             rx_deadline,
             rx_update_bits,
+            tx_update_mask,
         })
     }
 
@@ -588,11 +595,21 @@ impl<const N: usize, const TX: usize, const RX: usize, const S: usize> Com<N, TX
         };
         let i = usize::from(ipdu.0);
         let buf = self.tx_buf.get_mut(i).ok_or(ComError::UnknownSignal)?;
-        let old = sig.layout.unpack_raw(buf);
+        // Only the on-change properties need the old value.
+        let on_change = matches!(
+            property,
+            TransferProperty::TriggeredOnChange
+                | TransferProperty::TriggeredOnChangeWithoutRepetition
+        );
+        let old = if on_change {
+            sig.layout.unpack_raw(buf)
+        } else {
+            0
+        };
         sig.layout
             .pack(buf, value)
             .map_err(|_| ComError::OutOfRange)?;
-        let changed = sig.layout.unpack_raw(buf) != old;
+        let changed = on_change && sig.layout.unpack_raw(buf) != old;
         self.after_write(sig, i, property, changed, transmit);
         Ok(())
     }
@@ -675,11 +692,10 @@ impl<const N: usize, const TX: usize, const RX: usize, const S: usize> Com<N, TX
         let len = usize::from(self.cfg.tx[i].len);
         if transmit(TxIpduId(i as u16), &self.tx_buf[i][..len]) {
             self.tx_last[i] = Some(self.tx_now);
-            for sig in self.cfg.signals.iter() {
-                if let (SignalDirection::Tx(id, _), Some(bit)) = (sig.direction, sig.update_bit) {
-                    if usize::from(id.0) == i {
-                        set_bit(&mut self.tx_buf[i], bit, false);
-                    }
+            let mask = &self.cfg.tx_update_mask[i];
+            if mask.iter().any(|m| *m != 0) {
+                for (byte, m) in self.tx_buf[i].iter_mut().zip(mask) {
+                    *byte &= !m;
                 }
             }
         }
