@@ -585,15 +585,7 @@ impl<const N: usize, const TX: usize, const RX: usize, const S: usize> Com<N, TX
         value: SignalValue,
         transmit: impl FnMut(TxIpduId, &[u8]) -> bool,
     ) -> Result<(), ComError> {
-        let sig = self
-            .cfg
-            .signals
-            .get(usize::from(signal.0))
-            .ok_or(ComError::UnknownSignal)?;
-        let SignalDirection::Tx(ipdu, property) = sig.direction else {
-            return Err(ComError::UnknownSignal);
-        };
-        let i = usize::from(ipdu.0);
+        let (sig, i, property) = self.tx_signal(signal)?;
         let buf = self.tx_buf.get_mut(i).ok_or(ComError::UnknownSignal)?;
         // Only the on-change properties need the old value.
         let on_change = matches!(
@@ -614,6 +606,23 @@ impl<const N: usize, const TX: usize, const RX: usize, const S: usize> Com<N, TX
         Ok(())
     }
 
+    /// A transmitted signal's configuration, I-PDU index and transfer property.
+    #[inline(always)]
+    fn tx_signal(
+        &self,
+        signal: SignalId,
+    ) -> Result<(&'static SignalConfig<N>, usize, TransferProperty), ComError> {
+        let cfg: &'static ComConfig<N, TX, RX, S> = self.cfg;
+        let sig = cfg
+            .signals
+            .get(usize::from(signal.0))
+            .ok_or(ComError::UnknownSignal)?;
+        match sig.direction {
+            SignalDirection::Tx(ipdu, property) => Ok((sig, usize::from(ipdu.0), property)),
+            SignalDirection::Rx(_) => Err(ComError::UnknownSignal),
+        }
+    }
+
     /// `Com_InvalidateSignal`: writes the signal's invalidation value, with the same
     /// transmission behaviour as a write.
     ///
@@ -624,16 +633,8 @@ impl<const N: usize, const TX: usize, const RX: usize, const S: usize> Com<N, TX
         signal: SignalId,
         transmit: impl FnMut(TxIpduId, &[u8]) -> bool,
     ) -> Result<(), ComError> {
-        let sig = self
-            .cfg
-            .signals
-            .get(usize::from(signal.0))
-            .ok_or(ComError::UnknownSignal)?;
-        let SignalDirection::Tx(ipdu, property) = sig.direction else {
-            return Err(ComError::UnknownSignal);
-        };
+        let (sig, i, property) = self.tx_signal(signal)?;
         let invalid = sig.invalid.ok_or(ComError::NoInvalidValue)?;
-        let i = usize::from(ipdu.0);
         let buf = self.tx_buf.get_mut(i).ok_or(ComError::UnknownSignal)?;
         let changed = sig.layout.unpack_raw(buf) != invalid;
         sig.layout.pack_masked(buf, invalid);

@@ -859,6 +859,16 @@ impl<const T: usize, const R: usize, const C: usize, const A: usize, const Q: us
         Ok(ticks)
     }
 
+    /// The checks `SetRelAlarm` and `SetAbsAlarm` share: `E_OS_ID` for an unknown alarm,
+    /// `E_OS_STATE` for an armed one. Returns the alarm and its counter.
+    fn unarmed_alarm(&self, alarm: AlarmId) -> Result<(usize, usize), OsError> {
+        let a = Self::alarm_index(alarm)?;
+        if self.alarm_active[a] {
+            return Err(OsError::State);
+        }
+        Ok((a, self.alarm_counter(a)))
+    }
+
     /// `SetRelAlarm`: arms the alarm `increment` ticks from now, then every `cycle` ticks
     /// (0: once).
     ///
@@ -871,11 +881,7 @@ impl<const T: usize, const R: usize, const C: usize, const A: usize, const Q: us
         increment: TickType,
         cycle: TickType,
     ) -> Result<(), OsError> {
-        let a = Self::alarm_index(alarm)?;
-        if self.alarm_active[a] {
-            return Err(OsError::State);
-        }
-        let c = self.alarm_counter(a);
+        let (a, c) = self.unarmed_alarm(alarm)?;
         let k = &self.cfg.0.counters[c];
         if increment == 0 || increment > k.max_allowed_value || !cycle_ok(k, cycle) {
             return Err(OsError::Value);
@@ -896,11 +902,7 @@ impl<const T: usize, const R: usize, const C: usize, const A: usize, const Q: us
         start: TickType,
         cycle: TickType,
     ) -> Result<(), OsError> {
-        let a = Self::alarm_index(alarm)?;
-        if self.alarm_active[a] {
-            return Err(OsError::State);
-        }
-        let c = self.alarm_counter(a);
+        let (a, c) = self.unarmed_alarm(alarm)?;
         let k = &self.cfg.0.counters[c];
         if start > k.max_allowed_value || !cycle_ok(k, cycle) {
             return Err(OsError::Value);
