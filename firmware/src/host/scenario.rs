@@ -16,7 +16,8 @@
 //! `hold` and `ramp` follow each other in time; the other commands are placed by their own
 //! times. The scenario lasts as long as its movements (at least until its last event).
 
-use cw_core::can::{CanFrame, CanId};
+use super::cantool::parse_frame;
+use cw_core::can::CanFrame;
 
 /// The sensor noise of a scenario.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -255,31 +256,6 @@ impl Scenario {
             .iter()
             .any(|(start, len)| (*start..start + len).contains(&t_ms))
     }
-}
-
-/// Parses `ID#HEX` (candump notation): 3 hex digits for a standard id, 8 for an extended.
-fn parse_frame(text: &str) -> Result<CanFrame, String> {
-    let (id_text, data_text) = text
-        .split_once('#')
-        .ok_or_else(|| format!("`{text}` is not a frame (expected ID#HEXDATA)"))?;
-    let raw =
-        u32::from_str_radix(id_text, 16).map_err(|_| format!("`{id_text}` is not a hex CAN id"))?;
-    let id = if id_text.len() > 3 {
-        CanId::extended(raw)
-    } else {
-        u16::try_from(raw).ok().and_then(CanId::standard)
-    }
-    .ok_or_else(|| format!("CAN id {id_text} is out of range"))?;
-    if data_text.len() % 2 != 0 {
-        return Err(format!("`{data_text}` has an odd number of hex digits"));
-    }
-    let bytes = (0..data_text.len())
-        .step_by(2)
-        .map(|i| u8::from_str_radix(&data_text[i..i + 2], 16))
-        .collect::<Result<Vec<u8>, _>>()
-        .map_err(|_| format!("`{data_text}` is not hex data"))?;
-    CanFrame::from_parts(id, &bytes)
-        .ok_or_else(|| format!("{} data bytes; a CAN frame holds at most 8", bytes.len()))
 }
 
 #[cfg(test)]
