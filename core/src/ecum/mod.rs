@@ -137,7 +137,7 @@ impl EcuM {
         self.state
     }
 
-    fn expect(&self, state: EcuMState) -> Result<(), EcuMError> {
+    fn require_state(&self, state: EcuMState) -> Result<(), EcuMError> {
         if self.state == state {
             Ok(())
         } else {
@@ -150,7 +150,7 @@ impl EcuM {
     /// # Errors
     /// [`EcuMError::WrongState`] unless off.
     pub fn init(&mut self) -> Result<&'static [Module], EcuMError> {
-        self.expect(EcuMState::Off)?;
+        self.require_state(EcuMState::Off)?;
         self.state = EcuMState::StartupOneDone;
         Ok(&STARTUP_ONE)
     }
@@ -160,7 +160,7 @@ impl EcuM {
     /// # Errors
     /// [`EcuMError::WrongState`] unless start-up one is done.
     pub fn startup_two(&mut self) -> Result<&'static [Module], EcuMError> {
-        self.expect(EcuMState::StartupOneDone)?;
+        self.require_state(EcuMState::StartupOneDone)?;
         self.state = EcuMState::StartupTwoDone;
         Ok(&STARTUP_TWO)
     }
@@ -193,7 +193,7 @@ impl EcuM {
     /// [`EcuMError::WrongState`] unless running; [`EcuMError::UnknownUser`].
     pub fn release_run(&mut self, user: u8) -> Result<(), EcuMError> {
         let bit = Self::user_bit(user)?;
-        self.expect(EcuMState::Run)?;
+        self.require_state(EcuMState::Run)?;
         self.run_requests &= !bit;
         if self.run_requests == 0 {
             self.state = EcuMState::PostRun;
@@ -206,7 +206,7 @@ impl EcuM {
     /// # Errors
     /// [`EcuMError::WrongState`] unless in post-run.
     pub fn shutdown(&mut self) -> Result<(), EcuMError> {
-        self.expect(EcuMState::PostRun)?;
+        self.require_state(EcuMState::PostRun)?;
         self.state = EcuMState::Shutdown;
         Ok(())
     }
