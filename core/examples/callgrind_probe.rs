@@ -13,6 +13,7 @@ use cw_core::os::{
     AlarmAction, AlarmAutostart, AlarmConfig, AlarmId, CounterConfig, CounterId, Os, OsConfig,
     TaskConfig, TaskId,
 };
+use cw_core::tables::Tables;
 use std::hint::black_box;
 
 /// The paper's distance signal: 32-bit little-endian unsigned at bit 0 of an 8-byte PDU.
@@ -80,6 +81,11 @@ static TWO: OsConfig<2, 0, 1, 1> = ok(OsConfig::new(
     }],
 ));
 
+cw_core::static_tables!(
+    /// [`TWO`] as a build-time constant, as the ECU configures its kernel.
+    TwoTables: OsConfig<2, 0, 1, 1> = TWO
+);
+
 /// 64 tasks at 64 priorities and 32 alarms on one counter: the same probes must cost the
 /// same as with two tasks and one alarm.
 static MANY: OsConfig<64, 0, 1, 32> = {
@@ -112,8 +118,27 @@ static MANY: OsConfig<64, 0, 1, 32> = {
 };
 
 #[inline(never)]
-fn probe_activate_task<const T: usize, const A: usize, const Q: usize>(
-    os: &mut Os<T, 0, 1, A, Q>,
+fn probe_activate_task<
+    const T: usize,
+    const A: usize,
+    const Q: usize,
+    K: Tables<OsConfig<T, 0, 1, A>>,
+>(
+    os: &mut Os<T, 0, 1, A, Q, K>,
+    task: TaskId,
+) {
+    let _ = os.activate_task(task);
+}
+
+/// The configuration a build-time constant (as in the ECU), the task id a run-time value.
+#[inline(never)]
+fn probe_activate_task_static<
+    const T: usize,
+    const A: usize,
+    const Q: usize,
+    K: Tables<OsConfig<T, 0, 1, A>>,
+>(
+    os: &mut Os<T, 0, 1, A, Q, K>,
     task: TaskId,
 ) {
     let _ = os.activate_task(task);
@@ -121,37 +146,62 @@ fn probe_activate_task<const T: usize, const A: usize, const Q: usize>(
 
 /// As RTE-generated code calls it: the task id is a constant at the call site.
 #[inline(never)]
-fn probe_activate_task_const_id<const T: usize, const A: usize, const Q: usize>(
-    os: &mut Os<T, 0, 1, A, Q>,
+fn probe_activate_task_const_id<
+    const T: usize,
+    const A: usize,
+    const Q: usize,
+    K: Tables<OsConfig<T, 0, 1, A>>,
+>(
+    os: &mut Os<T, 0, 1, A, Q, K>,
 ) {
     let _ = os.activate_task(TaskId(0));
 }
 
 #[inline(never)]
-fn probe_activate_task_64<const T: usize, const A: usize, const Q: usize>(
-    os: &mut Os<T, 0, 1, A, Q>,
+fn probe_activate_task_64<
+    const T: usize,
+    const A: usize,
+    const Q: usize,
+    K: Tables<OsConfig<T, 0, 1, A>>,
+>(
+    os: &mut Os<T, 0, 1, A, Q, K>,
     task: TaskId,
 ) {
     let _ = os.activate_task(task);
 }
 
 #[inline(never)]
-fn probe_alarm_tick_idle<const T: usize, const A: usize, const Q: usize>(
-    os: &mut Os<T, 0, 1, A, Q>,
+fn probe_alarm_tick_idle<
+    const T: usize,
+    const A: usize,
+    const Q: usize,
+    K: Tables<OsConfig<T, 0, 1, A>>,
+>(
+    os: &mut Os<T, 0, 1, A, Q, K>,
 ) {
     let _ = os.increment_counter(black_box(CounterId(0)));
 }
 
 #[inline(never)]
-fn probe_alarm_tick_idle_32<const T: usize, const A: usize, const Q: usize>(
-    os: &mut Os<T, 0, 1, A, Q>,
+fn probe_alarm_tick_idle_32<
+    const T: usize,
+    const A: usize,
+    const Q: usize,
+    K: Tables<OsConfig<T, 0, 1, A>>,
+>(
+    os: &mut Os<T, 0, 1, A, Q, K>,
 ) {
     let _ = os.increment_counter(black_box(CounterId(0)));
 }
 
 #[inline(never)]
-fn probe_alarm_tick_due<const T: usize, const A: usize, const Q: usize>(
-    os: &mut Os<T, 0, 1, A, Q>,
+fn probe_alarm_tick_due<
+    const T: usize,
+    const A: usize,
+    const Q: usize,
+    K: Tables<OsConfig<T, 0, 1, A>>,
+>(
+    os: &mut Os<T, 0, 1, A, Q, K>,
 ) -> u32 {
     os.increment_counter(black_box(CounterId(0)))
         .map_or(0, |r| r.callbacks)
@@ -159,17 +209,20 @@ fn probe_alarm_tick_due<const T: usize, const A: usize, const Q: usize>(
 
 /// Puts `high` running and leaves `low` suspended, so that activating `low` is a pure
 /// "queue it, no preemption" decision.
-fn reset<const T: usize, const A: usize, const Q: usize>(os: &mut Os<T, 0, 1, A, Q>, high: TaskId) {
+fn reset<const T: usize, const A: usize, const Q: usize, K: Tables<OsConfig<T, 0, 1, A>>>(
+    os: &mut Os<T, 0, 1, A, Q, K>,
+    high: TaskId,
+) {
     while os.running().is_some() {
         let _ = os.terminate_task();
     }
     let _ = os.activate_task(high);
 }
 
-fn kernel<const T: usize, const A: usize, const Q: usize>(
-    cfg: &'static OsConfig<T, 0, 1, A>,
-) -> Result<Os<T, 0, 1, A, Q>, String> {
-    let mut os = Os::<T, 0, 1, A, Q>::new(cfg).map_err(|e| e.describe().to_string())?;
+fn kernel<const T: usize, const A: usize, const Q: usize, K: Tables<OsConfig<T, 0, 1, A>>>(
+    cfg: K,
+) -> Result<Os<T, 0, 1, A, Q, K>, String> {
+    let mut os = Os::<T, 0, 1, A, Q, K>::new(cfg).map_err(|e| e.describe().to_string())?;
     os.start().map_err(|e| e.name().to_string())?;
     Ok(os)
 }
@@ -210,34 +263,41 @@ fn main() -> Result<(), String> {
             )
         }),
         "activate_task" => {
-            let mut os = kernel::<2, 1, 2>(&TWO)?;
+            let mut os = kernel::<2, 1, 2, _>(&TWO)?;
             for _ in 0..n {
                 reset(&mut os, TaskId(1));
                 probe_activate_task(&mut os, black_box(TaskId(0)));
             }
         }
+        "activate_task_static" => {
+            let mut os = kernel::<2, 1, 2, _>(TwoTables)?;
+            for _ in 0..n {
+                reset(&mut os, TaskId(1));
+                probe_activate_task_static(&mut os, black_box(TaskId(0)));
+            }
+        }
         "activate_task_const_id" => {
-            let mut os = kernel::<2, 1, 2>(&TWO)?;
+            let mut os = kernel::<2, 1, 2, _>(&TWO)?;
             for _ in 0..n {
                 reset(&mut os, TaskId(1));
                 probe_activate_task_const_id(&mut os);
             }
         }
         "activate_task_64" => {
-            let mut os = kernel::<64, 32, 64>(&MANY)?;
+            let mut os = kernel::<64, 32, 64, _>(&MANY)?;
             for _ in 0..n {
                 reset(&mut os, TaskId(63));
                 probe_activate_task_64(&mut os, black_box(TaskId(0)));
             }
         }
         "alarm_tick_idle" => {
-            let mut os = kernel::<2, 1, 2>(&TWO)?;
+            let mut os = kernel::<2, 1, 2, _>(&TWO)?;
             os.set_rel_alarm(AlarmId(0), u32::MAX - 1, 0)
                 .map_err(|e| e.name())?;
             (0..n).for_each(|_| probe_alarm_tick_idle(&mut os));
         }
         "alarm_tick_idle_32" => {
-            let mut os = kernel::<64, 32, 64>(&MANY)?;
+            let mut os = kernel::<64, 32, 64, _>(&MANY)?;
             for a in 0..32 {
                 os.set_rel_alarm(AlarmId(a), u32::MAX - 1 - u32::from(a), 0)
                     .map_err(|e| e.name())?;
@@ -245,7 +305,7 @@ fn main() -> Result<(), String> {
             (0..n).for_each(|_| probe_alarm_tick_idle_32(&mut os));
         }
         "alarm_tick_due" => {
-            let mut os = kernel::<2, 1, 2>(&TWO)?;
+            let mut os = kernel::<2, 1, 2, _>(&TWO)?;
             os.set_rel_alarm(AlarmId(0), 1, 1).map_err(|e| e.name())?;
             (0..n).for_each(|_| sink ^= u64::from(probe_alarm_tick_due(&mut os)));
         }

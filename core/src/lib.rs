@@ -19,6 +19,9 @@
 //! - [`rte`]: typed sender-receiver ports (last-is-best and queued, with data-received
 //!   events) and client-server operations.
 //!
+//! Each BSW module reads its configuration through [`tables::Tables`]: a `&'static`
+//! reference, or a zero-sized type that makes the configuration a build-time constant.
+//!
 //! Every kernel has a `spec` module of named, pure predicates. The same predicates are
 //! executed by the bolero harnesses beside the code (`cargo test`), by the fuzz targets
 //! (`cargo bolero test`) and by Kani (`cargo kani`), and guard the implementation through
@@ -41,4 +44,5 @@ pub mod os;
 pub mod pdur;
 pub mod rte;
 pub mod sonar;
+pub mod tables;
 pub mod warning;

@@ -23,8 +23,8 @@ impl CanDriver for Mailbox {
 }
 
 fn stack(c: &mut Criterion) {
-    let mut com = Com::new(&config::COM);
-    let mut canif = CanIf::new(&config::CANIF);
+    let mut com = Com::new(config::ComTables);
+    let mut canif = CanIf::new(config::CanIfTables);
     let mut can = Mailbox;
     let _ = canif.set_controller_mode(&mut can, ControllerMode::Started);
     canif.set_pdu_mode(PduMode::Online);

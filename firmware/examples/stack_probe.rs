@@ -40,8 +40,8 @@ impl CanDriver for Mailbox {
 
 struct Stack {
     rte: LastIsBest<SonarDataInterface>,
-    com: Com<8, 1, 1, 4>,
-    canif: CanIf<1, 1>,
+    com: config::EcuCom,
+    canif: config::EcuCanIf,
     can: Mailbox,
 }
 
@@ -132,8 +132,8 @@ fn main() -> Result<(), String> {
     let n: u32 = args.next().and_then(|s| s.parse().ok()).ok_or(usage)?;
     let mut s = Stack {
         rte: LastIsBest::new(Measurement::Invalid, true),
-        com: Com::new(&config::COM),
-        canif: CanIf::new(&config::CANIF),
+        com: Com::new(config::ComTables),
+        canif: CanIf::new(config::CanIfTables),
         can: Mailbox::default(),
     };
     s.canif

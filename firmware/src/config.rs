@@ -87,8 +87,13 @@ pub static OS: OsConfig<6, 0, 1, 4> = match OsConfig::new(
     Err(e) => panic!("{}", e.describe()),
 };
 
+cw_core::static_tables!(
+    /// [`OS`] as a build-time constant: the kernel's table lookups fold away.
+    pub OsTables: OsConfig<6, 0, 1, 4> = OS
+);
+
 /// The OS kernel type for [`OS`].
-pub type Kernel = cw_core::os::Os<6, 0, 1, 4, 6>;
+pub type Kernel = cw_core::os::Os<6, 0, 1, 4, 6, OsTables>;
 
 const fn std_id(raw: u16) -> CanId {
     match CanId::standard(raw) {
@@ -120,6 +125,14 @@ pub static CANIF: CanIfConfig<1, 1> = match CanIfConfig::new(
     Ok(cfg) => cfg,
     Err(e) => panic!("{}", e.describe()),
 };
+
+cw_core::static_tables!(
+    /// [`CANIF`] as a build-time constant: CanIf's lookups fold away.
+    pub CanIfTables: CanIfConfig<1, 1> = CANIF
+);
+
+/// The ECU's CanIf.
+pub type EcuCanIf = cw_core::canif::CanIf<1, 1, CanIfTables>;
 
 /// Com TX I-PDU of the distance frame.
 pub const DISTANCE_IPDU: TxIpduId = TxIpduId(0);
@@ -195,6 +208,15 @@ pub static COM: ComConfig<8, 1, 1, 4> = match ComConfig::new(
     Ok(cfg) => cfg,
     Err(e) => panic!("{}", e.describe()),
 };
+
+cw_core::static_tables!(
+    /// [`COM`] as a build-time constant: signal layouts, transfer properties and timing
+    /// fold into the code that uses them.
+    pub ComTables: ComConfig<8, 1, 1, 4> = COM
+);
+
+/// The ECU's Com.
+pub type EcuCom = cw_core::com::ipdu::Com<8, 1, 1, 4, ComTables>;
 
 /// PduR: the distance I-PDU onto CanIf PDU 0; CanIf RX PDU 0 onto the threshold I-PDU.
 pub static PDUR: PduRConfig<1, 1, 1, 1> =

@@ -52,9 +52,9 @@ pub struct EcuStats {
 pub struct Ecu {
     os: Kernel,
     ecum: EcuM,
-    canif: CanIf<1, 1>,
+    canif: config::EcuCanIf,
     cansm: CanSm,
-    com: Com<8, 1, 1, 4>,
+    com: config::EcuCom,
     rte: Rte,
     ultrasonic: UltraSonic,
     obstacle: ObstacleDetection,
@@ -74,11 +74,11 @@ impl Ecu {
     /// configuration (a build-configuration mistake, reported rather than panicking).
     pub fn new(sensor: SonarConfig) -> Result<Self, cw_core::os::ConfigError> {
         Ok(Self {
-            os: Kernel::new(&config::OS)?,
+            os: Kernel::new(config::OsTables)?,
             ecum: EcuM::new(),
-            canif: CanIf::new(&config::CANIF),
+            canif: CanIf::new(config::CanIfTables),
             cansm: CanSm::new(config::CANSM),
-            com: Com::new(&config::COM),
+            com: Com::new(config::ComTables),
             rte: Rte::new(),
             ultrasonic: UltraSonic::new(sensor),
             obstacle: ObstacleDetection::new(),
@@ -96,7 +96,7 @@ impl Ecu {
     }
 
     /// The CanIf state (drop counters, modes).
-    pub const fn canif(&self) -> &CanIf<1, 1> {
+    pub const fn canif(&self) -> &config::EcuCanIf {
         &self.canif
     }
 

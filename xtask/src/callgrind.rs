@@ -42,6 +42,10 @@ pub const PROBES: &[(&str, &str)] = &[
         "OS ActivateTask up to the scheduling decision, run-time task id, 64 tasks",
     ),
     (
+        "activate_task_static",
+        "OS ActivateTask up to the scheduling decision, run-time task id, tables constant",
+    ),
+    (
         "activate_task_const_id",
         "OS ActivateTask up to the scheduling decision, constant task id (as RTE calls it)",
     ),

@@ -15,6 +15,7 @@
 //! Configuration is a `const` [`CanIfConfig`], validated when it is built.
 
 use crate::can::{CanBusy, CanDriver, CanFrame, CanId, ControllerMode, Hrh, Hth, ModeRefused};
+use crate::tables::Tables;
 
 /// A transmit L-PDU of CanIf.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
@@ -220,8 +221,8 @@ const EMPTY: u8 = u8::MAX;
 
 /// The CanIf state for one controller.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub struct CanIf<const TX: usize, const RX: usize> {
-    cfg: &'static CanIfConfig<TX, RX>,
+pub struct CanIf<const TX: usize, const RX: usize, C = &'static CanIfConfig<TX, RX>> {
+    cfg: C,
     controller: ControllerMode,
     pdu_mode: PduMode,
     /// Per TX PDU: buffered data length, or `EMPTY`.
@@ -230,9 +231,9 @@ pub struct CanIf<const TX: usize, const RX: usize> {
     stats: CanIfStats,
 }
 
-impl<const TX: usize, const RX: usize> CanIf<TX, RX> {
+impl<const TX: usize, const RX: usize, C: Tables<CanIfConfig<TX, RX>>> CanIf<TX, RX, C> {
     /// CanIf after `CanIf_Init`: controller stopped, channel offline, buffers empty.
-    pub const fn new(cfg: &'static CanIfConfig<TX, RX>) -> Self {
+    pub const fn new(cfg: C) -> Self {
         Self {
             cfg,
             controller: ControllerMode::Stopped,
@@ -252,8 +253,9 @@ impl<const TX: usize, const RX: usize> CanIf<TX, RX> {
     }
 
     /// The configuration.
-    pub const fn config(&self) -> &'static CanIfConfig<TX, RX> {
-        self.cfg
+    #[inline(always)]
+    pub fn config(&self) -> &'static CanIfConfig<TX, RX> {
+        self.cfg.tables()
     }
 
     /// The controller mode as CanIf last set or learned it.
@@ -332,7 +334,7 @@ impl<const TX: usize, const RX: usize> CanIf<TX, RX> {
         sdu: &[u8],
     ) -> Result<(), TransmitError> {
         let p = usize::from(pdu.0);
-        let cfg = self.cfg.tx.get(p).ok_or(TransmitError::UnknownPdu)?;
+        let cfg = self.config().tx.get(p).ok_or(TransmitError::UnknownPdu)?;
         if self.controller != ControllerMode::Started || self.pdu_mode != PduMode::Online {
             return Err(TransmitError::Offline);
         }
@@ -363,7 +365,7 @@ impl<const TX: usize, const RX: usize> CanIf<TX, RX> {
     /// free again, so the highest-priority buffered PDU of that HTH goes out now. Returns
     /// the confirmed PDU for the upper layer (`None` for an unknown handle).
     pub fn tx_confirmation<D: CanDriver>(&mut self, driver: &mut D, pdu: u16) -> Option<TxPduId> {
-        let hth = self.cfg.tx.get(usize::from(pdu))?.hth;
+        let hth = self.config().tx.get(usize::from(pdu))?.hth;
         if self.controller == ControllerMode::Started && self.pdu_mode == PduMode::Online {
             self.flush(driver, hth);
         }
@@ -373,9 +375,9 @@ impl<const TX: usize, const RX: usize> CanIf<TX, RX> {
     /// Sends the buffered PDU of `hth` with the lowest CAN id, if any.
     fn flush<D: CanDriver>(&mut self, driver: &mut D, hth: Hth) {
         let mut best: Option<usize> = None;
-        for (p, cfg) in self.cfg.tx.iter().enumerate() {
+        for (p, cfg) in self.config().tx.iter().enumerate() {
             if cfg.hth == hth && self.buffered_len[p] != EMPTY {
-                let better = best.is_none_or(|b| cfg.id.key() < self.cfg.tx[b].id.key());
+                let better = best.is_none_or(|b| cfg.id.key() < self.config().tx[b].id.key());
                 if better {
                     best = Some(p);
                 }
@@ -383,7 +385,8 @@ impl<const TX: usize, const RX: usize> CanIf<TX, RX> {
         }
         let Some(p) = best else { return };
         let len = usize::from(self.buffered_len[p]);
-        let Some(frame) = CanFrame::from_parts(self.cfg.tx[p].id, &self.buffered_data[p][..len])
+        let Some(frame) =
+            CanFrame::from_parts(self.config().tx[p].id, &self.buffered_data[p][..len])
         else {
             return;
         };
@@ -418,10 +421,10 @@ impl<const TX: usize, const RX: usize> CanIf<TX, RX> {
             return Err(RxDropped::Offline);
         }
         let pdu = self
-            .cfg
+            .config()
             .rx_pdu_for(frame.can_id())
             .ok_or(RxDropped::UnknownId)?;
-        let cfg = &self.cfg.rx[usize::from(pdu.0)];
+        let cfg = &self.config().rx[usize::from(pdu.0)];
         if cfg.hrh != hrh {
             return Err(RxDropped::WrongHrh);
         }

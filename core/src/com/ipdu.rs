@@ -22,6 +22,7 @@
 //! stale entry is re-filed when its slot comes up (lazy deadline reset).
 
 use super::signal::{SignalLayout, SignalValue, Signedness};
+use crate::tables::Tables;
 
 /// Slots of the timer wheel (a power of two). Deadlines further away than this many
 /// cycles wait in their slot for another turn.
@@ -476,8 +477,14 @@ impl<const K: usize> Wheel<K> {
 
 /// The Com state for a configuration.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub struct Com<const N: usize, const TX: usize, const RX: usize, const S: usize> {
-    cfg: &'static ComConfig<N, TX, RX, S>,
+pub struct Com<
+    const N: usize,
+    const TX: usize,
+    const RX: usize,
+    const S: usize,
+    C = &'static ComConfig<N, TX, RX, S>,
+> {
+    cfg: C,
     tx_buf: [[u8; N]; TX],
     rx_buf: [[u8; N]; RX],
     /// Main-function calls so far: the current call is numbered `tx_now` (1-based), and a
@@ -500,10 +507,13 @@ pub struct Com<const N: usize, const TX: usize, const RX: usize, const S: usize>
     rx_wheel: Wheel<RX>,
 }
 
-impl<const N: usize, const TX: usize, const RX: usize, const S: usize> Com<N, TX, RX, S> {
+impl<const N: usize, const TX: usize, const RX: usize, const S: usize, C> Com<N, TX, RX, S, C>
+where
+    C: Tables<ComConfig<N, TX, RX, S>>,
+{
     /// `Com_Init`: every signal holds its init value; periodic I-PDUs start after their
     /// offset; deadline monitoring starts now.
-    pub fn new(cfg: &'static ComConfig<N, TX, RX, S>) -> Self {
+    pub fn new(cfg: C) -> Self {
         let mut com = Self {
             cfg,
             tx_buf: [[0; N]; TX],
@@ -524,7 +534,7 @@ impl<const N: usize, const TX: usize, const RX: usize, const S: usize> Com<N, TX
             com.write_init(s);
         }
         for i in 0..TX {
-            let t = cfg.tx_timing[i];
+            let t = cfg.tables().tx_timing[i];
             if t.period > 0 {
                 // Offset 0: the first main function call (call number 1) transmits.
                 com.tx_next_periodic[i] = t.offset + 1;
@@ -532,7 +542,7 @@ impl<const N: usize, const TX: usize, const RX: usize, const S: usize> Com<N, TX
             }
         }
         for i in 0..RX {
-            let d = cfg.rx_deadline[i];
+            let d = cfg.tables().rx_deadline[i];
             if d > 0 {
                 // Counted down by the main function: the d-th call without a reception.
                 com.rx_due[i] = d;
@@ -543,7 +553,7 @@ impl<const N: usize, const TX: usize, const RX: usize, const S: usize> Com<N, TX
     }
 
     fn write_init(&mut self, s: usize) {
-        let sig = self.cfg.signals[s];
+        let sig = self.cfg().signals[s];
         match sig.direction {
             SignalDirection::Tx(id, _) => {
                 if let Some(buf) = self.tx_buf.get_mut(usize::from(id.0)) {
@@ -560,7 +570,7 @@ impl<const N: usize, const TX: usize, const RX: usize, const S: usize> Com<N, TX
 
     /// The current contents of a TX I-PDU (its configured length).
     pub fn tx_ipdu(&self, id: TxIpduId) -> Option<&[u8]> {
-        let len = usize::from(self.cfg.tx.get(usize::from(id.0))?.len);
+        let len = usize::from(self.cfg().tx.get(usize::from(id.0))?.len);
         self.tx_buf.get(usize::from(id.0)).map(|b| &b[..len])
     }
 
@@ -612,7 +622,7 @@ impl<const N: usize, const TX: usize, const RX: usize, const S: usize> Com<N, TX
         &self,
         signal: SignalId,
     ) -> Result<(&'static SignalConfig<N>, usize, TransferProperty), ComError> {
-        let cfg: &'static ComConfig<N, TX, RX, S> = self.cfg;
+        let cfg = self.cfg();
         let sig = cfg
             .signals
             .get(usize::from(signal.0))
@@ -654,7 +664,7 @@ impl<const N: usize, const TX: usize, const RX: usize, const S: usize> Com<N, TX
         if let Some(bit) = sig.update_bit {
             set_bit(&mut self.tx_buf[i], bit, true);
         }
-        let timing = self.cfg.tx_timing[i];
+        let timing = self.cfg().tx_timing[i];
         let (triggers, repeat) = match property {
             TransferProperty::Pending => (false, false),
             TransferProperty::Triggered => (true, true),
@@ -675,7 +685,7 @@ impl<const N: usize, const TX: usize, const RX: usize, const S: usize> Com<N, TX
         if now >= mdt_end {
             self.send(i, transmit);
             if self.tx_reps_left[i] > 0 {
-                self.tx_next_rep[i] = now + self.cfg.tx_timing[i].repetition_period;
+                self.tx_next_rep[i] = now + self.cfg().tx_timing[i].repetition_period;
                 self.tx_wheel.file(i, self.tx_next_rep[i]);
             }
         } else {
@@ -685,15 +695,19 @@ impl<const N: usize, const TX: usize, const RX: usize, const S: usize> Com<N, TX
     }
 
     fn mdt_end(&self, i: usize) -> u32 {
-        self.tx_last[i].map_or(0, |last| last + self.cfg.tx_timing[i].mdt)
+        let mdt = self.cfg().tx_timing[i].mdt;
+        match self.tx_last[i] {
+            Some(last) if mdt > 0 => last + mdt,
+            _ => 0,
+        }
     }
 
     /// Hands I-PDU `i` to the lower layer and clears its update bits.
     fn send(&mut self, i: usize, mut transmit: impl FnMut(TxIpduId, &[u8]) -> bool) {
-        let len = usize::from(self.cfg.tx[i].len);
+        let len = usize::from(self.cfg().tx[i].len);
         if transmit(TxIpduId(i as u16), &self.tx_buf[i][..len]) {
             self.tx_last[i] = Some(self.tx_now);
-            let mask = &self.cfg.tx_update_mask[i];
+            let mask = &self.cfg().tx_update_mask[i];
             if mask.iter().any(|m| *m != 0) {
                 for (byte, m) in self.tx_buf[i].iter_mut().zip(mask) {
                     *byte &= !m;
@@ -714,7 +728,7 @@ impl<const N: usize, const TX: usize, const RX: usize, const S: usize> Com<N, TX
     }
 
     fn tx_due(&mut self, i: usize, now: u32, transmit: &mut impl FnMut(TxIpduId, &[u8]) -> bool) {
-        let timing = self.cfg.tx_timing[i];
+        let timing = self.cfg().tx_timing[i];
         let periodic_due = timing.period > 0 && self.tx_next_periodic[i] <= now;
         let rep_due = self.tx_reps_left[i] > 0 && self.tx_next_rep[i] <= now;
         let deferred_due = self.tx_deferred[i];
@@ -755,17 +769,17 @@ impl<const N: usize, const TX: usize, const RX: usize, const S: usize> Com<N, TX
     #[inline]
     pub fn rx_indication(&mut self, ipdu: RxIpduId, data: &[u8]) {
         let i = usize::from(ipdu.0);
-        let Some(cfg) = self.cfg.rx.get(i) else {
+        let Some(cfg) = self.cfg().rx.get(i) else {
             return;
         };
         let len = usize::from(cfg.len).min(data.len());
-        if self.cfg.rx_update_bits[i] {
+        if self.cfg().rx_update_bits[i] {
             self.merge_updated(i, &data[..len]);
         } else {
             self.rx_buf[i][..len].copy_from_slice(&data[..len]);
         }
         self.rx_timed_out[i] = false;
-        let deadline = self.cfg.rx_deadline[i];
+        let deadline = self.cfg().rx_deadline[i];
         if deadline > 0 {
             // The wheel entry stays where it is; its slot re-files it (lazy reset).
             self.rx_due[i] = self.rx_now + deadline;
@@ -777,7 +791,7 @@ impl<const N: usize, const TX: usize, const RX: usize, const S: usize> Com<N, TX
     fn merge_updated(&mut self, i: usize, data: &[u8]) {
         let mut incoming = [0u8; N];
         incoming[..data.len()].copy_from_slice(data);
-        for sig in self.cfg.signals.iter() {
+        for sig in self.cfg().signals.iter() {
             if sig.direction != SignalDirection::Rx(RxIpduId(i as u16)) {
                 continue;
             }
@@ -801,7 +815,7 @@ impl<const N: usize, const TX: usize, const RX: usize, const S: usize> Com<N, TX
                 self.replace_by_init(i);
                 self.rx_timed_out[i] = true;
                 on_timeout(RxIpduId(i as u16));
-                self.rx_due[i] = now + self.cfg.rx_deadline[i];
+                self.rx_due[i] = now + self.cfg().rx_deadline[i];
             }
             self.rx_wheel.file(i, self.rx_due[i]);
         }
@@ -809,7 +823,7 @@ impl<const N: usize, const TX: usize, const RX: usize, const S: usize> Com<N, TX
 
     fn replace_by_init(&mut self, i: usize) {
         for s in 0..S {
-            if self.cfg.signals[s].direction == SignalDirection::Rx(RxIpduId(i as u16)) {
+            if self.cfg().signals[s].direction == SignalDirection::Rx(RxIpduId(i as u16)) {
                 self.write_init(s);
             }
         }
@@ -823,7 +837,7 @@ impl<const N: usize, const TX: usize, const RX: usize, const S: usize> Com<N, TX
     #[inline]
     pub fn receive_signal(&self, signal: SignalId) -> Result<SignalValue, ComError> {
         let sig = self
-            .cfg
+            .cfg()
             .signals
             .get(usize::from(signal.0))
             .ok_or(ComError::UnknownSignal)?;
@@ -844,10 +858,16 @@ impl<const N: usize, const TX: usize, const RX: usize, const S: usize> Com<N, TX
 
     /// The signedness of a signal, for callers that convert values.
     pub fn signedness(&self, signal: SignalId) -> Option<Signedness> {
-        self.cfg
+        self.cfg()
             .signals
             .get(usize::from(signal.0))
             .map(|s| s.layout.signedness())
+    }
+
+    /// The configuration tables.
+    #[inline(always)]
+    fn cfg(&self) -> &'static ComConfig<N, TX, RX, S> {
+        self.cfg.tables()
     }
 }
 

@@ -16,6 +16,7 @@ use super::queue::ReadyQueue;
 use super::{
     AlarmId, CounterId, EventMask, OsError, ResourceId, TaskId, TaskState, TickType, RES_SCHEDULER,
 };
+use crate::tables::Tables;
 use core::hash::{Hash, Hasher};
 
 const NONE: u8 = u8::MAX;
@@ -78,23 +79,38 @@ enum Caller {
 /// The configuration, compared by identity: two kernels are equal only if they run the same
 /// configuration object, and hashing the state need not hash the tables.
 #[derive(Clone, Copy)]
-struct CfgRef<const T: usize, const R: usize, const C: usize, const A: usize>(
-    &'static OsConfig<T, R, C, A>,
-);
+struct CfgRef<const T: usize, const R: usize, const C: usize, const A: usize, K>(K);
 
-impl<const T: usize, const R: usize, const C: usize, const A: usize> PartialEq
-    for CfgRef<T, R, C, A>
+impl<const T: usize, const R: usize, const C: usize, const A: usize, K> CfgRef<T, R, C, A, K>
+where
+    K: Tables<OsConfig<T, R, C, A>>,
 {
-    fn eq(&self, other: &Self) -> bool {
-        core::ptr::eq(self.0, other.0)
+    #[inline(always)]
+    fn get(self) -> &'static OsConfig<T, R, C, A> {
+        self.0.tables()
     }
 }
-impl<const T: usize, const R: usize, const C: usize, const A: usize> Eq for CfgRef<T, R, C, A> {}
-impl<const T: usize, const R: usize, const C: usize, const A: usize> Hash for CfgRef<T, R, C, A> {
+
+impl<const T: usize, const R: usize, const C: usize, const A: usize, K> PartialEq
+    for CfgRef<T, R, C, A, K>
+where
+    K: Tables<OsConfig<T, R, C, A>>,
+{
+    fn eq(&self, other: &Self) -> bool {
+        core::ptr::eq(self.get(), other.get())
+    }
+}
+impl<const T: usize, const R: usize, const C: usize, const A: usize, K> Eq for CfgRef<T, R, C, A, K> where
+    K: Tables<OsConfig<T, R, C, A>>
+{
+}
+impl<const T: usize, const R: usize, const C: usize, const A: usize, K> Hash
+    for CfgRef<T, R, C, A, K>
+{
     fn hash<H: Hasher>(&self, _state: &mut H) {}
 }
-impl<const T: usize, const R: usize, const C: usize, const A: usize> core::fmt::Debug
-    for CfgRef<T, R, C, A>
+impl<const T: usize, const R: usize, const C: usize, const A: usize, K> core::fmt::Debug
+    for CfgRef<T, R, C, A, K>
 {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         f.write_str("OsConfig")
@@ -103,9 +119,21 @@ impl<const T: usize, const R: usize, const C: usize, const A: usize> core::fmt::
 
 /// The OSEK kernel state for a configuration of `T` tasks, `R` resources, `C` counters and
 /// `A` alarms, with `Q` ready-queue entries (the sum of all tasks' activations).
+///
+/// `K` is where the configuration comes from ([`Tables`]): a `&'static OsConfig`, or a
+/// zero-sized type that makes it a build-time constant.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub struct Os<const T: usize, const R: usize, const C: usize, const A: usize, const Q: usize> {
-    cfg: CfgRef<T, R, C, A>,
+pub struct Os<
+    const T: usize,
+    const R: usize,
+    const C: usize,
+    const A: usize,
+    const Q: usize,
+    K = &'static OsConfig<T, R, C, A>,
+> where
+    K: Tables<OsConfig<T, R, C, A>>,
+{
+    cfg: CfgRef<T, R, C, A, K>,
     ready: ReadyQueue<Q>,
     running: u8,
     running_prio: u8,
@@ -133,15 +161,18 @@ pub struct Os<const T: usize, const R: usize, const C: usize, const A: usize, co
     alarm_cycle: [TickType; A],
 }
 
-impl<const T: usize, const R: usize, const C: usize, const A: usize, const Q: usize>
-    Os<T, R, C, A, Q>
+impl<const T: usize, const R: usize, const C: usize, const A: usize, const Q: usize, K>
+    Os<T, R, C, A, Q, K>
+where
+    K: Tables<OsConfig<T, R, C, A>>,
 {
     /// A kernel for `cfg`, before `StartOS`: no task is active, no alarm armed.
     ///
     /// # Errors
     /// [`ConfigError::QueueCapacity`] unless `Q` equals the configuration's total
     /// activations (and is at most 255).
-    pub const fn new(cfg: &'static OsConfig<T, R, C, A>) -> Result<Self, ConfigError> {
+    pub fn new(tables: K) -> Result<Self, ConfigError> {
+        let cfg = tables.tables();
         if Q != cfg.total_activations || Q > 255 {
             return Err(ConfigError::QueueCapacity {
                 needed: cfg.total_activations,
@@ -154,7 +185,7 @@ impl<const T: usize, const R: usize, const C: usize, const A: usize, const Q: us
             t += 1;
         }
         Ok(Self {
-            cfg: CfgRef(cfg),
+            cfg: CfgRef(tables),
             ready: ReadyQueue::new(),
             running: NONE,
             running_prio: 0,
@@ -188,7 +219,7 @@ impl<const T: usize, const R: usize, const C: usize, const A: usize, const Q: us
         {
             return Err(OsError::State);
         }
-        let cfg = self.cfg.0;
+        let cfg = self.cfg.get();
         for t in 0..T {
             if cfg.tasks[t].autostart {
                 self.activate(t)?;
@@ -215,8 +246,9 @@ impl<const T: usize, const R: usize, const C: usize, const A: usize, const Q: us
     // ---- inspection ---------------------------------------------------------------------
 
     /// The configuration.
-    pub const fn config(&self) -> &'static OsConfig<T, R, C, A> {
-        self.cfg.0
+    #[inline(always)]
+    pub fn config(&self) -> &'static OsConfig<T, R, C, A> {
+        self.cfg.get()
     }
 
     /// The task the kernel has chosen to run (OSEK `GetTaskID` at task level).
@@ -300,9 +332,9 @@ impl<const T: usize, const R: usize, const C: usize, const A: usize, const Q: us
     /// The ceiling of a resource.
     pub fn ceiling(&self, res: ResourceId) -> Option<u8> {
         if res == RES_SCHEDULER {
-            Some(self.cfg.0.scheduler_ceiling)
+            Some(self.cfg.get().scheduler_ceiling)
         } else {
-            self.cfg.0.resource_ceiling(res.0 as usize)
+            self.cfg.get().resource_ceiling(res.0 as usize)
         }
     }
 
@@ -349,17 +381,17 @@ impl<const T: usize, const R: usize, const C: usize, const A: usize, const Q: us
 
     #[inline(always)]
     fn base_prio(&self, t: usize) -> u8 {
-        self.cfg.0.priority[t]
+        self.cfg.get().priority[t]
     }
 
     #[inline(always)]
     fn internal_prio(&self, t: usize) -> u8 {
-        self.cfg.0.dispatch_priority[t]
+        self.cfg.get().dispatch_priority[t]
     }
 
     #[inline(always)]
     fn is_extended(&self, t: usize) -> bool {
-        matches!(self.cfg.0.tasks[t].kind, TaskKind::Extended)
+        matches!(self.cfg.get().tasks[t].kind, TaskKind::Extended)
     }
 
     fn res_state(&self, id: ResourceId) -> Result<&ResState, OsError> {
@@ -382,7 +414,7 @@ impl<const T: usize, const R: usize, const C: usize, const A: usize, const Q: us
     /// Returns the task's priority, which the caller needs for its scheduling decision.
     #[inline(always)]
     fn activate(&mut self, t: usize) -> Result<u8, OsError> {
-        let cfg = self.cfg.0;
+        let cfg = self.cfg.get();
         let (count, max, prio) = (self.activations[t], cfg.max_activations[t], cfg.priority[t]);
         if count >= max {
             return Err(OsError::Limit);
@@ -524,7 +556,7 @@ impl<const T: usize, const R: usize, const C: usize, const A: usize, const Q: us
             return Err(OsError::Resource);
         }
         let n = Self::task_index(task)?;
-        if n != t && self.activations[n] >= self.cfg.0.max_activations[n] {
+        if n != t && self.activations[n] >= self.cfg.get().max_activations[n] {
             return Err(OsError::Limit);
         }
         self.finish(t);
@@ -758,13 +790,13 @@ impl<const T: usize, const R: usize, const C: usize, const A: usize, const Q: us
     }
 
     fn alarm_counter(&self, a: usize) -> usize {
-        self.cfg.0.alarms[a].counter.0 as usize
+        self.cfg.get().alarms[a].counter.0 as usize
     }
 
     /// Ticks from now until the counter of `c` next shows `start` (a full revolution if it
     /// shows it now).
     fn abs_delay(&self, c: usize, start: TickType) -> u64 {
-        let modulus = u64::from(self.cfg.0.counters[c].max_allowed_value) + 1;
+        let modulus = u64::from(self.cfg.get().counters[c].max_allowed_value) + 1;
         let now = u64::from(self.counter_value[c]);
         let delay = (u64::from(start) + modulus - now) % modulus;
         if delay == 0 {
@@ -830,7 +862,7 @@ impl<const T: usize, const R: usize, const C: usize, const A: usize, const Q: us
     /// `E_OS_ID` invalid alarm.
     pub fn get_alarm_base(&self, alarm: AlarmId) -> Result<AlarmBase, OsError> {
         let a = Self::alarm_index(alarm)?;
-        let k = &self.cfg.0.counters[self.alarm_counter(a)];
+        let k = &self.cfg.get().counters[self.alarm_counter(a)];
         Ok(AlarmBase {
             max_allowed_value: k.max_allowed_value,
             ticks_per_base: k.ticks_per_base,
@@ -882,7 +914,7 @@ impl<const T: usize, const R: usize, const C: usize, const A: usize, const Q: us
         cycle: TickType,
     ) -> Result<(), OsError> {
         let (a, c) = self.unarmed_alarm(alarm)?;
-        let k = &self.cfg.0.counters[c];
+        let k = &self.cfg.get().counters[c];
         if increment == 0 || increment > k.max_allowed_value || !cycle_ok(k, cycle) {
             return Err(OsError::Value);
         }
@@ -903,7 +935,7 @@ impl<const T: usize, const R: usize, const C: usize, const A: usize, const Q: us
         cycle: TickType,
     ) -> Result<(), OsError> {
         let (a, c) = self.unarmed_alarm(alarm)?;
-        let k = &self.cfg.0.counters[c];
+        let k = &self.cfg.get().counters[c];
         if start > k.max_allowed_value || !cycle_ok(k, cycle) {
             return Err(OsError::Value);
         }
@@ -936,7 +968,7 @@ impl<const T: usize, const R: usize, const C: usize, const A: usize, const Q: us
         if c >= C {
             return Err(OsError::Id);
         }
-        let max = self.cfg.0.counters[c].max_allowed_value;
+        let max = self.cfg.get().counters[c].max_allowed_value;
         let value = self.counter_value[c];
         self.counter_value[c] = if value >= max { 0 } else { value + 1 };
         let head = self.counter_head[c] as usize;
@@ -970,7 +1002,7 @@ impl<const T: usize, const R: usize, const C: usize, const A: usize, const Q: us
             if cycle != 0 {
                 self.arm(a, c, u64::from(cycle), cycle);
             }
-            match self.cfg.0.alarms[a].action {
+            match self.cfg.get().alarms[a].action {
                 AlarmAction::ActivateTask(task) => {
                     let result = Self::task_index(task).and_then(|t| self.activate(t).map(|_| ()));
                     report.record(result);

@@ -2,7 +2,8 @@
 //! bitmap of non-empty priorities, so that every operation is O(1): the highest ready
 //! priority is `63 - leading_zeros(bitmap)`.
 //!
-//! Each entry is one activation record (a task id). Equality and hashing look at the
+//! Each entry is one activation record (a task id). A list ends at its `tail`: the `next`
+//! link of the newest entry is never read, so appending writes no terminator. Equality and hashing look at the
 //! logical content (the sequence of tasks at each priority), not at which pool slots hold
 //! it, so two queues that will behave the same compare equal.
 
@@ -62,7 +63,6 @@ impl<const Q: usize> ReadyQueue<Q> {
         }
         self.free = self.next[slot];
         self.task[slot] = task;
-        self.next[slot] = NIL;
         Ok(slot)
     }
 
@@ -105,10 +105,12 @@ impl<const Q: usize> ReadyQueue<Q> {
             return None;
         }
         let task = self.task[slot];
-        self.head[p] = self.next[slot];
-        if self.head[p] == NIL {
+        if slot == usize::from(self.tail[p]) {
+            self.head[p] = NIL;
             self.tail[p] = NIL;
             self.bitmap &= !(1 << p);
+        } else {
+            self.head[p] = self.next[slot];
         }
         self.next[slot] = self.free;
         self.free = slot as u8;
@@ -117,9 +119,11 @@ impl<const Q: usize> ReadyQueue<Q> {
 
     /// The tasks queued at `prio`, oldest first.
     pub(crate) fn iter(&self, prio: u8) -> Iter<'_, Q> {
+        let p = (prio & 63) as usize;
         Iter {
             queue: self,
-            slot: self.head[(prio & 63) as usize],
+            slot: self.head[p],
+            last: self.tail[p],
         }
     }
 
@@ -134,6 +138,7 @@ impl<const Q: usize> ReadyQueue<Q> {
 pub(crate) struct Iter<'a, const Q: usize> {
     queue: &'a ReadyQueue<Q>,
     slot: u8,
+    last: u8,
 }
 
 impl<const Q: usize> Iterator for Iter<'_, Q> {
@@ -143,7 +148,11 @@ impl<const Q: usize> Iterator for Iter<'_, Q> {
         if s >= Q {
             return None;
         }
-        self.slot = self.queue.next[s];
+        self.slot = if self.slot == self.last {
+            NIL
+        } else {
+            self.queue.next[s]
+        };
         Some(self.queue.task[s])
     }
 }

@@ -2,10 +2,12 @@
 //! methods. The harnesses in this crate, the fuzz targets, the stateright model in
 //! `proofs/` and `debug_assert!`s inside the kernel all execute these same functions.
 
+use super::OsConfig;
 use super::{
     AlarmId, CounterId, EventMask, Os, OsError, ResourceId, TaskId, TaskKind, TickType,
     RES_SCHEDULER,
 };
+use crate::tables::Tables;
 
 /// OSEK §4.6: at task level, the running task has the highest priority among ready
 /// activations (ties go to the running task); with nothing running, nothing is ready.
@@ -15,8 +17,9 @@ pub fn running_is_highest_ready<
     const C: usize,
     const A: usize,
     const Q: usize,
+    K: Tables<OsConfig<T, R, C, A>>,
 >(
-    os: &Os<T, R, C, A, Q>,
+    os: &Os<T, R, C, A, Q, K>,
 ) -> bool {
     if os.isr_depth() != 0 {
         return true;
@@ -36,8 +39,9 @@ pub fn running_priority_is_ceiling<
     const C: usize,
     const A: usize,
     const Q: usize,
+    K: Tables<OsConfig<T, R, C, A>>,
 >(
-    os: &Os<T, R, C, A, Q>,
+    os: &Os<T, R, C, A, Q, K>,
 ) -> bool {
     let Some(task) = os.running() else {
         return true;
@@ -60,8 +64,9 @@ pub fn activations_accounted<
     const C: usize,
     const A: usize,
     const Q: usize,
+    K: Tables<OsConfig<T, R, C, A>>,
 >(
-    os: &Os<T, R, C, A, Q>,
+    os: &Os<T, R, C, A, Q, K>,
 ) -> bool {
     (0..T).all(|t| {
         let id = TaskId(t as u8);
@@ -82,8 +87,9 @@ pub fn resources_consistent<
     const C: usize,
     const A: usize,
     const Q: usize,
+    K: Tables<OsConfig<T, R, C, A>>,
 >(
-    os: &Os<T, R, C, A, Q>,
+    os: &Os<T, R, C, A, Q, K>,
 ) -> bool {
     let ids = (0..R as u8)
         .map(ResourceId)
@@ -116,8 +122,9 @@ pub fn waiting_is_blocked<
     const C: usize,
     const A: usize,
     const Q: usize,
+    K: Tables<OsConfig<T, R, C, A>>,
 >(
-    os: &Os<T, R, C, A, Q>,
+    os: &Os<T, R, C, A, Q, K>,
 ) -> bool {
     (0..T).all(|t| {
         let id = TaskId(t as u8);
@@ -134,8 +141,9 @@ pub fn kernel_invariants<
     const C: usize,
     const A: usize,
     const Q: usize,
+    K: Tables<OsConfig<T, R, C, A>>,
 >(
-    os: &Os<T, R, C, A, Q>,
+    os: &Os<T, R, C, A, Q, K>,
 ) -> bool {
     running_is_highest_ready(os)
         && running_priority_is_ceiling(os)
@@ -197,10 +205,13 @@ impl Service {
     }
 }
 
-fn in_isr<const T: usize, const R: usize, const C: usize, const A: usize, const Q: usize>(
-    os: &mut Os<T, R, C, A, Q>,
-    service: impl FnOnce(&mut Os<T, R, C, A, Q>) -> Result<(), OsError>,
-) -> Result<(), OsError> {
+fn in_isr<const T: usize, const R: usize, const C: usize, const A: usize, const Q: usize, K>(
+    os: &mut Os<T, R, C, A, Q, K>,
+    service: impl FnOnce(&mut Os<T, R, C, A, Q, K>) -> Result<(), OsError>,
+) -> Result<(), OsError>
+where
+    K: Tables<OsConfig<T, R, C, A>>,
+{
     os.enter_isr()?;
     let result = service(os);
     os.exit_isr()?;
@@ -208,10 +219,13 @@ fn in_isr<const T: usize, const R: usize, const C: usize, const A: usize, const 
 }
 
 /// Performs one [`Service`] on the kernel.
-pub fn call<const T: usize, const R: usize, const C: usize, const A: usize, const Q: usize>(
-    os: &mut Os<T, R, C, A, Q>,
+pub fn call<const T: usize, const R: usize, const C: usize, const A: usize, const Q: usize, K>(
+    os: &mut Os<T, R, C, A, Q, K>,
     service: Service,
-) -> Result<(), OsError> {
+) -> Result<(), OsError>
+where
+    K: Tables<OsConfig<T, R, C, A>>,
+{
     match service {
         Service::ActivateTask(t) => os.activate_task(t),
         Service::TerminateTask => os.terminate_task(),
@@ -251,9 +265,10 @@ pub fn fifo_discipline<
     const C: usize,
     const A: usize,
     const Q: usize,
+    K: Tables<OsConfig<T, R, C, A>>,
 >(
-    before: &Os<T, R, C, A, Q>,
-    after: &Os<T, R, C, A, Q>,
+    before: &Os<T, R, C, A, Q, K>,
+    after: &Os<T, R, C, A, Q, K>,
 ) -> Result<(), &'static str> {
     let preempted = before.running().filter(|r| {
         after.running() != Some(*r)
@@ -305,9 +320,10 @@ pub fn transition_rules<
     const C: usize,
     const A: usize,
     const Q: usize,
+    K: Tables<OsConfig<T, R, C, A>>,
 >(
-    before: &Os<T, R, C, A, Q>,
-    after: &Os<T, R, C, A, Q>,
+    before: &Os<T, R, C, A, Q, K>,
+    after: &Os<T, R, C, A, Q, K>,
     service: Service,
     result: Result<(), OsError>,
 ) -> Result<(), &'static str> {
@@ -386,8 +402,9 @@ pub fn call_and_check<
     const C: usize,
     const A: usize,
     const Q: usize,
+    K: Tables<OsConfig<T, R, C, A>>,
 >(
-    os: &mut Os<T, R, C, A, Q>,
+    os: &mut Os<T, R, C, A, Q, K>,
     service: Service,
 ) -> Result<Result<(), OsError>, &'static str> {
     let before = *os;

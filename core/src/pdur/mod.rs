@@ -9,8 +9,9 @@
 //! is a build error.
 
 use crate::can::CanDriver;
-use crate::canif::{CanIf, RxPduId, TransmitError, TxPduId};
-use crate::com::ipdu::{self, Com};
+use crate::canif::{CanIf, CanIfConfig, RxPduId, TransmitError, TxPduId};
+use crate::com::ipdu::{self, Com, ComConfig};
+use crate::tables::Tables;
 
 /// Where a received L-PDU goes.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -121,13 +122,16 @@ impl<const COM_TX: usize, const CANIF_TX: usize, const CANIF_RX: usize, const CO
     /// `PduR_ComTransmit`: hands a Com TX I-PDU to CanIf. Returns whether CanIf accepted it
     /// (sent or buffered).
     #[inline(always)]
-    pub fn com_transmit<D: CanDriver, const TX: usize, const RX: usize>(
+    pub fn com_transmit<D: CanDriver, const TX: usize, const RX: usize, K>(
         &self,
-        canif: &mut CanIf<TX, RX>,
+        canif: &mut CanIf<TX, RX, K>,
         driver: &mut D,
         ipdu: ipdu::TxIpduId,
         sdu: &[u8],
-    ) -> Result<(), TransmitError> {
+    ) -> Result<(), TransmitError>
+    where
+        K: Tables<CanIfConfig<TX, RX>>,
+    {
         let pdu = *self
             .tx
             .get(usize::from(ipdu.0))
@@ -150,9 +154,10 @@ impl<const COM_TX: usize, const CANIF_TX: usize, const CANIF_RX: usize, const CO
         const CTX: usize,
         const CRX: usize,
         const S: usize,
+        K: Tables<ComConfig<N, CTX, CRX, S>>,
     >(
         &self,
-        com: &mut Com<N, CTX, CRX, S>,
+        com: &mut Com<N, CTX, CRX, S, K>,
         pdu: RxPduId,
         sdu: &[u8],
     ) -> usize {
@@ -167,11 +172,14 @@ impl<const COM_TX: usize, const CANIF_TX: usize, const CANIF_RX: usize, const CO
     }
 
     #[inline(never)]
-    fn fan_out<const N: usize, const CTX: usize, const CRX: usize, const S: usize>(
-        com: &mut Com<N, CTX, CRX, S>,
+    fn fan_out<const N: usize, const CTX: usize, const CRX: usize, const S: usize, K>(
+        com: &mut Com<N, CTX, CRX, S, K>,
         list: &[ipdu::RxIpduId],
         sdu: &[u8],
-    ) -> usize {
+    ) -> usize
+    where
+        K: Tables<ComConfig<N, CTX, CRX, S>>,
+    {
         for ipdu in list {
             com.rx_indication(*ipdu, sdu);
         }
