@@ -17,10 +17,10 @@ use cw_core::ecum::{bswm_actions, BswMAction, BswMRequest, EcuM};
 use cw_core::os::{OsError, TaskId};
 use cw_core::sonar::SonarConfig;
 use cw_core::warning::{Measurement, WarningLevel};
-use embedded_hal::digital::OutputPin;
 
 use crate::board::Board;
 use crate::config::{self, Kernel};
+use crate::iohwab;
 use crate::rte::Rte;
 use crate::swc::{can_translate, LedActuator, LedColor, ObstacleDetection, UltraSonic};
 
@@ -46,6 +46,8 @@ pub struct EcuStats {
     pub rx_dropped: u32,
     /// Kernel services that returned an error (none expected).
     pub os_errors: u32,
+    /// LED writes a Dio channel refused.
+    pub pin_faults: u32,
 }
 
 /// The whole ECU except the board.
@@ -141,10 +143,8 @@ impl Ecu {
         if self.ecum.init().is_err() {
             return;
         }
-        // Start-up one: Mcu, Port, Dio, Gpt. On every board here the LEDs start low.
-        for color in [LedColor::Red, LedColor::Yellow] {
-            let _ = board.led(color).set_low();
-        }
+        // Start-up one: Mcu, Port (every pin to its direction, outputs low), Dio, Gpt.
+        board.port_init();
         let started = self.os.start();
         self.os_result(started);
         self.dispatch(board);
@@ -286,12 +286,9 @@ impl Ecu {
         let level = self.rte.led_request.read();
         let now_ms = board.now_ms();
         for (swc, color) in [(self.red, LedColor::Red), (self.yellow, LedColor::Yellow)] {
-            let pin = board.led(color);
-            let _ = if swc.run(level, now_ms) {
-                pin.set_high()
-            } else {
-                pin.set_low()
-            };
+            if iohwab::set_led(board, color, swc.run(level, now_ms)).is_err() {
+                self.stats.pin_faults = self.stats.pin_faults.saturating_add(1);
+            }
         }
     }
 
@@ -329,7 +326,8 @@ impl Ecu {
 
     /// `OsSonarTask`: UltraSonic; its write to SonarRecv activates `OsComTask`.
     fn sonar_task<B: Board>(&mut self, board: &mut B) {
-        let measurement = self.ultrasonic.run(board.sonar_echo());
+        let echo = iohwab::measure_echo(board, self.ultrasonic.sensor().echo_timeout_us());
+        let measurement = self.ultrasonic.run(echo);
         self.last_measurement = measurement;
         let _ = self.rte.sonar_to_obstacle.write(measurement);
         if self.rte.sonar_to_can.write(measurement).0 {

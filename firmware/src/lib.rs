@@ -1,6 +1,6 @@
 //! The collision-warning ECU of the paper, composed: its configuration ([`config`]), its
-//! SWCs ([`swc`]), its RTE ([`rte`]) and the ECU that runs them on a [`board::Board`]
-//! ([`ecu`]). Everything here is `no_std` and builds for `thumbv7em-none-eabihf`; the host
+//! SWCs ([`swc`]), its RTE ([`rte`]), the I/O hardware abstraction ([`iohwab`]) and the
+//! ECU that runs them on a [`board::Board`] ([`ecu`]). Everything here is `no_std` and builds for `thumbv7em-none-eabihf`; the host
 //! simulation (feature `host`) adds the simulated board and the command-line tool.
 #![cfg_attr(not(any(test, feature = "host")), no_std)]
 #![forbid(unsafe_code)]
@@ -10,5 +10,6 @@ pub mod config;
 pub mod ecu;
 #[cfg(feature = "host")]
 pub mod host;
+pub mod iohwab;
 pub mod rte;
 pub mod swc;

@@ -37,6 +37,11 @@ impl UltraSonic {
         }
     }
 
+    /// The sensor's parameters.
+    pub const fn sensor(&self) -> &SonarConfig {
+        &self.sensor
+    }
+
     /// The runnable: one echo in, the measurement to publish out.
     pub fn run(&mut self, echo: Echo) -> Measurement {
         match self.sensor.measure(echo) {

@@ -115,7 +115,9 @@ fn periodic_tasks_run_exactly_on_their_periods_and_every_sample_leaves_as_a_fram
             assert_eq!(w[1] - w[0], period_ms * 1000, "{task:?} period");
         }
     }
-    // CanTranslate runs right after every sonar sample, at the same instant.
+    // CanTranslate runs right after every sonar sample: UltraSonic's measurement took the
+    // trigger pulse (the echo is timed by the capture hardware), then its write activated
+    // OsComTask, which preempted it at once.
     let sonar: Vec<u64> = starts
         .iter()
         .filter(|(t, _)| *t == config::SONAR_TASK)
@@ -126,7 +128,11 @@ fn periodic_tasks_run_exactly_on_their_periods_and_every_sample_leaves_as_a_fram
         .filter(|(t, _)| *t == config::COM_TASK)
         .map(|(_, us)| *us)
         .collect();
-    assert_eq!(sonar, com);
+    let sample_done: Vec<u64> = sonar
+        .iter()
+        .map(|t| t + u64::from(cw_firmware::iohwab::TRIGGER_PULSE_US))
+        .collect();
+    assert_eq!(com, sample_done);
     // And its frame completes on the bus within a millisecond, every time.
     let frames: Vec<u64> = sim
         .frames()
@@ -219,4 +225,46 @@ fn thresholds_the_pc_sends_are_refused_when_invalid() {
         cw_core::warning::Thresholds::PAPER,
         "2000 < 1000 is refused"
     );
+}
+
+#[test]
+fn io_stack_inits_ports_once_and_triggers_the_sensor_before_every_echo() {
+    let sim = run("hold 1500 2000");
+    assert_eq!(sim.port_inits(), 1, "Port_Init runs once, in start-up one");
+    // Every OsSonarTask drives one trigger pulse of at least 10 us (rising then falling
+    // edge), and the capture never ran without one.
+    let sonar_runs = sim
+        .task_starts()
+        .iter()
+        .filter(|(t, _)| *t == config::SONAR_TASK)
+        .count();
+    let edges = sim.sonar_trigger().history();
+    assert_eq!(edges.len(), 2 * sonar_runs);
+    for pulse in edges.chunks(2) {
+        let [(rise, true), (fall, false)] = pulse else {
+            panic!("trigger edges out of order: {pulse:?}");
+        };
+        assert!(fall - rise >= 10, "trigger pulse {} us", fall - rise);
+    }
+    assert_eq!(sim.untriggered_captures(), 0);
+    assert_eq!(sim.ecu().stats().pin_faults, 0);
+}
+
+#[test]
+fn an_echo_line_stuck_high_is_a_sensor_fault_and_recovers_when_released() {
+    let scenario = Scenario::parse("hold 1500 4000").expect("test scenario parses");
+    let mut sim = Simulation::new(scenario, 1).expect("ECU configuration is consistent");
+    sim.run_until_ms(1000);
+    assert_eq!(sim.ecu().level(), WarningLevel::Yellow);
+    let triggers_before = sim.sonar_trigger().change_count();
+    sim.sonar_echo_line().set_level(true);
+    sim.run_until_ms(2000);
+    assert_eq!(sim.ecu().level(), WarningLevel::Fault);
+    assert_eq!(sim.ecu().measurement(), Measurement::Invalid);
+    // The sensor is not triggered while its echo line is stuck.
+    assert_eq!(sim.sonar_trigger().change_count(), triggers_before);
+    sim.sonar_echo_line().set_level(false);
+    sim.run_until_ms(2200);
+    assert_eq!(sim.ecu().level(), WarningLevel::Yellow);
+    assert_eq!(sim.ecu().stats().os_errors, 0);
 }

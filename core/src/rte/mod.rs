@@ -7,6 +7,77 @@
 //! runnable takes its ports as parameters; the generated (here: hand-written, in firmware)
 //! RTE must pass them, so a required port left unconnected does not compile either.
 //!
+//! A connection declared and used as intended:
+//!
+//! ```
+//! use cw_core::rte::{LastIsBest, SenderReceiverInterface};
+//! struct Distance;
+//! impl SenderReceiverInterface for Distance {
+//!     type Data = u32;
+//!     const NAME: &'static str = "Distance";
+//! }
+//! /// The connections, declared once: every required port is a field.
+//! struct Connections {
+//!     distance: LastIsBest<Distance>,
+//! }
+//! /// A receiving runnable names the interface it requires.
+//! fn obstacle_detection(port: &LastIsBest<Distance>) -> bool {
+//!     port.read() < 1000
+//! }
+//! let mut rte = Connections { distance: LastIsBest::new(u32::MAX, false) };
+//! let _ = rte.distance.write(500);
+//! assert!(obstacle_detection(&rte.distance));
+//! ```
+//!
+//! A sender of another interface cannot feed that runnable, even with the same data type:
+//!
+//! ```compile_fail,E0308
+//! use cw_core::rte::{LastIsBest, SenderReceiverInterface};
+//! struct Distance;
+//! impl SenderReceiverInterface for Distance {
+//!     type Data = u32;
+//!     const NAME: &'static str = "Distance";
+//! }
+//! struct Speed;
+//! impl SenderReceiverInterface for Speed {
+//!     type Data = u32;
+//!     const NAME: &'static str = "Speed";
+//! }
+//! fn obstacle_detection(port: &LastIsBest<Distance>) -> bool {
+//!     port.read() < 1000
+//! }
+//! let speed: LastIsBest<Speed> = LastIsBest::new(0, false);
+//! obstacle_detection(&speed);
+//! ```
+//!
+//! Writing the wrong data type into a port does not compile:
+//!
+//! ```compile_fail,E0308
+//! use cw_core::rte::{LastIsBest, SenderReceiverInterface};
+//! struct Distance;
+//! impl SenderReceiverInterface for Distance {
+//!     type Data = u32;
+//!     const NAME: &'static str = "Distance";
+//! }
+//! let mut port: LastIsBest<Distance> = LastIsBest::new(0, false);
+//! let _ = port.write(true);
+//! ```
+//!
+//! And a declared connection that is left out does not compile:
+//!
+//! ```compile_fail,E0063
+//! use cw_core::rte::{LastIsBest, SenderReceiverInterface};
+//! struct Distance;
+//! impl SenderReceiverInterface for Distance {
+//!     type Data = u32;
+//!     const NAME: &'static str = "Distance";
+//! }
+//! struct Connections {
+//!     distance: LastIsBest<Distance>,
+//! }
+//! let rte = Connections {};
+//! ```
+//!
 //! Return codes follow `Std_ReturnType`/RTE: [`RteError::NoData`] (`RTE_E_NO_DATA`) when a
 //! queue is empty or nothing was ever sent, [`RteError::Limit`] (`RTE_E_LIMIT`) when a queue
 //! is full (the value is *not* stored, and the sender knows it).

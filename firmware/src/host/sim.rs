@@ -1,8 +1,8 @@
 //! The simulation loop: board, ECU and scenario in 1 ms steps of virtual time.
 
 use cw_bsp::host::{
-    BusRecord, CanEvent, HcSr04, HostCan, HostCanConfig, Noise, SimPin, Tester, VirtualBus,
-    VirtualClock,
+    BusRecord, CanEvent, HcSr04, HostCan, HostCanConfig, Noise, SimDelay, SimInput, SimPin, Tester,
+    VirtualBus, VirtualClock,
 };
 use cw_core::can::Hrh;
 use cw_core::os::TaskId;
@@ -10,10 +10,10 @@ use cw_core::sonar::{Echo, SonarConfig};
 use cw_core::warning::{Measurement, WarningLevel};
 
 use super::scenario::{NoiseSpec, Scenario};
-use crate::board::Board;
+use crate::board::{Board, DioIn, DioOut, PulseCapture};
 use crate::config;
 use crate::ecu::{CanInterrupt, Ecu};
-use crate::swc::LedColor;
+use embedded_hal::digital::OutputPin;
 
 /// The simulated board the ECU runs on.
 pub struct HostBoard {
@@ -21,30 +21,96 @@ pub struct HostBoard {
     can: HostCan,
     red: SimPin,
     yellow: SimPin,
-    sensor: HcSr04,
-    /// The obstacle's true distance now (set from the scenario).
-    true_distance_mm: u32,
+    trigger: SimPin,
+    echo: SimInput,
+    delay: SimDelay,
+    sonar: HostSonar,
+    /// `Port_Init` calls so far (exactly one expected).
+    port_inits: u32,
     /// Task starts: (task, virtual time in us).
     task_starts: Vec<(TaskId, u64)>,
 }
 
+/// The HC-SR04 on the board's Gpt capture: it answers a capture only for a trigger pulse
+/// of at least 10 µs that the firmware drove on the trigger pin since the last capture.
+pub struct HostSonar {
+    trigger: SimPin,
+    sensor: HcSr04,
+    /// The obstacle's true distance now (set from the scenario).
+    true_distance_mm: u32,
+    /// Trigger-pin history entries already consumed by a capture.
+    seen_edges: usize,
+    /// Captures answered with no trigger pulse before them.
+    untriggered: u32,
+}
+
+impl HostSonar {
+    /// The minimum trigger pulse the sensor responds to, µs.
+    const MIN_TRIGGER_US: u64 = 10;
+
+    /// Whether a complete trigger pulse of at least 10 µs happened since the last capture.
+    fn take_trigger(&mut self) -> bool {
+        let history = self.trigger.history();
+        let new = history.get(self.seen_edges..).unwrap_or(&[]);
+        let triggered = new.windows(2).any(
+            |w| matches!(w, [(rise, true), (fall, false)] if fall - rise >= Self::MIN_TRIGGER_US),
+        );
+        self.seen_edges = history.len();
+        triggered
+    }
+}
+
+impl PulseCapture for HostSonar {
+    fn high_time_us(&mut self, timeout_us: u32) -> Option<u32> {
+        if !self.take_trigger() {
+            self.untriggered += 1;
+            return None;
+        }
+        match self.sensor.measure(self.true_distance_mm) {
+            Echo::Pulse { width_us } if width_us <= timeout_us => Some(width_us),
+            _ => None,
+        }
+    }
+}
+
 impl Board for HostBoard {
     type Can = HostCan;
-    type Led = SimPin;
+    type Out = SimPin;
+    type In = SimInput;
+    type Delay = SimDelay;
+    type Capture = HostSonar;
+
+    fn port_init(&mut self) {
+        self.port_inits += 1;
+        for pin in [&mut self.red, &mut self.yellow, &mut self.trigger] {
+            let _ = pin.set_low();
+        }
+    }
 
     fn can(&mut self) -> &mut HostCan {
         &mut self.can
     }
 
-    fn led(&mut self, color: LedColor) -> &mut SimPin {
-        match color {
-            LedColor::Red => &mut self.red,
-            LedColor::Yellow => &mut self.yellow,
+    fn dio_out(&mut self, channel: DioOut) -> &mut SimPin {
+        match channel {
+            DioOut::RedLed => &mut self.red,
+            DioOut::YellowLed => &mut self.yellow,
+            DioOut::SonarTrigger => &mut self.trigger,
         }
     }
 
-    fn sonar_echo(&mut self) -> Echo {
-        self.sensor.measure(self.true_distance_mm)
+    fn dio_in(&mut self, channel: DioIn) -> &mut SimInput {
+        match channel {
+            DioIn::SonarEcho => &mut self.echo,
+        }
+    }
+
+    fn gpt_delay(&mut self) -> &mut SimDelay {
+        &mut self.delay
+    }
+
+    fn gpt_capture(&mut self) -> &mut HostSonar {
+        &mut self.sonar
     }
 
     fn now_ms(&self) -> u64 {
@@ -149,13 +215,23 @@ impl Simulation {
             .with_noise(noise)
             .with_dropout_ppm(scenario.dropout_ppm)
             .with_seed(seed);
+        let trigger = SimPin::new("SonarTrigger", &clock);
         let board = HostBoard {
             red: SimPin::new("RedLED", &clock),
             yellow: SimPin::new("YellowLED", &clock),
+            echo: SimInput::new("SonarEcho", false),
+            delay: SimDelay::new(&clock),
+            sonar: HostSonar {
+                trigger: trigger.clone(),
+                sensor,
+                true_distance_mm: scenario.distance_at(0),
+                seen_edges: 0,
+                untriggered: 0,
+            },
+            trigger,
             clock: clock.clone(),
             can,
-            sensor,
-            true_distance_mm: scenario.distance_at(0),
+            port_inits: 0,
             task_starts: Vec::new(),
         };
         let ecu = Ecu::new(SonarConfig::HC_SR04)
@@ -215,6 +291,26 @@ impl Simulation {
         &self.board.yellow
     }
 
+    /// The sensor's trigger pin (with its history).
+    pub fn sonar_trigger(&self) -> &SimPin {
+        &self.board.trigger
+    }
+
+    /// The sensor's echo line, which a test may force (a sensor stuck high).
+    pub fn sonar_echo_line(&self) -> &SimInput {
+        &self.board.echo
+    }
+
+    /// `Port_Init` calls so far.
+    pub const fn port_inits(&self) -> u32 {
+        self.board.port_inits
+    }
+
+    /// Echo captures the firmware asked for without a trigger pulse before them.
+    pub const fn untriggered_captures(&self) -> u32 {
+        self.board.sonar.untriggered
+    }
+
     /// Runs until virtual time `end_ms`.
     pub fn run_until_ms(&mut self, end_ms: u64) {
         while self.now_ms < end_ms {
@@ -249,8 +345,9 @@ impl Simulation {
         for (_, frame) in self.scenario.frames.iter().filter(|(at, _)| *at == t) {
             self.pc.send(frame);
         }
-        self.board.true_distance_mm = self.scenario.distance_at(t);
+        self.board.sonar.true_distance_mm = self.scenario.distance_at(t);
         self.board
+            .sonar
             .sensor
             .set_forced_dropout(self.scenario.in_dropout(t));
         self.ecu.tick(&mut self.board);
@@ -258,7 +355,7 @@ impl Simulation {
         if t % 10 == 0 {
             self.trace.push(TraceRow {
                 time_ms: t,
-                true_distance_mm: self.board.true_distance_mm,
+                true_distance_mm: self.board.sonar.true_distance_mm,
                 measured: self.ecu.measurement(),
                 level: self.ecu.level(),
                 red: self.board.red.is_high_now(),
