@@ -13,8 +13,9 @@ use cw_core::canif::{CanIf, PduMode, RxDropped, TxPduId};
 use cw_core::cansm::{Actions, CanSm, ComMode};
 use cw_core::com::ipdu::Com;
 use cw_core::com::signal::SignalValue;
-use cw_core::ecum::{bswm_actions, BswMAction, BswMRequest, EcuM};
+use cw_core::ecum::{bswm_actions, BswMAction, BswMRequest, EcuM, EcuMState};
 use cw_core::os::{OsError, TaskId};
+use cw_core::rte::RteError;
 use cw_core::sonar::SonarConfig;
 use cw_core::warning::{Measurement, WarningLevel};
 
@@ -138,6 +139,21 @@ impl Ecu {
         }
     }
 
+    /// A mode request to BswM (from the mode-management SWC: ignition off, or a
+    /// communication control), carried out by BswM's main function in the next
+    /// `OsBswServiceTask`.
+    ///
+    /// # Errors
+    /// [`RteError::Limit`] when four requests are already waiting; this one is not stored.
+    pub fn request_mode(&mut self, request: BswMRequest) -> Result<(), RteError> {
+        self.rte.mode_requests.send(request).map(|_| ())
+    }
+
+    /// Whether the ECU has shut down (EcuM `Shutdown`: it no longer runs).
+    pub fn is_off(&self) -> bool {
+        self.ecum.state() == EcuMState::Shutdown
+    }
+
     /// Power-on: `EcuM_Init` (start-up one), then `StartOS`, which runs `OsStartupTask`.
     pub fn start<B: Board>(&mut self, board: &mut B) {
         if self.ecum.init().is_err() {
@@ -153,6 +169,9 @@ impl Ecu {
     /// The 1 ms timer interrupt: the system counter advances and due alarms activate tasks,
     /// which then run.
     pub fn tick<B: Board>(&mut self, board: &mut B) {
+        if self.is_off() {
+            return;
+        }
         let entered = self.os.enter_isr();
         self.os_result(entered);
         let ticked = self
@@ -173,6 +192,9 @@ impl Ecu {
 
     /// The CAN interrupt: one controller event into CanIf and upwards.
     pub fn can_event<B: Board>(&mut self, board: &mut B, event: CanInterrupt) {
+        if self.is_off() {
+            return;
+        }
         let entered = self.os.enter_isr();
         self.os_result(entered);
         match event {
@@ -208,6 +230,9 @@ impl Ecu {
     /// Runs tasks while the kernel has one to run that is not already on the stack.
     fn dispatch<B: Board>(&mut self, board: &mut B) {
         while let Some(task) = self.os.running() {
+            if self.is_off() {
+                return;
+            }
             self.run_task(board, task);
         }
     }
@@ -216,7 +241,7 @@ impl Ecu {
     /// the nested execution of a preempting task.
     fn run_preempting<B: Board>(&mut self, board: &mut B, me: TaskId) {
         while let Some(task) = self.os.running() {
-            if task == me {
+            if task == me || self.is_off() {
                 return;
             }
             self.run_task(board, task);
@@ -234,6 +259,10 @@ impl Ecu {
             config::SONAR_TASK => self.sonar_task(board),
             _ => {}
         }
+        if self.is_off() {
+            // The ECU shut down inside this task: the OS is gone, nothing terminates.
+            return;
+        }
         let ended = self.os.terminate_task();
         self.os_result(ended);
     }
@@ -246,7 +275,12 @@ impl Ecu {
         if self.ecum.startup_two().is_err() {
             return;
         }
-        for action in bswm_actions(BswMRequest::EcuRun) {
+        self.bswm_execute(board, BswMRequest::EcuRun);
+    }
+
+    /// BswM: carries out the action list of one request.
+    fn bswm_execute<B: Board>(&mut self, board: &mut B, request: BswMRequest) {
+        for action in bswm_actions(request) {
             match action {
                 BswMAction::ComMFullCommunication => {
                     let actions = self.cansm.request(ComMode::Full);
@@ -264,6 +298,20 @@ impl Ecu {
                 }
             }
         }
+    }
+
+    /// EcuM's main function: in post-run, the outputs go to their safe state (LEDs off)
+    /// and the ECU shuts down (`ShutdownOS`: no more ticks, tasks or interrupts).
+    fn ecum_main_function<B: Board>(&mut self, board: &mut B) {
+        if self.ecum.state() != EcuMState::PostRun {
+            return;
+        }
+        for color in [LedColor::Red, LedColor::Yellow] {
+            if iohwab::set_led(board, color, false).is_err() {
+                self.stats.pin_faults = self.stats.pin_faults.saturating_add(1);
+            }
+        }
+        let _ = self.ecum.shutdown();
     }
 
     /// Carries out CanSM's decisions on CanIf and the controller.
@@ -294,6 +342,9 @@ impl Ecu {
 
     /// `OsBswServiceTask`: the BSW main functions.
     fn bsw_task<B: Board>(&mut self, board: &mut B) {
+        while let Ok(request) = self.rte.mode_requests.receive() {
+            self.bswm_execute(board, request);
+        }
         self.com.main_function_rx(|_timed_out| {});
         let (canif, stats) = (&mut self.canif, &mut self.stats);
         self.com.main_function_tx(|ipdu, sdu| {
@@ -308,6 +359,7 @@ impl Ecu {
         if self.canif.pdu_mode() == PduMode::Offline && self.cansm.current_mode() == ComMode::Full {
             self.canif.set_pdu_mode(PduMode::Online);
         }
+        self.ecum_main_function(board);
     }
 
     /// `OsObstacleDetectionTask`: ObstacleDetection (and the thresholds from the PC).

@@ -181,7 +181,8 @@ fn run(o: &Options) -> Result<(), String> {
     let text = format!(
         "{}\nsummary: {:.1} s of ECU time simulated in {:.1} ms of wall time ({:.0}x real time)\n\
          \x20        {} CAN frames on the bus; distance frames sent {}, refused {}; received frames dropped {}\n\
-         \x20        bus-offs {}, kernel errors {}, thresholds red < {} mm, yellow < {} mm\n",
+         \x20        bus-offs {}, kernel errors {}, thresholds red < {} mm, yellow < {} mm\n\
+         \x20        EcuM state at the end: {:?}\n",
         figure7_table(sim.scenario(), sim.trace()),
         simulated_s,
         wall.as_secs_f64() * 1000.0,
@@ -194,6 +195,7 @@ fn run(o: &Options) -> Result<(), String> {
         stats.os_errors,
         ecu.thresholds().red_below_mm(),
         ecu.thresholds().yellow_below_mm(),
+        ecu.ecum().state(),
     );
     out.write_all(text.as_bytes())
         .map_err(|e| format!("cannot write to stdout: {e}"))

@@ -3,7 +3,7 @@
 //! [`crate::ecu`] call the runnables with exactly these ports, so a missing or mistyped
 //! connection does not compile.
 
-use cw_core::rte::{LastIsBest, SenderReceiverInterface};
+use cw_core::rte::{LastIsBest, Queued, SenderReceiverInterface};
 use cw_core::warning::{Measurement, WarningLevel};
 
 /// `SonarDataInterface`: the distance measured by UltraSonic, with its validity (the paper
@@ -22,6 +22,14 @@ impl SenderReceiverInterface for LedRequestInterface {
     const NAME: &'static str = "LedRequestInterface";
 }
 
+/// `ModeRequestInterface`: what the mode-management SWC asks BswM for (queued: every
+/// request is carried out once, in order).
+pub struct ModeRequestInterface;
+impl SenderReceiverInterface for ModeRequestInterface {
+    type Data = cw_core::ecum::BswMRequest;
+    const NAME: &'static str = "ModeRequestInterface";
+}
+
 /// All connections of the ECU.
 pub struct Rte {
     /// UltraSonic.SonarData -> ObstacleDetection.SonarData (read every 20 ms).
@@ -31,6 +39,9 @@ pub struct Rte {
     pub sonar_to_can: LastIsBest<SonarDataInterface>,
     /// ObstacleDetection.LedRequest -> LEDActuator (both prototypes) and CanTranslate.
     pub led_request: LastIsBest<LedRequestInterface>,
+    /// Mode management -> BswM (ignition off, communication control), queued, handled by
+    /// BswM's main function in `OsBswServiceTask`.
+    pub mode_requests: Queued<ModeRequestInterface, 4>,
 }
 
 impl Rte {
@@ -41,6 +52,7 @@ impl Rte {
             sonar_to_obstacle: LastIsBest::new(Measurement::Invalid, false),
             sonar_to_can: LastIsBest::new(Measurement::Invalid, true),
             led_request: LastIsBest::new(WarningLevel::Fault, false),
+            mode_requests: Queued::new(),
         }
     }
 }

@@ -268,3 +268,51 @@ fn an_echo_line_stuck_high_is_a_sensor_fault_and_recovers_when_released() {
     assert_eq!(sim.ecu().level(), WarningLevel::Yellow);
     assert_eq!(sim.ecu().stats().os_errors, 0);
 }
+
+#[test]
+fn no_communication_silences_the_bus_but_not_the_leds_then_frames_resume() {
+    let sim = run("hold 500 3000\nno-communication 1000 1000");
+    let distance_frames = |from_us: u64, to_us: u64| {
+        sim.frames()
+            .iter()
+            .filter(|f| f.frame.can_id() == config::DISTANCE_FRAME_ID)
+            .filter(|f| f.time_us >= from_us && f.time_us < to_us)
+            .count()
+    };
+    // The request is carried out by the next BSW main function (within 10 ms) and the last
+    // frame already in the controller may still complete (within 1 ms after that).
+    assert_eq!(distance_frames(1_011_000, 2_000_000), 0, "silent");
+    assert!(distance_frames(2_050_000, 3_000_000) >= 20, "frames again");
+    // Com kept writing; CanIf refused what it could not send, and counted it.
+    assert!(sim.ecu().stats().frames_refused >= 24);
+    for r in settled(sim.trace(), 1000, 2000) {
+        assert_eq!((r.level, r.red, r.yellow), (WarningLevel::Red, true, false));
+    }
+    assert_eq!(sim.ecu().stats().os_errors, 0);
+}
+
+#[test]
+fn ignition_off_goes_through_post_run_to_shutdown_with_leds_dark_and_bus_silent() {
+    let sim = run("hold 500 3000\nshutdown 1000");
+    assert!(sim.ecu().is_off());
+    assert_eq!(sim.ecu().ecum().state(), cw_core::ecum::EcuMState::Shutdown);
+    assert_eq!(
+        sim.ecu().cansm().current_mode(),
+        cw_core::cansm::ComMode::No
+    );
+    let last_frame = sim
+        .frames()
+        .iter()
+        .map(|f| f.time_us)
+        .max()
+        .expect("frames before the shutdown");
+    assert!(last_frame < 1_011_000, "last frame at {last_frame} us");
+    for r in sim.trace().iter().filter(|r| r.time_ms >= 1010) {
+        assert!(!r.red && !r.yellow, "LEDs dark at {} ms", r.time_ms);
+    }
+    // Nothing runs any more: no task started after the shutdown.
+    let last_start = sim.task_starts().iter().map(|(_, us)| *us).max();
+    assert!(last_start.is_some_and(|t| t < 1_011_000));
+    assert_eq!(sim.ecu().stats().os_errors, 0);
+    assert_eq!(sim.mode_requests_refused(), 0);
+}

@@ -284,7 +284,7 @@ fn run_stage(stage: &str) -> Result {
 fn interop() -> Result {
     let out = crate::process::root().join("target").join("interop");
     std::fs::create_dir_all(&out).map_err(|e| format!("cannot create {}: {e}", out.display()))?;
-    for scenario in ["figure7", "faults", "approach"] {
+    for scenario in ["figure7", "faults", "approach", "shutdown"] {
         let trace = out.join(format!("{scenario}.csv"));
         let log = out.join(format!("{scenario}.log"));
         Cmd::new("cargo")

@@ -81,8 +81,13 @@ pub enum EcuMError {
 pub enum BswMRequest {
     /// Bring the ECU into its run mode (`ModeManagerInit` at start).
     EcuRun,
-    /// Leave the run mode.
+    /// Leave the run mode (ignition off): communication stops, then post-run and shutdown.
     EcuPostRun,
+    /// Stop communicating on the network while running (e.g. a diagnostic communication
+    /// control): the ECU keeps working locally.
+    CommunicationOff,
+    /// Communicate again after [`BswMRequest::CommunicationOff`].
+    CommunicationOn,
 }
 
 /// One action of a BswM action list.
@@ -106,6 +111,8 @@ pub const fn bswm_actions(request: BswMRequest) -> &'static [BswMAction] {
             BswMAction::EcuMRequestRun,
         ],
         BswMRequest::EcuPostRun => &[BswMAction::ComMNoCommunication, BswMAction::EcuMReleaseRun],
+        BswMRequest::CommunicationOff => &[BswMAction::ComMNoCommunication],
+        BswMRequest::CommunicationOn => &[BswMAction::ComMFullCommunication],
     }
 }
 

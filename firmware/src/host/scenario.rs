@@ -11,6 +11,8 @@
 //! dropout-rate 10000       # parts per million of echoes lost at random
 //! can-errors 6000 40       # at_ms count: the ECU's next `count` transmissions fail
 //! frame 7000 200#E8030000  # at_ms id#hex: a tester puts this frame on the bus
+//! no-communication 8000 500 # start_ms duration_ms: BswM stops network communication
+//! shutdown 9000            # at_ms: ignition off; EcuM post-run, then the ECU shuts down
 //! ```
 //!
 //! `hold` and `ramp` follow each other in time; the other commands are placed by their own
@@ -58,6 +60,11 @@ pub struct Scenario {
     pub can_errors: Vec<(u64, u32)>,
     /// Tester frames: (at_ms, frame).
     pub frames: Vec<(u64, CanFrame)>,
+    /// Windows without network communication (ComM no-communication via BswM):
+    /// (start_ms, duration_ms).
+    pub no_communication: Vec<(u64, u64)>,
+    /// Ignition off, ms.
+    pub shutdown_at_ms: Option<u64>,
 }
 
 /// A scenario line that could not be read, with its line number (from 1).
@@ -95,6 +102,8 @@ impl Scenario {
             dropouts: Vec::new(),
             can_errors: Vec::new(),
             frames: Vec::new(),
+            no_communication: Vec::new(),
+            shutdown_at_ms: None,
         }
     }
 
@@ -208,6 +217,18 @@ impl Scenario {
                     let frame = parse_frame(words[2]).map_err(err)?;
                     s.frames.push((num(1, "a time in ms")?, frame));
                 }
+                "no-communication" => {
+                    arity(2)?;
+                    s.no_communication
+                        .push((num(1, "a start in ms")?, num(2, "a duration in ms")?));
+                }
+                "shutdown" => {
+                    arity(1)?;
+                    if s.shutdown_at_ms.is_some() {
+                        return Err(err("the ECU shuts down only once".into()));
+                    }
+                    s.shutdown_at_ms = Some(num(1, "a time in ms")?);
+                }
                 other => return Err(err(format!("unknown command `{other}`"))),
             }
         }
@@ -232,6 +253,8 @@ impl Scenario {
             .map(|(t, d)| t + d)
             .chain(self.can_errors.iter().map(|(t, _)| *t))
             .chain(self.frames.iter().map(|(t, _)| *t))
+            .chain(self.no_communication.iter().map(|(t, d)| t + d))
+            .chain(self.shutdown_at_ms)
             .max()
             .unwrap_or(0);
         moves.max(events)
@@ -266,7 +289,8 @@ mod tests {
     fn reads_every_command_and_places_movements_back_to_back() {
         let text =
             "# demo\nhold 500 1000\nramp 500 1500 1000 # up\nnoise uniform 20\ndropout 300 200\n\
-                    dropout-rate 1000\ncan-errors 1500 40\nframe 1800 200#E8030000\n";
+                    dropout-rate 1000\ncan-errors 1500 40\nframe 1800 200#E8030000\n\
+                    no-communication 1200 300\nshutdown 1900\n";
         let s = Scenario::parse(text).expect("valid scenario");
         assert_eq!(s.segments.len(), 2);
         assert_eq!(s.segments[1].start_ms, 1000);
@@ -281,6 +305,8 @@ mod tests {
         assert!(s.in_dropout(300) && s.in_dropout(499) && !s.in_dropout(500));
         assert_eq!(s.can_errors, [(1500, 40)]);
         assert_eq!(s.frames[0].1.bytes(), &[0xE8, 0x03, 0, 0]);
+        assert_eq!(s.no_communication, [(1200, 300)]);
+        assert_eq!(s.shutdown_at_ms, Some(1900));
         assert_eq!(s.duration_ms(), 2000);
     }
 
@@ -304,6 +330,10 @@ mod tests {
             (
                 "hold 1 1\nframe 5 100#000000000000000000",
                 "line 2: 9 data bytes; a CAN frame holds at most 8",
+            ),
+            (
+                "shutdown 5\nshutdown 6",
+                "line 2: the ECU shuts down only once",
             ),
             (
                 "noise pink 3",

@@ -5,6 +5,7 @@ use cw_bsp::host::{
     VirtualBus, VirtualClock,
 };
 use cw_core::can::Hrh;
+use cw_core::ecum::BswMRequest;
 use cw_core::os::TaskId;
 use cw_core::sonar::{Echo, SonarConfig};
 use cw_core::warning::{Measurement, WarningLevel};
@@ -188,6 +189,7 @@ pub struct Simulation {
     now_ms: u64,
     trace: Vec<TraceRow>,
     frames: Vec<BusRecord>,
+    mode_requests_refused: u32,
 }
 
 impl Simulation {
@@ -246,6 +248,7 @@ impl Simulation {
             now_ms: 0,
             trace: Vec::new(),
             frames: Vec::new(),
+            mode_requests_refused: 0,
         };
         sim.ecu.start(&mut sim.board);
         Ok(sim)
@@ -345,6 +348,17 @@ impl Simulation {
         for (_, frame) in self.scenario.frames.iter().filter(|(at, _)| *at == t) {
             self.pc.send(frame);
         }
+        let windows = self.scenario.no_communication.clone();
+        for (start, len) in windows {
+            if start == t {
+                self.mode_request(BswMRequest::CommunicationOff);
+            } else if start + len == t {
+                self.mode_request(BswMRequest::CommunicationOn);
+            }
+        }
+        if self.scenario.shutdown_at_ms == Some(t) {
+            self.mode_request(BswMRequest::EcuPostRun);
+        }
         self.board.sonar.true_distance_mm = self.scenario.distance_at(t);
         self.board
             .sonar
@@ -362,6 +376,18 @@ impl Simulation {
                 yellow: self.board.yellow.is_high_now(),
             });
         }
+    }
+
+    /// Hands a mode request to the ECU; a full request queue is counted.
+    fn mode_request(&mut self, request: BswMRequest) {
+        if self.ecu.request_mode(request).is_err() {
+            self.mode_requests_refused += 1;
+        }
+    }
+
+    /// Mode requests the ECU refused because its queue was full.
+    pub const fn mode_requests_refused(&self) -> u32 {
+        self.mode_requests_refused
     }
 
     fn deliver_can_events(&mut self) {
