@@ -8,12 +8,11 @@
 //! kernel at interrupt level ([`Ecu::tick`], [`Ecu::can_event`]) and rescheduling happens
 //! when they leave.
 
-use cw_core::can::ControllerMode;
-use cw_core::canif::{CanIf, PduMode, RxDropped, TxPduId};
-use cw_core::cansm::{Actions, CanSm, ComMode};
+use cw_core::canif::{CanIf, RxDropped, TxPduId};
+use cw_core::cansm::{self, Actions, CanSm};
 use cw_core::com::ipdu::Com;
 use cw_core::com::signal::SignalValue;
-use cw_core::ecum::{bswm_actions, BswMAction, BswMRequest, EcuM, EcuMState};
+use cw_core::ecum::{bswm_execute, BswMRequest, EcuM, EcuMState};
 use cw_core::os::{OsError, TaskId};
 use cw_core::rte::RteError;
 use cw_core::sonar::SonarConfig;
@@ -49,6 +48,8 @@ pub struct EcuStats {
     pub os_errors: u32,
     /// LED writes a Dio channel refused.
     pub pin_faults: u32,
+    /// Mode requests BswM refused (their rule's condition did not hold).
+    pub mode_requests_refused: u32,
 }
 
 /// The whole ECU except the board.
@@ -275,35 +276,13 @@ impl Ecu {
         if self.ecum.startup_two().is_err() {
             return;
         }
-        self.bswm_execute(board, BswMRequest::EcuRun);
-    }
-
-    /// BswM: carries out the action list of one request.
-    fn bswm_execute<B: Board>(&mut self, board: &mut B, request: BswMRequest) {
-        for action in bswm_actions(request) {
-            match action {
-                BswMAction::ComMFullCommunication => {
-                    let actions = self.cansm.request(ComMode::Full);
-                    self.apply(board, actions);
-                }
-                BswMAction::ComMNoCommunication => {
-                    let actions = self.cansm.request(ComMode::No);
-                    self.apply(board, actions);
-                }
-                BswMAction::EcuMRequestRun => {
-                    let _ = self.ecum.request_run(0);
-                }
-                BswMAction::EcuMReleaseRun => {
-                    let _ = self.ecum.release_run(0);
-                }
-            }
-        }
+        self.bswm(board, BswMRequest::EcuRun);
     }
 
     /// EcuM's main function: in post-run, the outputs go to their safe state (LEDs off)
     /// and the ECU shuts down (`ShutdownOS`: no more ticks, tasks or interrupts).
     fn ecum_main_function<B: Board>(&mut self, board: &mut B) {
-        if self.ecum.state() != EcuMState::PostRun {
+        if !self.ecum.main_function() {
             return;
         }
         for color in [LedColor::Red, LedColor::Yellow] {
@@ -311,22 +290,26 @@ impl Ecu {
                 self.stats.pin_faults = self.stats.pin_faults.saturating_add(1);
             }
         }
-        let _ = self.ecum.shutdown();
+    }
+
+    /// BswM's main function for one request; a request whose rule does not hold now (e.g.
+    /// communication on during post-run) is refused and counted.
+    fn bswm<B: Board>(&mut self, board: &mut B, request: BswMRequest) {
+        let done = bswm_execute(
+            request,
+            &mut self.ecum,
+            &mut self.cansm,
+            &mut self.canif,
+            board.can(),
+        );
+        if done.is_err() {
+            self.stats.mode_requests_refused = self.stats.mode_requests_refused.saturating_add(1);
+        }
     }
 
     /// Carries out CanSM's decisions on CanIf and the controller.
     fn apply<B: Board>(&mut self, board: &mut B, actions: Actions) {
-        if let Some(mode) = actions.controller {
-            if self.canif.set_controller_mode(board.can(), mode).is_err()
-                && mode == ControllerMode::Started
-            {
-                // The controller refused to start; CanSM retries at its next bus-off or
-                // request. Nothing is sent meanwhile (CanIf stays stopped).
-            }
-        }
-        if let Some(mode) = actions.pdu {
-            self.canif.set_pdu_mode(mode);
-        }
+        cansm::apply(&mut self.cansm, &mut self.canif, board.can(), actions);
     }
 
     /// `OsLEDTask`: LEDActuator, prototypes RedLED and YellowLED.
@@ -343,7 +326,7 @@ impl Ecu {
     /// `OsBswServiceTask`: the BSW main functions.
     fn bsw_task<B: Board>(&mut self, board: &mut B) {
         while let Ok(request) = self.rte.mode_requests.receive() {
-            self.bswm_execute(board, request);
+            self.bswm(board, request);
         }
         self.com.main_function_rx(|_timed_out| {});
         let (canif, stats) = (&mut self.canif, &mut self.stats);
@@ -356,9 +339,6 @@ impl Ecu {
         });
         let actions = self.cansm.main_function();
         self.apply(board, actions);
-        if self.canif.pdu_mode() == PduMode::Offline && self.cansm.current_mode() == ComMode::Full {
-            self.canif.set_pdu_mode(PduMode::Online);
-        }
         self.ecum_main_function(board);
     }
 

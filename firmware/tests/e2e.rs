@@ -316,3 +316,18 @@ fn ignition_off_goes_through_post_run_to_shutdown_with_leds_dark_and_bus_silent(
     assert_eq!(sim.ecu().stats().os_errors, 0);
     assert_eq!(sim.mode_requests_refused(), 0);
 }
+
+#[test]
+fn communication_is_not_restarted_during_post_run() {
+    // Ignition off at 1001 ms, and a communication-on request at 1005 ms (the end of a
+    // no-communication window): both reach BswM at 1010 ms, in order. RUN is released
+    // first, so the second is refused and counted, and the ECU shuts down silent.
+    let sim = run("hold 500 2000\nno-communication 900 105\nshutdown 1001");
+    assert!(sim.ecu().is_off());
+    assert_eq!(sim.ecu().stats().mode_requests_refused, 1);
+    assert_eq!(
+        sim.ecu().cansm().current_mode(),
+        cw_core::cansm::ComMode::No
+    );
+    assert!(sim.frames().iter().all(|f| f.time_us < 911_000));
+}

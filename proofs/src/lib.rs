@@ -1,4 +1,5 @@
-//! Model checking of the OSEK scheduler in `cw-core`.
+//! Model checking of the OSEK scheduler in `cw-core` (this module), and of the ECU's
+//! communication modes ([`modes`]).
 //!
 //! [`OsModel`] is a stateright model whose state *is* the real kernel
 //! ([`cw_core::os::Os`]) and whose transitions call the real services: nothing about the
@@ -210,13 +211,31 @@ pub struct Outcome {
     pub failures: Vec<String>,
 }
 
-/// Explores the whole state space of `model` and checks its properties.
+/// Explores the whole state space of a scheduler model and checks its properties.
 pub fn check<const T: usize, const R: usize, const C: usize, const A: usize, const Q: usize>(
     model: OsModel<T, R, C, A, Q>,
     threads: usize,
 ) -> Outcome {
-    use stateright::Checker;
     let name = model.name;
+    explore(name, model, threads)
+}
+
+/// Explores the whole state space of the communication-mode model and checks it.
+pub fn check_modes(threads: usize) -> Outcome {
+    explore(
+        "EcuM/BswM/ComM/CanSM/CanIf modes, bus-off and controller faults",
+        modes::ModeModel,
+        threads,
+    )
+}
+
+fn explore<M>(name: &'static str, model: M, threads: usize) -> Outcome
+where
+    M: Model + Send + Sync + 'static,
+    M::State: Debug + std::hash::Hash + Eq + Send + Sync + Clone,
+    M::Action: Debug + Eq + Send + Sync + Clone,
+{
+    use stateright::Checker;
     let properties = model.properties();
     let checker = model.checker().threads(threads).spawn_bfs().join();
     let discoveries = checker.discoveries();
@@ -245,6 +264,7 @@ pub fn check<const T: usize, const R: usize, const C: usize, const A: usize, con
 }
 
 pub mod configs;
+pub mod modes;
 
 #[cfg(test)]
 mod tests;

@@ -1,15 +1,16 @@
 //! Runs every model to exhaustion and prints the number of states explored.
-use cw_proofs::{check, configs, Outcome};
+use cw_proofs::{check, check_modes, configs, Outcome};
 use std::process::ExitCode;
 use std::time::Instant;
 
 fn main() -> ExitCode {
     let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
-    let runs: [fn(usize) -> Outcome; 4] = [
+    let runs: [fn(usize) -> Outcome; 5] = [
         |n| check(configs::paper(), n),
         |n| check(configs::ceiling(), n),
         |n| check(configs::fifo(), n),
         |n| check(configs::events(), n),
+        check_modes,
     ];
     let mut total = 0;
     let mut failed = false;
@@ -30,7 +31,7 @@ fn main() -> ExitCode {
         }
     }
     println!(
-        "model check: {total} distinct scheduler states explored, all properties hold: {}",
+        "model check: {total} distinct states explored, all properties hold: {}",
         !failed
     );
     if failed {

@@ -20,3 +20,30 @@ fn small_models_hold_every_property() {
         );
     }
 }
+
+#[test]
+fn mode_model_holds_and_its_rules_can_fail() {
+    use crate::modes::{broken_rule, ModeModel};
+    use cw_core::canif::PduMode;
+    use stateright::Model;
+
+    let outcome = check_modes(1);
+    assert!(outcome.failures.is_empty(), "{:?}", outcome.failures);
+    assert!(outcome.unique_states > 500, "{}", outcome.unique_states);
+    // The rules reject a channel online on a stopped controller, and a shut-down ECU
+    // that still communicates.
+    let mut s = ModeModel.init_states()[0];
+    assert_eq!(broken_rule(&s), None);
+    s.canif.set_pdu_mode(PduMode::Online);
+    assert!(broken_rule(&s).is_some());
+    let mut s = ModeModel.init_states()[0];
+    for step in [
+        crate::modes::ModeStep::PowerOn,
+        crate::modes::ModeStep::Request(cw_core::ecum::BswMRequest::EcuPostRun),
+    ] {
+        s = ModeModel.next_state(&s, step).expect("a next state");
+    }
+    let _ = s.cansm.request(cw_core::cansm::ComMode::Full);
+    let _ = s.ecum.main_function();
+    assert!(broken_rule(&s).is_some());
+}

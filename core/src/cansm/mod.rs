@@ -13,8 +13,9 @@
 //! [`CanSm::main_function`] return the [`Actions`] the caller applies to CanIf and the
 //! driver. Times are in main-function cycles (the configuration converts milliseconds).
 
-use crate::can::ControllerMode;
-use crate::canif::PduMode;
+use crate::can::{CanDriver, ControllerMode};
+use crate::canif::{CanIf, CanIfConfig, PduMode};
+use crate::tables::Tables;
 
 /// A communication mode requested by ComM.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -36,7 +37,8 @@ pub enum CanSmState {
         /// Cycles since the restart after a bus-off, until the transmission is ensured.
         since_restart: Option<u32>,
     },
-    /// Off the bus, waiting `remaining` cycles before restarting the controller.
+    /// Off the bus (after a bus-off, or a start the controller refused), waiting
+    /// `remaining` cycles before restarting the controller.
     BusOff {
         /// Cycles left before the restart.
         remaining: u32,
@@ -198,6 +200,21 @@ impl CanSm {
         }
     }
 
+    /// The controller refused to start (`CanIf_SetControllerMode` failed): CanSM stays off
+    /// the bus and asks again after the fast recovery time, as after a bus-off, without
+    /// counting a bus-off. The channel stays closed for transmission meanwhile.
+    pub fn start_refused(&mut self) -> Actions {
+        let was_full = matches!(self.state, CanSmState::FullCommunication { .. });
+        self.state = CanSmState::BusOff {
+            remaining: self.cfg.fast_cycles,
+        };
+        Actions {
+            controller: None,
+            pdu: Some(PduMode::TxOffline),
+            indicate: was_full.then_some(ComMode::No),
+        }
+    }
+
     /// `CanSM_MainFunction`: one period passed.
     pub fn main_function(&mut self) -> Actions {
         match self.state {
@@ -235,6 +252,30 @@ impl CanSm {
             }
             _ => Actions::default(),
         }
+    }
+}
+
+/// Carries out CanSM's [`Actions`] on CanIf and the controller. A controller that refuses
+/// to start is reported back to CanSM ([`CanSm::start_refused`]), so the channel never goes
+/// online on a stopped controller; a refused stop still takes the channel offline.
+pub fn apply<D: CanDriver, const TX: usize, const RX: usize, K: Tables<CanIfConfig<TX, RX>>>(
+    cansm: &mut CanSm,
+    canif: &mut CanIf<TX, RX, K>,
+    driver: &mut D,
+    actions: Actions,
+) {
+    if let Some(mode) = actions.controller {
+        let refused = canif.set_controller_mode(driver, mode).is_err();
+        if refused && mode == ControllerMode::Started {
+            let retry = cansm.start_refused();
+            if let Some(pdu) = retry.pdu {
+                canif.set_pdu_mode(pdu);
+            }
+            return;
+        }
+    }
+    if let Some(pdu) = actions.pdu {
+        canif.set_pdu_mode(pdu);
     }
 }
 

@@ -7,6 +7,11 @@
 //! the ECU may run or must shut down; the firmware does the initialising. Wrong-order calls
 //! are refused with [`EcuMError`], never half-done.
 
+use crate::can::CanDriver;
+use crate::canif::{CanIf, CanIfConfig};
+use crate::cansm::{apply, CanSm, ComMode};
+use crate::tables::Tables;
+
 /// A BSW module the start-up initialises.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum Module {
@@ -116,6 +121,61 @@ pub const fn bswm_actions(request: BswMRequest) -> &'static [BswMAction] {
     }
 }
 
+/// A BswM request whose rule condition does not hold now; nothing was done.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub struct RequestRefused(pub EcuMState);
+
+/// BswM: carries out the action list of `request` on EcuM and, through ComM, on CanSM,
+/// CanIf and the controller. Rule conditions: every request needs the BSW started and not
+/// shut down, and [`BswMRequest::CommunicationOn`] needs RUN (communication never restarts
+/// during post-run).
+///
+/// # Errors
+/// [`RequestRefused`] with the EcuM state when the rule's condition does not hold.
+pub fn bswm_execute<D, const TX: usize, const RX: usize, K>(
+    request: BswMRequest,
+    ecum: &mut EcuM,
+    cansm: &mut CanSm,
+    canif: &mut CanIf<TX, RX, K>,
+    driver: &mut D,
+) -> Result<(), RequestRefused>
+where
+    D: CanDriver,
+    K: Tables<CanIfConfig<TX, RX>>,
+{
+    let state = ecum.state();
+    let allowed = match request {
+        BswMRequest::EcuRun => matches!(state, EcuMState::StartupTwoDone | EcuMState::Run),
+        BswMRequest::CommunicationOn => state == EcuMState::Run,
+        BswMRequest::EcuPostRun | BswMRequest::CommunicationOff => {
+            matches!(state, EcuMState::Run | EcuMState::PostRun)
+        }
+    };
+    if !allowed {
+        return Err(RequestRefused(state));
+    }
+    for action in bswm_actions(request) {
+        match action {
+            BswMAction::ComMFullCommunication => {
+                let actions = cansm.request(ComMode::Full);
+                apply(cansm, canif, driver, actions);
+            }
+            BswMAction::ComMNoCommunication => {
+                let actions = cansm.request(ComMode::No);
+                apply(cansm, canif, driver, actions);
+            }
+            // The state was checked above: these cannot fail here.
+            BswMAction::EcuMRequestRun => {
+                let _ = ecum.request_run(0);
+            }
+            BswMAction::EcuMReleaseRun => {
+                let _ = ecum.release_run(0);
+            }
+        }
+    }
+    Ok(())
+}
+
 /// The EcuM state machine.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub struct EcuM {
@@ -206,6 +266,12 @@ impl EcuM {
             self.state = EcuMState::PostRun;
         }
         Ok(())
+    }
+
+    /// `EcuM_MainFunction`: in post-run, the ECU shuts down now. Returns whether it did, so
+    /// that the caller puts the outputs in their safe state and stops the OS.
+    pub fn main_function(&mut self) -> bool {
+        self.shutdown().is_ok()
     }
 
     /// Ends post-run: the ECU shuts down.
