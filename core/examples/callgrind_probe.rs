@@ -8,6 +8,7 @@
 //! the "const" probes keep the layout a compile-time constant, as generated RTE/Com code
 //! has it.
 
+use cw_core::com::ipdu::{Com, ComConfig, ComConfigError, RxIpduConfig, TxIpduConfig, TxMode};
 use cw_core::com::signal::{ByteOrder, SignalLayout, Signedness};
 use cw_core::os::{
     AlarmAction, AlarmAutostart, AlarmConfig, AlarmId, CounterConfig, CounterId, Os, OsConfig,
@@ -117,82 +118,45 @@ static MANY: OsConfig<64, 0, 1, 32> = {
     ))
 };
 
-#[inline(never)]
-fn probe_activate_task<
-    const T: usize,
-    const A: usize,
-    const Q: usize,
-    K: Tables<OsConfig<T, 0, 1, A>>,
->(
-    os: &mut Os<T, 0, 1, A, Q, K>,
-    task: TaskId,
-) {
+// Callgrind collects a probe by its function name, so every op has its own function;
+// the ops that run the same call on different kernels share one body through this macro.
+macro_rules! kernel_probe {
+    ($(#[$doc:meta])* $name:ident($os:ident $(, $arg:ident: $ty:ty)*) $body:block) => {
+        $(#[$doc])*
+        #[inline(never)]
+        fn $name<const T: usize, const A: usize, const Q: usize, K: Tables<OsConfig<T, 0, 1, A>>>(
+            $os: &mut Os<T, 0, 1, A, Q, K>,
+            $($arg: $ty),*
+        ) {
+            $body
+        }
+    };
+}
+
+kernel_probe!(probe_activate_task(os, task: TaskId) {
     let _ = os.activate_task(task);
-}
-
-/// The configuration a build-time constant (as in the ECU), the task id a run-time value.
-#[inline(never)]
-fn probe_activate_task_static<
-    const T: usize,
-    const A: usize,
-    const Q: usize,
-    K: Tables<OsConfig<T, 0, 1, A>>,
->(
-    os: &mut Os<T, 0, 1, A, Q, K>,
-    task: TaskId,
-) {
+});
+kernel_probe!(probe_activate_task_64(os, task: TaskId) {
     let _ = os.activate_task(task);
-}
-
-/// As RTE-generated code calls it: the task id is a constant at the call site.
-#[inline(never)]
-fn probe_activate_task_const_id<
-    const T: usize,
-    const A: usize,
-    const Q: usize,
-    K: Tables<OsConfig<T, 0, 1, A>>,
->(
-    os: &mut Os<T, 0, 1, A, Q, K>,
-) {
-    let _ = os.activate_task(TaskId(0));
-}
-
-#[inline(never)]
-fn probe_activate_task_64<
-    const T: usize,
-    const A: usize,
-    const Q: usize,
-    K: Tables<OsConfig<T, 0, 1, A>>,
->(
-    os: &mut Os<T, 0, 1, A, Q, K>,
-    task: TaskId,
-) {
-    let _ = os.activate_task(task);
-}
-
-#[inline(never)]
-fn probe_alarm_tick_idle<
-    const T: usize,
-    const A: usize,
-    const Q: usize,
-    K: Tables<OsConfig<T, 0, 1, A>>,
->(
-    os: &mut Os<T, 0, 1, A, Q, K>,
-) {
+});
+kernel_probe!(
+    /// The configuration a build-time constant (as in the ECU), the task id a run-time value.
+    probe_activate_task_static(os, task: TaskId) {
+        let _ = os.activate_task(task);
+    }
+);
+kernel_probe!(
+    /// As RTE-generated code calls it: the task id is a constant at the call site.
+    probe_activate_task_const_id(os) {
+        let _ = os.activate_task(TaskId(0));
+    }
+);
+kernel_probe!(probe_alarm_tick_idle(os) {
     let _ = os.increment_counter(black_box(CounterId(0)));
-}
-
-#[inline(never)]
-fn probe_alarm_tick_idle_32<
-    const T: usize,
-    const A: usize,
-    const Q: usize,
-    K: Tables<OsConfig<T, 0, 1, A>>,
->(
-    os: &mut Os<T, 0, 1, A, Q, K>,
-) {
+});
+kernel_probe!(probe_alarm_tick_idle_32(os) {
     let _ = os.increment_counter(black_box(CounterId(0)));
-}
+});
 
 #[inline(never)]
 fn probe_alarm_tick_due<
@@ -205,6 +169,151 @@ fn probe_alarm_tick_due<
 ) -> u32 {
     os.increment_counter(black_box(CounterId(0)))
         .map_or(0, |r| r.callbacks)
+}
+
+// Com main functions with nothing due. The runner needs 2000 consecutive idle calls, 20 s
+// at the usual 10 ms main period, so the I-PDUs are slow ones (AUTOSAR allows cycle times
+// and deadlines up to an hour): TX sent every 30 s, RX monitored with a 30 s deadline (a
+// 10 s cycle, three missed frames). Offsets and deadlines step by one main period so the
+// 32 I-PDUs spread over 32 cycles instead of sharing one. Before the measured calls, one
+// turn of the wheel (64 calls, outside the probe) makes the first transmissions (offsets
+// 0..310 ms); the next ones are due at call 3001, the first timeouts at call 3000.
+// Whatever Com does for the pending I-PDUs in between (a one-level 64-slot wheel revisits
+// each of them every 64 calls) is inside the measured calls and shows up, amortized, in
+// the per-call figure.
+
+/// Main period of the Com probes, ms.
+const COM_PERIOD_MS: u32 = 10;
+/// Main-function calls made before the measured ones (the first transmissions).
+const COM_WARM_UP: u32 = 64;
+
+// Evaluated only in `static` initialisers: a broken configuration stops the build.
+#[allow(clippy::panic)]
+const fn com_ok<const TX: usize, const RX: usize>(
+    cfg: Result<ComConfig<8, TX, RX, 0>, ComConfigError>,
+) -> ComConfig<8, TX, RX, 0> {
+    match cfg {
+        Ok(c) => c,
+        Err(e) => panic!("{}", e.describe()),
+    }
+}
+
+/// TX I-PDU `i`: periodic, 30 s, offset `i` main periods.
+const fn slow_tx(i: u32) -> TxIpduConfig {
+    TxIpduConfig {
+        name: "SlowTx",
+        len: 8,
+        mode: TxMode::Periodic {
+            period_ms: 30_000,
+            offset_ms: i * COM_PERIOD_MS,
+        },
+        mdt_ms: 0,
+    }
+}
+
+/// RX I-PDU `i`: deadline 30 s plus `i` main periods.
+const fn slow_rx(i: u32) -> RxIpduConfig {
+    RxIpduConfig {
+        name: "SlowRx",
+        len: 8,
+        deadline_ms: 30_000 + i * COM_PERIOD_MS,
+    }
+}
+
+/// One periodic TX I-PDU and one monitored RX I-PDU.
+static COM_1: ComConfig<8, 1, 1, 0> = com_ok(ComConfig::new(
+    COM_PERIOD_MS,
+    [slow_tx(0)],
+    [slow_rx(0)],
+    [],
+));
+
+/// 32 periodic TX I-PDUs and 32 monitored RX I-PDUs.
+static COM_32: ComConfig<8, 32, 32, 0> = {
+    let mut tx = [slow_tx(0); 32];
+    let mut rx = [slow_rx(0); 32];
+    let mut i = 0;
+    while i < 32 {
+        tx[i] = slow_tx(i as u32);
+        rx[i] = slow_rx(i as u32);
+        i += 1;
+    }
+    com_ok(ComConfig::new(COM_PERIOD_MS, tx, rx, []))
+};
+
+cw_core::static_tables!(
+    /// [`COM_1`] as a build-time constant, as the ECU configures Com.
+    Com1Tables: ComConfig<8, 1, 1, 0> = COM_1
+);
+cw_core::static_tables!(
+    /// [`COM_32`] as a build-time constant.
+    Com32Tables: ComConfig<8, 32, 32, 0> = COM_32
+);
+
+/// Transmissions and timeouts seen by a main function call (none are expected).
+#[derive(Default)]
+struct ComEvents {
+    sent: u32,
+    timeouts: u32,
+}
+
+/// One `Com_MainFunctionTx` and one `Com_MainFunctionRx`, as the BSW task calls them.
+fn com_main<const TX: usize, const RX: usize, C: Tables<ComConfig<8, TX, RX, 0>>>(
+    com: &mut Com<8, TX, RX, 0, C>,
+    events: &mut ComEvents,
+) {
+    com.main_function_tx(|_, _| {
+        events.sent += 1;
+        true
+    });
+    com.main_function_rx(|_| events.timeouts += 1);
+}
+
+#[inline(never)]
+fn probe_com_main_idle_1<C: Tables<ComConfig<8, 1, 1, 0>>>(
+    com: &mut Com<8, 1, 1, 0, C>,
+    events: &mut ComEvents,
+) {
+    com_main(com, events);
+}
+
+#[inline(never)]
+fn probe_com_main_idle_32<C: Tables<ComConfig<8, 32, 32, 0>>>(
+    com: &mut Com<8, 32, 32, 0, C>,
+    events: &mut ComEvents,
+) {
+    com_main(com, events);
+}
+
+/// Runs `probe` `n` times on a Com after the warm-up; fails if anything was due during the
+/// measured calls (the probe would then not measure idle calls).
+fn com_idle<const TX: usize, const RX: usize, C: Tables<ComConfig<8, TX, RX, 0>>>(
+    cfg: C,
+    n: u32,
+    probe: fn(&mut Com<8, TX, RX, 0, C>, &mut ComEvents),
+) -> Result<(), String> {
+    let mut com = Com::new(cfg);
+    let mut warm_up = ComEvents::default();
+    for _ in 0..COM_WARM_UP {
+        com_main(&mut com, &mut warm_up);
+    }
+    if warm_up.sent != TX as u32 {
+        return Err(format!(
+            "warm-up sent {} I-PDUs, expected {TX}",
+            warm_up.sent
+        ));
+    }
+    let mut events = ComEvents::default();
+    for _ in 0..n {
+        probe(black_box(&mut com), black_box(&mut events));
+    }
+    if events.sent + events.timeouts > 0 {
+        return Err(format!(
+            "not idle: {} transmissions, {} timeouts in {n} calls",
+            events.sent, events.timeouts
+        ));
+    }
+    Ok(())
 }
 
 /// Puts `high` running and leaves `low` suspended, so that activating `low` is a pure
@@ -309,6 +418,8 @@ fn main() -> Result<(), String> {
             os.set_rel_alarm(AlarmId(0), 1, 1).map_err(|e| e.name())?;
             (0..n).for_each(|_| sink ^= u64::from(probe_alarm_tick_due(&mut os)));
         }
+        "com_main_idle_1" => com_idle(Com1Tables, n, probe_com_main_idle_1)?,
+        "com_main_idle_32" => com_idle(Com32Tables, n, probe_com_main_idle_32)?,
         other => return Err(format!("unknown op {other}")),
     }
     println!("{op} x{n}: pdu {pdu:02x?} sink {sink}");

@@ -61,6 +61,14 @@ pub const PROBES: &[(&str, &str)] = &[
         "alarm_tick_due",
         "OS counter tick that expires a cyclic alarm (callback)",
     ),
+    (
+        "com_main_idle_1",
+        "Com_MainFunctionTx + Rx, nothing due; 1 TX (30 s) + 1 RX (30 s deadline) pending",
+    ),
+    (
+        "com_main_idle_32",
+        "Com_MainFunctionTx + Rx, nothing due; 32 TX (30 s) + 32 RX (30 s deadline) pending",
+    ),
 ];
 
 /// Probes of the communication stack per layer (the paper's Figure 10), in

@@ -16,18 +16,29 @@
 //! Time: the main functions run every `main_period_ms` (configuration); every time in
 //! the tables is converted to main-function cycles when the configuration is built.
 //!
-//! Main-function cost: pending work sits in a timer wheel of [`WHEEL`] slots, one linked
-//! list per slot; a main function looks only at the slot of the current cycle, so an I-PDU
-//! with nothing due costs nothing. A reception does not move its I-PDU in the wheel: the
-//! stale entry is re-filed when its slot comes up (lazy deadline reset).
+//! Main-function cost: pending work sits in a hierarchical timer wheel (`Wheel`), one
+//! linked list per slot; a main function looks only at the slot of the current cycle, so
+//! an I-PDU with nothing due costs nothing, however far ahead its next event lies. Events
+//! up to [`WHEEL`] cycles ahead sit in the slot of their cycle; further ones in coarser
+//! slots, from which they move down at most once per level as their time approaches. A
+//! reception does not move its I-PDU in the wheel: the stale entry is re-filed when its
+//! slot comes up (lazy deadline reset).
 
 use super::signal::{SignalLayout, SignalValue, Signedness};
 use crate::tables::Tables;
 
-/// Slots of the timer wheel (a power of two). Deadlines further away than this many
-/// cycles wait in their slot for another turn.
+/// Slots per level of the timer wheel (a power of two): events up to this many cycles
+/// ahead are filed by their cycle, further ones by coarser blocks of cycles.
 pub const WHEEL: usize = 64;
+/// Bits of a cycle number that pick the slot within one level.
+const SLOT_BITS: u32 = WHEEL.trailing_zeros();
+/// Levels of the wheel: enough for any distance between two `u32` cycles, so no entry is
+/// ever looked at before the block of its cycle starts.
+const LEVELS: usize = (u32::BITS as usize).div_ceil(SLOT_BITS as usize);
+/// End of a list.
 const NIL: u8 = u8::MAX;
+/// `Wheel::list` of an entry that is not filed.
+const UNFILED: u16 = u16::MAX;
 
 /// A transmitted I-PDU of Com.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
@@ -400,50 +411,105 @@ pub enum ComError {
     NoInvalidValue,
 }
 
-/// A timer wheel of `WHEEL` slots over `K` entries (I-PDUs): O(1) insert, and a main
-/// function visits only the entries filed in the current cycle's slot.
+/// A hierarchical timer wheel over `K` entries (I-PDUs), each filed for one cycle: O(1)
+/// filing, and a main function visits only the entries due in its cycle.
+///
+/// Distances count from `next`, the first cycle whose slot is still to be taken (the
+/// cycle after the caller's). Level 0 is a plain wheel of `WHEEL` one-cycle slots: an
+/// entry due less than `WHEEL` cycles after `next` waits in slot `due % WHEEL` and is
+/// taken in cycle `due`. Level `l` has `WHEEL` slots of `WHEEL^l` cycles each (a block)
+/// and holds the entries due `WHEEL^l` to `WHEEL^(l+1) - 1` cycles after `next`, in the
+/// slot of `due`'s block. In the first cycle of a block (a multiple of `WHEEL^l`) the
+/// block's slot is emptied and its entries, all due within the block, are filed again from
+/// there: they land on a lower level ("cascade"). The first start of a block in that slot
+/// after filing is the start of `due`'s own block (the one before is `WHEEL^(l+1)` cycles
+/// earlier, before the filing), so an entry is moved at most once per level on its way
+/// down and is taken exactly in cycle `due`. A cycle therefore visits the entries due in
+/// it and, on a block start, the entries due within the block that starts; an entry whose
+/// event lies beyond is not looked at. [`LEVELS`] levels cover every `u32` distance.
+///
+/// Order: the entries due in one cycle are handled last-filed first. Filing pushes at the
+/// front of a list; a cascade appends at the end, because an entry filed directly on a
+/// level was filed after every entry for the same cycle that comes down to it (it was
+/// nearer then). Entries filed at most `WHEEL` cycles ahead thus go to level 0 exactly as
+/// in a one-level wheel.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 struct Wheel<const K: usize> {
-    head: [u8; WHEEL],
+    /// List heads: level `l`, slot `s` at `l * WHEEL + s`.
+    head: [u8; LEVELS * WHEEL],
     next: [u8; K],
     /// The cycle each filed entry is filed for.
-    filed_for: [Option<u32>; K],
+    due: [u32; K],
+    /// The list (index into `head`) each entry is in, or [`UNFILED`].
+    list: [u16; K],
 }
 
 impl<const K: usize> Wheel<K> {
     const fn new() -> Self {
         Self {
-            head: [NIL; WHEEL],
+            head: [NIL; LEVELS * WHEEL],
             next: [NIL; K],
-            filed_for: [None; K],
+            due: [0; K],
+            list: [UNFILED; K],
         }
     }
 
-    /// Files entry `k` for cycle `due`. An entry already filed for the same or an earlier
-    /// cycle stays where it is (its slot re-files it when it comes up); one filed for a
-    /// later cycle is moved.
-    fn file(&mut self, k: usize, due: u32) {
+    /// Files entry `k` for cycle `due`; `now` is the cycle the caller is at (already
+    /// taken). An entry already filed for the same or an earlier cycle stays where it is
+    /// (its slot re-files it when it comes up); one filed for a later cycle is moved.
+    fn file(&mut self, k: usize, due: u32, now: u32) {
         if k >= K {
             return;
         }
-        if let Some(filed) = self.filed_for[k] {
-            if filed <= due {
+        if self.list[k] != UNFILED {
+            if self.due[k] <= due {
                 return;
             }
-            self.unlink(k, filed as usize % WHEEL);
+            self.unlink(k);
         }
-        let slot = due as usize % WHEEL;
-        self.next[k] = self.head[slot];
-        self.head[slot] = k as u8;
-        self.filed_for[k] = Some(due);
+        // `now`'s own slot is taken already: the next one to be taken is `now + 1`'s.
+        self.push(k, due, now.wrapping_add(1));
     }
 
-    /// Removes entry `k` from the list of `slot`.
-    fn unlink(&mut self, k: usize, slot: usize) {
-        if self.head[slot] as usize == k {
-            self.head[slot] = self.next[k];
+    /// Puts entry `k` at the front of the list for cycle `due`, where `next` is the first
+    /// cycle whose level-0 slot is still to be taken.
+    fn push(&mut self, k: usize, due: u32, next: u32) {
+        let list = list_for(due, next);
+        self.next[k] = self.head[list];
+        self.head[list] = k as u8;
+        self.due[k] = due;
+        self.list[k] = list as u16;
+    }
+
+    /// Puts entry `k`, filed for `self.due[k]`, at the end of its list as seen from cycle
+    /// `next` (a cascade: the entries filed there directly are all younger).
+    fn append(&mut self, k: usize, next: u32) {
+        let list = list_for(self.due[k], next);
+        self.next[k] = NIL;
+        self.list[k] = list as u16;
+        let mut node = self.head[list] as usize;
+        if node >= K {
+            self.head[list] = k as u8;
+            return;
+        }
+        while (self.next[node] as usize) < K {
+            node = self.next[node] as usize;
+        }
+        self.next[node] = k as u8;
+    }
+
+    /// Removes filed entry `k` from its list.
+    fn unlink(&mut self, k: usize) {
+        let list = usize::from(self.list[k]);
+        self.list[k] = UNFILED;
+        // Always in range for a filed entry; `get_mut` keeps a panic path out of the code.
+        let Some(head) = self.head.get_mut(list) else {
+            return;
+        };
+        if *head as usize == k {
+            *head = self.next[k];
         } else {
-            let mut node = self.head[slot] as usize;
+            let mut node = *head as usize;
             while node < K {
                 if self.next[node] as usize == k {
                     self.next[node] = self.next[k];
@@ -452,15 +518,51 @@ impl<const K: usize> Wheel<K> {
                 node = self.next[node] as usize;
             }
         }
-        self.filed_for[k] = None;
     }
 
-    /// Detaches the current slot's list; the caller re-files what is not due yet.
-    fn take(&mut self, now: u32) -> u8 {
+    /// Whether cycle `now` has work for [`Self::take`]: entries filed for it, or entries
+    /// to bring down because a block starts. A level-1 block starts every `WHEEL` cycles
+    /// and its slot is empty unless something is due in it; higher levels are looked at
+    /// every `WHEEL^2` cycles. An idle cycle costs this check only.
+    #[inline(always)]
+    fn busy(&self, now: u32) -> bool {
         let slot = now as usize % WHEEL;
-        let list = self.head[slot];
-        self.head[slot] = NIL;
-        list
+        if slot == 0 {
+            return block_start_busy(&self.head, now);
+        }
+        self.head[slot] != NIL
+    }
+
+    /// Detaches the list of the entries due in cycle `now`, after bringing down those due
+    /// in the blocks that start in `now`; the caller handles them and re-files what is not
+    /// due yet.
+    fn take(&mut self, now: u32) -> u8 {
+        if now % WHEEL as u32 == 0 {
+            self.cascade(now);
+        }
+        core::mem::replace(&mut self.head[now as usize % WHEEL], NIL)
+    }
+
+    /// Cycle `now` starts a block on level 1 and maybe on higher levels: each such level's
+    /// slot for the block is emptied and its entries are appended to the lists they belong
+    /// in as seen from `now` (one or more levels lower; one due in `now` lands in level 0's
+    /// slot for `now`, taken next). Finest level first, so that for each cycle the older
+    /// entries (from the coarser levels) come last. No entry lands in a slot emptied here:
+    /// one that goes from level `l` to a level `j >= 1` is due `WHEEL^j` to `WHEEL^l - 1`
+    /// cycles after `now`, a multiple of `WHEEL^l`, so in a later level-`j` block.
+    fn cascade(&mut self, now: u32) {
+        for level in 1..LEVELS {
+            let shift = level as u32 * SLOT_BITS;
+            // A level-`l` block starts in the cycles that are multiples of `WHEEL^l`.
+            if now & ((1 << shift) - 1) != 0 {
+                break;
+            }
+            let block = (now >> shift) as usize % WHEEL;
+            let mut entries = core::mem::replace(&mut self.head[level * WHEEL + block], NIL);
+            while let Some(k) = self.pop(&mut entries) {
+                self.append(k, now);
+            }
+        }
     }
 
     /// Next entry of a detached list, un-filing it.
@@ -470,9 +572,33 @@ impl<const K: usize> Wheel<K> {
             return None;
         }
         *list = self.next[k];
-        self.filed_for[k] = None;
+        self.list[k] = UNFILED;
         Some(k)
     }
+}
+
+/// [`Wheel::busy`] for a cycle that starts a level-1 block (one in `WHEEL`, out of line).
+#[cold]
+#[inline(never)]
+fn block_start_busy(head: &[u8; LEVELS * WHEEL], now: u32) -> bool {
+    head[0] != NIL
+        || now % (WHEEL * WHEEL) as u32 == 0
+        || head[WHEEL + (now as usize / WHEEL) % WHEEL] != NIL
+}
+
+/// The list (index into `Wheel::head`) for an entry due in cycle `due`, where `next` is
+/// the first cycle whose level-0 slot is still to be taken: level 0 if `due` is among the
+/// `WHEEL` cycles from `next` on (or already past), else the level `l` with
+/// `WHEEL^l <= due - next < WHEEL^(l+1)`, in the slot of `due`'s block.
+#[inline(always)]
+fn list_for(due: u32, next: u32) -> usize {
+    let distance = due.saturating_sub(next);
+    if distance < WHEEL as u32 {
+        return due as usize % WHEEL;
+    }
+    let level = ((u32::BITS - 1 - distance.leading_zeros()) / SLOT_BITS) as usize;
+    let level = level.min(LEVELS - 1);
+    level * WHEEL + (due >> (level as u32 * SLOT_BITS)) as usize % WHEEL
 }
 
 /// The Com state for a configuration.
@@ -538,7 +664,7 @@ where
             if t.period > 0 {
                 // Offset 0: the first main function call (call number 1) transmits.
                 com.tx_next_periodic[i] = t.offset + 1;
-                com.tx_wheel.file(i, t.offset + 1);
+                com.tx_wheel.file(i, t.offset + 1, 0);
             }
         }
         for i in 0..RX {
@@ -546,7 +672,7 @@ where
             if d > 0 {
                 // Counted down by the main function: the d-th call without a reception.
                 com.rx_due[i] = d;
-                com.rx_wheel.file(i, d);
+                com.rx_wheel.file(i, d, 0);
             }
         }
         com
@@ -686,11 +812,11 @@ where
             self.send(i, transmit);
             if self.tx_reps_left[i] > 0 {
                 self.tx_next_rep[i] = now + self.cfg().tx_timing[i].repetition_period;
-                self.tx_wheel.file(i, self.tx_next_rep[i]);
+                self.tx_wheel.file(i, self.tx_next_rep[i], now);
             }
         } else {
             self.tx_deferred[i] = true;
-            self.tx_wheel.file(i, mdt_end);
+            self.tx_wheel.file(i, mdt_end, now);
         }
     }
 
@@ -718,8 +844,18 @@ where
 
     /// `Com_MainFunctionTx`: one main-function period has passed; sends what is due
     /// (periodic transmissions, repetitions, transmissions the MDT held back).
-    pub fn main_function_tx(&mut self, mut transmit: impl FnMut(TxIpduId, &[u8]) -> bool) {
+    #[inline]
+    pub fn main_function_tx(&mut self, transmit: impl FnMut(TxIpduId, &[u8]) -> bool) {
         self.tx_now = self.tx_now.wrapping_add(1);
+        if self.tx_wheel.busy(self.tx_now) {
+            self.tx_cycle(transmit);
+        }
+    }
+
+    /// The work of a cycle that is not idle, out of line so that an idle call stays a
+    /// few instructions.
+    #[inline(never)]
+    fn tx_cycle(&mut self, mut transmit: impl FnMut(TxIpduId, &[u8]) -> bool) {
         let now = self.tx_now;
         let mut list = self.tx_wheel.take(now);
         while let Some(i) = self.tx_wheel.pop(&mut list) {
@@ -760,7 +896,7 @@ where
             next = next.min(self.mdt_end(i).max(now + 1));
         }
         if next != u32::MAX {
-            self.tx_wheel.file(i, next.max(now + 1));
+            self.tx_wheel.file(i, next.max(now + 1), now);
         }
     }
 
@@ -806,8 +942,17 @@ where
     /// `Com_MainFunctionRx`: one main-function period has passed; an RX I-PDU whose
     /// deadline expired gets its signals replaced by their init values, and `on_timeout`
     /// is told. Monitoring then restarts.
-    pub fn main_function_rx(&mut self, mut on_timeout: impl FnMut(RxIpduId)) {
+    #[inline]
+    pub fn main_function_rx(&mut self, on_timeout: impl FnMut(RxIpduId)) {
         self.rx_now = self.rx_now.wrapping_add(1);
+        if self.rx_wheel.busy(self.rx_now) {
+            self.rx_cycle(on_timeout);
+        }
+    }
+
+    /// The work of a cycle that is not idle, out of line.
+    #[inline(never)]
+    fn rx_cycle(&mut self, mut on_timeout: impl FnMut(RxIpduId)) {
         let now = self.rx_now;
         let mut list = self.rx_wheel.take(now);
         while let Some(i) = self.rx_wheel.pop(&mut list) {
@@ -817,7 +962,7 @@ where
                 on_timeout(RxIpduId(i as u16));
                 self.rx_due[i] = now + self.cfg().rx_deadline[i];
             }
-            self.rx_wheel.file(i, self.rx_due[i]);
+            self.rx_wheel.file(i, self.rx_due[i], now);
         }
     }
 

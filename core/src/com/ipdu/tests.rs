@@ -377,3 +377,707 @@ fn any_write_sequence_respects_the_mdt() {
             }
         });
 }
+
+// ---------------------------------------------------------------------------------------
+// Timing against the timer wheel: events far beyond the wheel's 64 slots.
+
+/// A reference main function that looks at every TX I-PDU in every cycle instead of only
+/// at the wheel's slot: the wheel must give the same transmissions in the same cycles.
+/// (It files into the wheel as a side effect, but never takes from it.)
+fn scan_all_tx<const TX: usize, const RX: usize, const S: usize>(
+    com: &mut Com<8, TX, RX, S>,
+    mut transmit: impl FnMut(TxIpduId, &[u8]) -> bool,
+) {
+    com.tx_now += 1;
+    let now = com.tx_now;
+    for i in 0..TX {
+        com.tx_due(i, now, &mut transmit);
+    }
+}
+
+/// The reference for `main_function_rx`: every monitored RX I-PDU checked every cycle.
+fn scan_all_rx<const TX: usize, const RX: usize, const S: usize>(
+    com: &mut Com<8, TX, RX, S>,
+    mut on_timeout: impl FnMut(RxIpduId),
+) {
+    com.rx_now += 1;
+    let now = com.rx_now;
+    for i in 0..RX {
+        let deadline = com.cfg().rx_deadline[i];
+        if deadline > 0 && com.rx_due[i] <= now {
+            com.replace_by_init(i);
+            com.rx_timed_out[i] = true;
+            on_timeout(RxIpduId(i as u16));
+            com.rx_due[i] = now + deadline;
+        }
+    }
+}
+
+/// What one main-function cycle did: (cycle, I-PDU, bytes) of each transmission and the
+/// timed-out RX I-PDUs, in I-PDU order (the order within a cycle is not specified).
+type Cycle = (u32, Vec<(u16, Vec<u8>)>, Vec<u16>);
+
+/// One cycle of both main functions, through the wheel or through the reference.
+fn cycle<const TX: usize, const RX: usize, const S: usize>(
+    com: &mut Com<8, TX, RX, S>,
+    reference: bool,
+) -> Cycle {
+    let mut sent = Vec::new();
+    let mut timeouts = Vec::new();
+    let transmit = |id: TxIpduId, data: &[u8]| {
+        sent.push((id.0, data.to_vec()));
+        true
+    };
+    let on_timeout = |id: RxIpduId| timeouts.push(id.0);
+    if reference {
+        scan_all_tx(com, transmit);
+        scan_all_rx(com, on_timeout);
+    } else {
+        com.main_function_tx(transmit);
+        com.main_function_rx(on_timeout);
+    }
+    sent.sort();
+    timeouts.sort();
+    (com.tx_now, sent, timeouts)
+}
+
+// Main period 10 ms. Near and far I-PDUs, exact multiples of the wheel size and of its
+// square, repetitions and MDTs longer than the wheel.
+// TX 0: mixed, 100 ms, 2 repetitions every 20 ms, MDT 20 ms.   (near)
+// TX 1: periodic 50 s, offset 10 ms.                              (5000 cycles)
+// TX 2: mixed 700 s, offset 650 ms, 3 repetitions every 1 s, MDT 300 ms.
+// TX 3: direct, 1 repetition after 2 s.
+// TX 4: periodic 640 ms (64 cycles), offset 630 ms.
+// TX 5: periodic 1000 s, offset 40.95 s (first sent in cycle 4096 = 64 * 64).
+// RX 0: deadline 50 ms; RX 1: 45 s; RX 2: not monitored; RX 3: 640 ms.
+static FAR: ComConfig<8, 6, 4, 7> = match ComConfig::new(
+    10,
+    [
+        TxIpduConfig {
+            name: "Near",
+            len: 2,
+            mode: TxMode::Mixed {
+                period_ms: 100,
+                offset_ms: 0,
+                repetitions: 2,
+                repetition_period_ms: 20,
+            },
+            mdt_ms: 20,
+        },
+        TxIpduConfig {
+            name: "Slow",
+            len: 1,
+            mode: TxMode::Periodic {
+                period_ms: 50_000,
+                offset_ms: 10,
+            },
+            mdt_ms: 0,
+        },
+        TxIpduConfig {
+            name: "SlowMixed",
+            len: 2,
+            mode: TxMode::Mixed {
+                period_ms: 700_000,
+                offset_ms: 650,
+                repetitions: 3,
+                repetition_period_ms: 1_000,
+            },
+            mdt_ms: 300,
+        },
+        TxIpduConfig {
+            name: "Direct",
+            len: 2,
+            mode: TxMode::Direct {
+                repetitions: 1,
+                repetition_period_ms: 2_000,
+            },
+            mdt_ms: 0,
+        },
+        TxIpduConfig {
+            name: "Wheel",
+            len: 1,
+            mode: TxMode::Periodic {
+                period_ms: 640,
+                offset_ms: 630,
+            },
+            mdt_ms: 0,
+        },
+        TxIpduConfig {
+            name: "VerySlow",
+            len: 1,
+            mode: TxMode::Periodic {
+                period_ms: 1_000_000,
+                offset_ms: 40_950,
+            },
+            mdt_ms: 0,
+        },
+    ],
+    [
+        RxIpduConfig {
+            name: "Fast",
+            len: 2,
+            deadline_ms: 50,
+        },
+        RxIpduConfig {
+            name: "Slow",
+            len: 2,
+            deadline_ms: 45_000,
+        },
+        RxIpduConfig {
+            name: "Unmonitored",
+            len: 2,
+            deadline_ms: 0,
+        },
+        RxIpduConfig {
+            name: "Wheel",
+            len: 1,
+            deadline_ms: 640,
+        },
+    ],
+    [
+        SignalConfig {
+            name: "NearValue",
+            direction: SignalDirection::Tx(TxIpduId(0), TransferProperty::Triggered),
+            layout: layout(0, 16),
+            init: 0,
+            invalid: None,
+            update_bit: None,
+        },
+        SignalConfig {
+            name: "SlowMixedValue",
+            direction: SignalDirection::Tx(TxIpduId(2), TransferProperty::TriggeredOnChange),
+            layout: layout(0, 16),
+            init: 0,
+            invalid: None,
+            update_bit: None,
+        },
+        SignalConfig {
+            name: "DirectValue",
+            direction: SignalDirection::Tx(TxIpduId(3), TransferProperty::Triggered),
+            layout: layout(0, 16),
+            init: 0,
+            invalid: None,
+            update_bit: None,
+        },
+        SignalConfig {
+            name: "VerySlowValue",
+            direction: SignalDirection::Tx(TxIpduId(5), TransferProperty::Pending),
+            layout: layout(0, 8),
+            init: 0,
+            invalid: None,
+            update_bit: None,
+        },
+        SignalConfig {
+            name: "RxFast",
+            direction: SignalDirection::Rx(RxIpduId(0)),
+            layout: layout(0, 16),
+            init: 5,
+            invalid: None,
+            update_bit: None,
+        },
+        SignalConfig {
+            name: "RxSlow",
+            direction: SignalDirection::Rx(RxIpduId(1)),
+            layout: layout(0, 16),
+            init: 6,
+            invalid: None,
+            update_bit: None,
+        },
+        SignalConfig {
+            name: "RxWheel",
+            direction: SignalDirection::Rx(RxIpduId(3)),
+            layout: layout(0, 8),
+            init: 7,
+            invalid: None,
+            update_bit: None,
+        },
+    ],
+) {
+    Ok(cfg) => cfg,
+    Err(e) => panic!("{}", e.describe()),
+};
+
+type FarCom = Com<8, 6, 4, 7>;
+
+/// One step of a scenario on the FAR configuration.
+#[derive(Debug, Clone, Copy)]
+enum Step {
+    /// Write `value` to TX signal `signal % 4`.
+    Send(u8, u16),
+    /// Receive RX I-PDU `ipdu % 4`.
+    Receive(u8, u16),
+    /// Run this many cycles.
+    Run(u32),
+}
+
+/// Runs `steps` on the wheel and on the reference; both must do the same in every cycle.
+fn same_as_reference(steps: impl IntoIterator<Item = Step>) {
+    let mut wheel = FarCom::new(&FAR);
+    let mut reference = FarCom::new(&FAR);
+    for step in steps {
+        match step {
+            Step::Send(signal, value) => {
+                let signal = SignalId(u16::from(signal % 4));
+                let value = SignalValue::Unsigned(u64::from(value & 0xFF));
+                let mut a = Vec::new();
+                let mut b = Vec::new();
+                let ra = wheel.send_signal(signal, value, |id, d| {
+                    a.push((id.0, d.to_vec()));
+                    true
+                });
+                let rb = reference.send_signal(signal, value, |id, d| {
+                    b.push((id.0, d.to_vec()));
+                    true
+                });
+                assert_eq!((ra, a), (rb, b), "cycle {}: {step:?}", wheel.tx_now);
+            }
+            Step::Receive(ipdu, value) => {
+                let data = value.to_le_bytes();
+                wheel.rx_indication(RxIpduId(u16::from(ipdu % 4)), &data);
+                reference.rx_indication(RxIpduId(u16::from(ipdu % 4)), &data);
+            }
+            Step::Run(cycles) => {
+                for _ in 0..cycles {
+                    assert_eq!(cycle(&mut wheel, false), cycle(&mut reference, true));
+                }
+            }
+        }
+        assert_eq!(wheel.tx_buf, reference.tx_buf);
+        assert_eq!(wheel.rx_buf, reference.rx_buf);
+        assert_eq!(wheel.rx_timed_out, reference.rx_timed_out);
+    }
+}
+
+/// Without writes or receptions every event follows from the configuration alone: each
+/// I-PDU, near or far, sends and times out exactly in its cycles.
+#[test]
+#[cfg_attr(
+    miri,
+    ignore = "walks up to a million cycles: too slow to interpret; safe arithmetic only, run natively"
+)]
+fn far_events_fire_exactly_on_their_cycles() {
+    let mut com = FarCom::new(&FAR);
+    let end = 250_000u32;
+    let mut sent: [Vec<u32>; 6] = Default::default();
+    let mut timeouts: [Vec<u32>; 4] = Default::default();
+    for _ in 0..end {
+        let (now, tx, rx) = cycle(&mut com, false);
+        for (id, _) in tx {
+            sent[usize::from(id)].push(now);
+        }
+        for id in rx {
+            timeouts[usize::from(id)].push(now);
+        }
+    }
+    // First transmission in call `offset + 1`, then every period (in cycles).
+    let expect =
+        |first: u32, period: u32| -> Vec<u32> { (first..=end).step_by(period as usize).collect() };
+    assert_eq!(sent[0], expect(1, 10));
+    assert_eq!(sent[1], expect(2, 5_000));
+    assert_eq!(sent[2], expect(66, 70_000));
+    assert!(sent[3].is_empty(), "direct: never without a write");
+    assert_eq!(sent[4], expect(64, 64));
+    assert_eq!(sent[5], [4_096, 104_096, 204_096]);
+    // Timeouts every deadline, counted from the start.
+    assert_eq!(timeouts[0], expect(5, 5));
+    assert_eq!(timeouts[1], expect(4_500, 4_500));
+    assert!(timeouts[2].is_empty());
+    assert_eq!(timeouts[3], expect(64, 64));
+}
+
+/// A long scenario with writes (repetitions and MDTs far beyond the wheel) and receptions
+/// (deadline restarts), against the reference.
+#[test]
+#[cfg_attr(
+    miri,
+    ignore = "walks up to a million cycles: too slow to interpret; safe arithmetic only, run natively"
+)]
+fn far_events_match_a_main_function_that_checks_every_ipdu() {
+    let mut steps = Vec::new();
+    let mut seed = 0x2545_F491u32;
+    let mut rand = move |n: u32| {
+        seed ^= seed << 13;
+        seed ^= seed >> 17;
+        seed ^= seed << 5;
+        seed % n
+    };
+    let mut cycles = 0;
+    while cycles < 400_000 {
+        match rand(5) {
+            0 | 1 => steps.push(Step::Send(rand(4) as u8, rand(256) as u16)),
+            2 => steps.push(Step::Receive(rand(4) as u8, rand(65_536) as u16)),
+            3 => {
+                let n = rand(100);
+                cycles += n;
+                steps.push(Step::Run(n));
+            }
+            _ => {
+                let n = rand(10_000);
+                cycles += n;
+                steps.push(Step::Run(n));
+            }
+        }
+    }
+    same_as_reference(steps);
+}
+
+/// Any sequence of writes, receptions and runs gives the reference's cycles.
+#[test]
+fn any_scenario_matches_the_reference() {
+    bolero::check!()
+        .with_type::<Vec<(u8, u8, u16)>>()
+        .for_each(|ops| {
+            // Miri interprets every cycle: a shorter walk there, the full one natively.
+            let (mut budget, max_ops) = if cfg!(miri) {
+                (600u32, 30)
+            } else {
+                (20_000, 100)
+            };
+            let steps = ops
+                .iter()
+                .take(max_ops)
+                .map(|&(kind, x, y)| match kind % 4 {
+                    0 => Step::Send(x, y),
+                    1 => Step::Receive(x, y),
+                    2 => Step::Run(u32::from(y % 100)),
+                    _ => {
+                        let n = (u32::from(y) * 4).min(budget);
+                        budget -= n;
+                        Step::Run(n)
+                    }
+                });
+            same_as_reference(steps);
+        });
+}
+
+/// Many I-PDUs (main period 1 ms, so cycles are ms) whose periods, offsets and deadlines
+/// lie on and around every power of the wheel size up to 64^3: each one sends and times
+/// out exactly in its cycles.
+#[test]
+#[cfg_attr(
+    miri,
+    ignore = "walks up to a million cycles: too slow to interpret; safe arithmetic only, run natively"
+)]
+fn many_ipdus_with_mixed_far_and_near_times_fire_exactly_on_their_cycles() {
+    const TIMES: [u32; 24] = [
+        1, 2, 3, 7, 63, 64, 65, 100, 127, 128, 129, 1_000, 4_095, 4_096, 4_097, 5_000, 8_191,
+        65_537, 100_000, 262_143, 262_144, 262_145, 300_000, 999_999,
+    ];
+    const K: usize = TIMES.len();
+    static MANY: ComConfig<8, K, K, 0> = {
+        let mut tx = [TxIpduConfig {
+            name: "t",
+            len: 1,
+            mode: TxMode::None,
+            mdt_ms: 0,
+        }; K];
+        let mut rx = [RxIpduConfig {
+            name: "r",
+            len: 1,
+            deadline_ms: 0,
+        }; K];
+        let mut i = 0;
+        while i < K {
+            tx[i].mode = TxMode::Periodic {
+                period_ms: TIMES[i],
+                // Offsets from the other end of the table: near periods start far away.
+                offset_ms: TIMES[K - 1 - i] - 1,
+            };
+            rx[i].deadline_ms = TIMES[(i + 5) % K];
+            i += 1;
+        }
+        match ComConfig::new(1, tx, rx, []) {
+            Ok(cfg) => cfg,
+            Err(e) => panic!("{}", e.describe()),
+        }
+    };
+    let mut com = Com::new(&MANY);
+    let end = 1_100_000u32;
+    let mut sent: [u32; K] = [0; K];
+    let mut timeouts: [u32; K] = [0; K];
+    for now in 1..=end {
+        com.main_function_tx(|id, _| {
+            let i = usize::from(id.0);
+            let (first, period) = (TIMES[K - 1 - i], TIMES[i]);
+            assert!(
+                now >= first && (now - first) % period == 0,
+                "TX {i} sent in cycle {now}"
+            );
+            sent[i] += 1;
+            true
+        });
+        com.main_function_rx(|id| {
+            let i = usize::from(id.0);
+            assert_eq!(
+                now % TIMES[(i + 5) % K],
+                0,
+                "RX {i} timed out in cycle {now}"
+            );
+            timeouts[i] += 1;
+        });
+    }
+    for i in 0..K {
+        let (first, period) = (TIMES[K - 1 - i], TIMES[i]);
+        let expected = if end >= first {
+            (end - first) / period + 1
+        } else {
+            0
+        };
+        assert_eq!(sent[i], expected, "transmissions of TX {i}");
+        assert_eq!(timeouts[i], end / TIMES[(i + 5) % K], "timeouts of RX {i}");
+    }
+}
+
+// ---------------------------------------------------------------------------------------
+// The hierarchical wheel on its own.
+
+#[test]
+fn lists_by_distance_from_the_next_cycle() {
+    let next = 1_000u32;
+    let level = |due: u32| list_for(due, next) / WHEEL;
+    assert_eq!(list_for(next, next), next as usize % WHEEL, "due next");
+    assert_eq!(list_for(next + 63, next), (next + 63) as usize % WHEEL);
+    assert_eq!(list_for(7, next), 7, "a cycle already past: level 0");
+    for (distance, expected) in [
+        (64, 1),
+        (4_095, 1),
+        (4_096, 2),
+        (262_143, 2),
+        (262_144, 3),
+        ((1 << 24) - 1, 3),
+        (1 << 24, 4),
+        (1 << 30, 5),
+        (u32::MAX - next, 5),
+    ] {
+        assert_eq!(level(next + distance), expected, "distance {distance}");
+    }
+    // The slot is the due cycle's block on that level.
+    assert_eq!(
+        list_for(next + 5_000, next),
+        2 * WHEEL + (6_000 >> 12) % WHEEL
+    );
+    assert_eq!(list_for(u32::MAX, 0), 5 * WHEEL + (u32::MAX >> 30) as usize);
+    assert!(list_for(u32::MAX, 0) < LEVELS * WHEEL);
+}
+
+/// An xorshift generator for the wheel tests.
+struct Rng(u32);
+
+impl Rng {
+    fn below(&mut self, n: u32) -> u32 {
+        self.0 ^= self.0 << 13;
+        self.0 ^= self.0 >> 17;
+        self.0 ^= self.0 << 5;
+        self.0 % n
+    }
+
+    /// A distance of 1 to `2^max_bits - 1` cycles, with as many short as long ones.
+    fn distance(&mut self, max_bits: u32) -> u32 {
+        let bits = 1 + self.below(max_bits);
+        1 + self.below((1u32 << bits) - 1)
+    }
+}
+
+/// A wheel with what the tests expect of it.
+struct Driven<const K: usize> {
+    wheel: Wheel<K>,
+    /// Expected due cycle of each entry.
+    due: [Option<u32>; K],
+    /// The entries per expected due cycle.
+    by_due: std::collections::BTreeMap<u32, Vec<usize>>,
+    /// Moves an entry may still make: the level it was filed on.
+    moves_left: [usize; K],
+}
+
+impl<const K: usize> Driven<K> {
+    fn file(&mut self, k: usize, due: u32, now: u32) {
+        self.wheel.file(k, due, now);
+        self.due[k] = Some(due);
+        self.by_due.entry(due).or_default().push(k);
+        self.moves_left[k] = usize::from(self.wheel.list[k]) / WHEEL;
+    }
+}
+
+/// Runs a wheel of `K` entries from cycle `start` (taken) through cycle `end` as the main
+/// functions do, filing each entry `first[k]` cycles ahead at the start and, when it is
+/// taken, `again(k)` cycles ahead (0: not again). Checks that every entry is taken
+/// exactly in its cycle; that a cycle `busy` calls idle has nothing to take or move; and
+/// that entries move only on block starts, at most once per level they were filed above
+/// level 0. Returns how many entries were taken.
+fn drive<const K: usize>(
+    start: u32,
+    end: u32,
+    first: [u32; K],
+    mut again: impl FnMut(usize) -> u32,
+) -> usize {
+    let mut d = Driven {
+        wheel: Wheel::<K>::new(),
+        due: [None; K],
+        by_due: Default::default(),
+        moves_left: [0; K],
+    };
+    for (k, &distance) in first.iter().enumerate() {
+        d.file(k, start + distance, start);
+    }
+    let mut taken = 0;
+    let mut now = start;
+    while now < end {
+        now += 1;
+        let expected = d.by_due.remove(&now).unwrap_or_default();
+        if !d.wheel.busy(now) {
+            assert!(expected.is_empty(), "cycle {now}: {expected:?} due, idle");
+            if now % WHEEL as u32 == 0 {
+                // An idle block start really has nothing to move.
+                let mut copy = d.wheel;
+                assert_eq!(copy.take(now), NIL);
+                assert_eq!(copy, d.wheel, "cycle {now}: idle, but entries to move");
+            }
+            continue;
+        }
+        let before = d.wheel.list;
+        let mut list = d.wheel.take(now);
+        for (k, &was) in before.iter().enumerate() {
+            if d.wheel.list[k] != was {
+                assert_eq!(now % WHEEL as u32, 0, "entry {k} moved in cycle {now}");
+                assert!(d.moves_left[k] > 0, "entry {k} moved too often");
+                d.moves_left[k] -= 1;
+            }
+        }
+        let mut got = Vec::new();
+        while let Some(k) = d.wheel.pop(&mut list) {
+            assert_eq!(d.due[k], Some(now), "entry {k} taken in cycle {now}");
+            got.push(k);
+        }
+        got.sort();
+        let mut want = expected;
+        want.sort();
+        assert_eq!(got, want, "cycle {now}");
+        taken += got.len();
+        for k in got {
+            d.due[k] = None;
+            let distance = again(k);
+            if distance > 0 {
+                d.file(k, now + distance, now);
+            }
+        }
+    }
+    // What is not due yet is still filed.
+    for (k, due) in d.due.iter().enumerate() {
+        assert_eq!(due.is_some(), d.wheel.list[k] != UNFILED, "entry {k}");
+    }
+    taken
+}
+
+/// Entries at every level boundary and at random distances up to 2^20 cycles, re-filed
+/// when taken, from a start just before a level-3 block (2^18) and one just before a
+/// level-4 block (2^24): each is taken exactly in its cycle, and idle cycles do nothing.
+#[test]
+#[cfg_attr(
+    miri,
+    ignore = "walks up to a million cycles: too slow to interpret; safe arithmetic only, run natively"
+)]
+fn wheel_takes_every_entry_exactly_in_its_cycle() {
+    const BOUNDARIES: [u32; 16] = [
+        1, 2, 63, 64, 65, 127, 128, 129, 4_095, 4_096, 4_097, 4_159, 262_143, 262_144, 262_145,
+        1_000_000,
+    ];
+    for start in [0, (1 << 18) - 70, (1 << 24) - 5_000] {
+        let mut rng = Rng(0x9E37_79B9 ^ start);
+        let mut first = [0u32; 64];
+        for (k, d) in first.iter_mut().enumerate() {
+            *d = match BOUNDARIES.get(k) {
+                Some(&b) => b,
+                None => rng.distance(20),
+            };
+        }
+        let taken = drive(start, start + 1_100_000, first, |k| {
+            // Boundary entries keep their distance; the others draw a new one (or stop).
+            match BOUNDARIES.get(k) {
+                Some(&b) => b,
+                None if rng.below(8) == 0 => 0,
+                None => rng.distance(20),
+            }
+        });
+        assert!(taken > 100_000, "{taken}");
+    }
+}
+
+/// Entries on level 4 (2^24 cycles and more ahead, 46 h at 10 ms) come down through every
+/// level and are taken exactly in their cycle.
+#[test]
+#[cfg_attr(
+    miri,
+    ignore = "walks up to a million cycles: too slow to interpret; safe arithmetic only, run natively"
+)]
+fn wheel_takes_an_entry_far_beyond_the_wheel_exactly_in_its_cycle() {
+    let far = [
+        1 << 24,
+        (1 << 24) + 1,
+        (1 << 24) + 4_097,
+        (1 << 24) + 262_211,
+        70,
+    ];
+    let start = 123_456;
+    let taken = drive(start, start + (1 << 24) + 262_300, far, |k| {
+        if k == 4 {
+            70
+        } else {
+            0
+        }
+    });
+    assert_eq!(taken, 4 + ((1 << 24) + 262_300) / 70);
+}
+
+/// Filing for an earlier cycle moves an entry; for a later one it stays.
+#[test]
+fn wheel_filing_earlier_moves_and_later_stays() {
+    let mut wheel = Wheel::<2>::new();
+    wheel.file(0, 5_000, 0);
+    wheel.file(0, 6_000, 0);
+    assert_eq!(wheel.due[0], 5_000, "a later cycle: stays");
+    wheel.file(0, 30, 0);
+    assert_eq!((wheel.due[0], usize::from(wheel.list[0])), (30, 30));
+    assert_eq!(wheel.head[2 * WHEEL + 1], NIL, "no longer on level 2");
+    wheel.file(1, 30, 0);
+    wheel.file(0, 10, 0);
+    assert_eq!(wheel.head[30], 1, "unlinked behind the head");
+    assert_eq!(wheel.next[1], NIL);
+}
+
+/// The entries due in one cycle are taken last-filed first, also when some of them came
+/// down from coarser levels (as the one-level wheel did for entries up to 64 cycles
+/// ahead).
+#[test]
+fn wheel_takes_the_entries_of_one_cycle_last_filed_first() {
+    let due = 3 * 4_096 + 5 * 64 + 7;
+    let mut wheel = Wheel::<6>::new();
+    // (entry, filed in cycle, level): from further to nearer.
+    let filings = [
+        (0, 1, 2),
+        (1, 2, 2),
+        (2, due - 4_000, 1),
+        (3, due - 3_000, 1),
+        (4, due - 64, 0),
+        (5, due - 1, 0),
+    ];
+    let mut now = 0;
+    let mut order = Vec::new();
+    while now < due {
+        now += 1;
+        if wheel.busy(now) {
+            let mut list = wheel.take(now);
+            while let Some(k) = wheel.pop(&mut list) {
+                order.push((now, k));
+            }
+        }
+        // As Com files: after the cycle's slot is taken.
+        for &(k, at, level) in &filings {
+            if at == now {
+                wheel.file(k, due, now);
+                assert_eq!(usize::from(wheel.list[k]) / WHEEL, level, "entry {k}");
+            }
+        }
+    }
+    let expected: Vec<(u32, usize)> = [5, 4, 3, 2, 1, 0].iter().map(|&k| (due, k)).collect();
+    assert_eq!(order, expected);
+}
