@@ -67,6 +67,13 @@ impl SimPin {
         self.state.borrow().history.clone()
     }
 
+    /// The level changes from the `first`-th on (0-based), oldest first: what happened
+    /// since an observer last looked, without copying the whole history.
+    pub fn changes_since(&self, first: usize) -> Vec<(u64, bool)> {
+        let state = self.state.borrow();
+        state.history.get(first..).unwrap_or(&[]).to_vec()
+    }
+
     /// The number of level changes so far.
     pub fn change_count(&self) -> usize {
         self.state.borrow().history.len()
@@ -195,6 +202,9 @@ mod tests {
         firmware_sets(&mut pin, false);
         assert_eq!(observer.history(), [(1_000, true), (2_000, false)]);
         assert_eq!(observer.change_count(), 2);
+        assert_eq!(observer.changes_since(1), [(2_000, false)]);
+        assert_eq!(observer.changes_since(2), []);
+        assert_eq!(observer.changes_since(9), [], "beyond the end: nothing new");
         assert!(!observer.is_high_now());
     }
 

@@ -51,12 +51,11 @@ impl HostSonar {
 
     /// Whether a complete trigger pulse of at least 10 µs happened since the last capture.
     fn take_trigger(&mut self) -> bool {
-        let history = self.trigger.history();
-        let new = history.get(self.seen_edges..).unwrap_or(&[]);
+        let new = self.trigger.changes_since(self.seen_edges);
         let triggered = new.windows(2).any(
             |w| matches!(w, [(rise, true), (fall, false)] if fall - rise >= Self::MIN_TRIGGER_US),
         );
-        self.seen_edges = history.len();
+        self.seen_edges += new.len();
         triggered
     }
 }
