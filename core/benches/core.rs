@@ -6,10 +6,7 @@
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use cw_core::com::signal::{ByteOrder, SignalLayout, Signedness};
-use cw_core::os::{
-    AlarmAction, AlarmAutostart, AlarmConfig, AlarmId, CounterConfig, CounterId, Os, OsConfig,
-    TaskConfig, TaskId,
-};
+use cw_core::os::{AlarmId, CounterId, Os, TaskId};
 use std::hint::black_box;
 
 const DISTANCE: SignalLayout<8> =
@@ -36,26 +33,12 @@ fn codec(c: &mut Criterion) {
     g.finish();
 }
 
-static CFG: OsConfig<2, 0, 1, 1> = match OsConfig::new(
-    [TaskConfig::basic("Low", 1), TaskConfig::basic("High", 5)],
-    [CounterConfig {
-        max_allowed_value: u32::MAX - 1,
-        ticks_per_base: 1,
-        min_cycle: 1,
-    }],
-    [AlarmConfig {
-        name: "Cb",
-        counter: CounterId(0),
-        action: AlarmAction::Callback(0),
-        autostart: AlarmAutostart::Off,
-    }],
-) {
-    Ok(cfg) => cfg,
-    Err(_) => panic!("benchmark configuration refused"),
-};
+#[path = "support/two_tasks.rs"]
+mod two_tasks;
+use two_tasks::TWO;
 
 fn kernel() -> Os<2, 0, 1, 1, 2> {
-    let Ok(mut os) = Os::new(&CFG) else {
+    let Ok(mut os) = Os::new(&TWO) else {
         panic!("kernel refused the configuration");
     };
     assert_eq!(os.start(), Ok(()));

@@ -66,21 +66,10 @@ const fn ok<const T: usize, const R: usize, const C: usize, const A: usize>(
     }
 }
 
-/// Two tasks: High (5) runs, Low (1) is activated.
-static TWO: OsConfig<2, 0, 1, 1> = ok(OsConfig::new(
-    [TaskConfig::basic("Low", 1), TaskConfig::basic("High", 5)],
-    [CounterConfig {
-        max_allowed_value: u32::MAX - 1,
-        ticks_per_base: 1,
-        min_cycle: 1,
-    }],
-    [AlarmConfig {
-        name: "Cb",
-        counter: CounterId(0),
-        action: AlarmAction::Callback(0),
-        autostart: AlarmAutostart::Off,
-    }],
-));
+/// Two tasks: High (5) runs, Low (1) is activated (shared with the criterion benchmarks).
+#[path = "../benches/support/two_tasks.rs"]
+mod two_tasks;
+use two_tasks::TWO;
 
 cw_core::static_tables!(
     /// [`TWO`] as a build-time constant, as the ECU configures its kernel.

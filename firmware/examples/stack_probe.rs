@@ -45,28 +45,29 @@ struct Stack {
     can: Mailbox,
 }
 
-#[inline(never)]
-fn probe_tx_path(s: &mut Stack, distance_mm: u32) {
-    // UltraSonic writes; CanTranslate takes it and sends the signal down to the mailbox.
-    let _ = s.rte.write(Measurement::Distance { distance_mm });
-    if let Ok(Measurement::Distance { distance_mm }) = s.rte.take() {
-        let (canif, can) = (&mut s.canif, &mut s.can);
-        let _ = s.com.send_signal(
-            config::SIG_DISTANCE,
-            SignalValue::Unsigned(u64::from(distance_mm)),
-            |ipdu, sdu| config::PDUR.com_transmit(canif, can, ipdu, sdu).is_ok(),
-        );
-    }
-}
-
-#[inline(never)]
-fn probe_tx_com_down(s: &mut Stack, distance_mm: u32) {
+/// `Com_SendSignal` of the distance down through PduR and CanIf to the mailbox.
+#[inline(always)]
+fn send_distance_down(s: &mut Stack, distance_mm: u32) {
     let (canif, can) = (&mut s.canif, &mut s.can);
     let _ = s.com.send_signal(
         config::SIG_DISTANCE,
         SignalValue::Unsigned(u64::from(distance_mm)),
         |ipdu, sdu| config::PDUR.com_transmit(canif, can, ipdu, sdu).is_ok(),
     );
+}
+
+#[inline(never)]
+fn probe_tx_path(s: &mut Stack, distance_mm: u32) {
+    // UltraSonic writes; CanTranslate takes it and sends the signal down to the mailbox.
+    let _ = s.rte.write(Measurement::Distance { distance_mm });
+    if let Ok(Measurement::Distance { distance_mm }) = s.rte.take() {
+        send_distance_down(s, distance_mm);
+    }
+}
+
+#[inline(never)]
+fn probe_tx_com_down(s: &mut Stack, distance_mm: u32) {
+    send_distance_down(s, distance_mm);
 }
 
 #[inline(never)]

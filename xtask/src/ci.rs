@@ -262,21 +262,26 @@ fn run_stage(stage: &str) -> Result {
             println!("$ cargo xtask callgrind   (in-process)");
             callgrind::run(&callgrind::Options::default())?;
             // Simulation speed: the paper ran its ECU for 30 minutes.
-            Cmd::new("cargo")
-                .args([
-                    "run",
-                    "--release",
-                    "-p",
-                    "cw-firmware",
-                    "--bin",
-                    "cw-ecu",
-                    "--",
-                ])
+            ecu_run()
                 .args(["--scenario", "scenarios/approach.txt", "--duration", "1800"])
                 .run()
         }
         other => Err(format!("no such stage `{other}`")),
     }
+}
+
+/// `cargo run --release` of the ECU simulation (`cw-ecu`); its options follow.
+fn ecu_run() -> Cmd {
+    Cmd::new("cargo").args([
+        "run",
+        "--quiet",
+        "--release",
+        "-p",
+        "cw-firmware",
+        "--bin",
+        "cw-ecu",
+        "--",
+    ])
 }
 
 /// The ECU's CAN log and trace, read back by python-can and cantools with the DBC: every
@@ -287,17 +292,7 @@ fn interop() -> Result {
     for scenario in ["figure7", "faults", "approach", "shutdown"] {
         let trace = out.join(format!("{scenario}.csv"));
         let log = out.join(format!("{scenario}.log"));
-        Cmd::new("cargo")
-            .args([
-                "run",
-                "--quiet",
-                "--release",
-                "-p",
-                "cw-firmware",
-                "--bin",
-                "cw-ecu",
-                "--",
-            ])
+        ecu_run()
             .arg("--scenario")
             .arg(format!("scenarios/{scenario}.txt"))
             .arg("--trace")

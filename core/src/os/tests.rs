@@ -115,52 +115,41 @@ fn impossible_configurations_are_refused_with_the_item() {
         OsConfig::<1, 0, 1, 0>::new([t(1)], [bad_counter], []).err(),
         Some(ConfigError::CounterLimits { counter: 0 })
     );
-    let alarm = |counter, action, autostart| AlarmConfig {
-        name: "a",
-        counter,
-        action,
-        autostart,
-    };
-    assert_eq!(
+    // One task, one counter and one alarm: the error the alarm alone causes.
+    let one_alarm = |counter, action, autostart| {
         OsConfig::<1, 0, 1, 1>::new(
             [t(1)],
             [COUNTER],
-            [alarm(
-                CounterId(1),
-                AlarmAction::Callback(0),
-                AlarmAutostart::Off
-            )]
+            [AlarmConfig {
+                name: "a",
+                counter,
+                action,
+                autostart,
+            }],
         )
-        .err(),
+        .err()
+    };
+    assert_eq!(
+        one_alarm(CounterId(1), AlarmAction::Callback(0), AlarmAutostart::Off),
         Some(ConfigError::AlarmCounter { alarm: 0 })
     );
     assert_eq!(
-        OsConfig::<1, 0, 1, 1>::new(
-            [t(1)],
-            [COUNTER],
-            [alarm(
-                CounterId(0),
-                AlarmAction::SetEvent(TaskId(0), 1),
-                AlarmAutostart::Off
-            )]
-        )
-        .err(),
+        one_alarm(
+            CounterId(0),
+            AlarmAction::SetEvent(TaskId(0), 1),
+            AlarmAutostart::Off
+        ),
         Some(ConfigError::AlarmAction { alarm: 0 })
     );
     assert_eq!(
-        OsConfig::<1, 0, 1, 1>::new(
-            [t(1)],
-            [COUNTER],
-            [alarm(
-                CounterId(0),
-                AlarmAction::ActivateTask(TaskId(0)),
-                AlarmAutostart::Relative {
-                    increment: 0,
-                    cycle: 10
-                }
-            )]
-        )
-        .err(),
+        one_alarm(
+            CounterId(0),
+            AlarmAction::ActivateTask(TaskId(0)),
+            AlarmAutostart::Relative {
+                increment: 0,
+                cycle: 10
+            }
+        ),
         Some(ConfigError::AlarmAutostart { alarm: 0 })
     );
 }
