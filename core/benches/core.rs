@@ -6,7 +6,7 @@
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use cw_core::com::signal::{ByteOrder, SignalLayout, Signedness};
-use cw_core::os::{AlarmId, CounterId, Os, TaskId};
+use cw_core::os::{AlarmId, CounterId, Os, TaskId, OSDEFAULTAPPMODE};
 use std::hint::black_box;
 
 const DISTANCE: SignalLayout<8> =
@@ -35,13 +35,18 @@ fn codec(c: &mut Criterion) {
 
 #[path = "support/two_tasks.rs"]
 mod two_tasks;
-use two_tasks::TWO;
+use two_tasks::{TICK_ISR, TWO};
 
-fn kernel() -> Os<2, 0, 1, 1, 2> {
+/// The kernel with Low running (started from the timer ISR), so the measured services are
+/// called from a task, as in an application.
+fn kernel() -> Os<2, 0, 1, 1, 1, 2> {
     let Ok(mut os) = Os::new(&TWO) else {
         panic!("kernel refused the configuration");
     };
-    assert_eq!(os.start(), Ok(()));
+    assert_eq!(os.start_os(OSDEFAULTAPPMODE), Ok(()));
+    assert_eq!(os.enter_isr(TICK_ISR), Ok(()));
+    assert_eq!(os.activate_task(TaskId(0)), Ok(()));
+    assert_eq!(os.exit_isr(), Ok(()));
     os
 }
 
@@ -49,7 +54,7 @@ fn scheduler(c: &mut Criterion) {
     let mut g = c.benchmark_group("os");
     let mut os = kernel();
     g.bench_function(
-        "ActivateTask + dispatch + TerminateTask (idle -> High -> idle)",
+        "ActivateTask + dispatch + TerminateTask (Low -> High -> Low)",
         |b| {
             b.iter(|| {
                 let _ = os.activate_task(black_box(TaskId(1)));
@@ -58,15 +63,14 @@ fn scheduler(c: &mut Criterion) {
         },
     );
     let mut os = kernel();
-    let _ = os.activate_task(TaskId(1));
+    let _ = os.chain_task(TaskId(1));
     g.bench_function(
-        "ActivateTask, no preemption (+ drain, High keeps running)",
+        "ActivateTask, no preemption (+ High ends, Low chains High again)",
         |b| {
             b.iter(|| {
                 let _ = os.activate_task(black_box(TaskId(0)));
                 let _ = os.terminate_task();
-                let _ = os.terminate_task();
-                let _ = os.activate_task(TaskId(1));
+                let _ = os.chain_task(TaskId(1));
             })
         },
     );

@@ -11,8 +11,8 @@
 use cw_core::com::ipdu::{Com, ComConfig, ComConfigError, RxIpduConfig, TxIpduConfig, TxMode};
 use cw_core::com::signal::{ByteOrder, SignalLayout, Signedness};
 use cw_core::os::{
-    AlarmAction, AlarmAutostart, AlarmConfig, AlarmId, CounterConfig, CounterId, Os, OsConfig,
-    TaskConfig, TaskId,
+    AlarmAction, AlarmConfig, AlarmId, CounterConfig, CounterId, IsrConfig, Os, OsConfig,
+    OsDescription, TaskConfig, TaskId, OSDEFAULTAPPMODE,
 };
 use cw_core::tables::Tables;
 use std::hint::black_box;
@@ -57,9 +57,9 @@ fn probe_pack_intel_runtime(layout: &SignalLayout<8>, pdu: &mut [u8; 8], value: 
 
 // Evaluated only in `static` initialisers: a broken configuration stops the build.
 #[allow(clippy::panic)]
-const fn ok<const T: usize, const R: usize, const C: usize, const A: usize>(
-    cfg: Result<OsConfig<T, R, C, A>, cw_core::os::ConfigError>,
-) -> OsConfig<T, R, C, A> {
+const fn ok<const T: usize, const R: usize, const C: usize, const A: usize, const I: usize>(
+    cfg: Result<OsConfig<T, R, C, A, I>, cw_core::os::ConfigError>,
+) -> OsConfig<T, R, C, A, I> {
     match cfg {
         Ok(c) => c,
         Err(e) => panic!("{}", e.describe()),
@@ -69,34 +69,29 @@ const fn ok<const T: usize, const R: usize, const C: usize, const A: usize>(
 /// Two tasks: High (5) runs, Low (1) is activated (shared with the criterion benchmarks).
 #[path = "../benches/support/two_tasks.rs"]
 mod two_tasks;
-use two_tasks::TWO;
+use two_tasks::{TICK_ISR, TWO};
 
 cw_core::static_tables!(
     /// [`TWO`] as a build-time constant, as the ECU configures its kernel.
-    TwoTables: OsConfig<2, 0, 1, 1> = TWO
+    TwoTables: OsConfig<2, 0, 1, 1, 1> = TWO
 );
 
 /// 64 tasks at 64 priorities and 32 alarms on one counter: the same probes must cost the
 /// same as with two tasks and one alarm.
-static MANY: OsConfig<64, 0, 1, 32> = {
+static MANY: OsConfig<64, 0, 1, 32, 1> = {
     let mut tasks = [TaskConfig::basic("T", 0); 64];
     let mut i = 0;
     while i < 64 {
         tasks[i] = TaskConfig::basic("T", i as u8);
         i += 1;
     }
-    let mut alarms = [AlarmConfig {
-        name: "Cb",
-        counter: CounterId(0),
-        action: AlarmAction::Callback(0),
-        autostart: AlarmAutostart::Off,
-    }; 32];
+    let mut alarms = [AlarmConfig::new("Cb", CounterId(0), AlarmAction::Callback(0)); 32];
     let mut a = 0;
     while a < 32 {
         alarms[a].action = AlarmAction::Callback(a as u8);
         a += 1;
     }
-    ok(OsConfig::new(
+    ok(OsConfig::new(OsDescription::new(
         tasks,
         [CounterConfig {
             max_allowed_value: u32::MAX - 1,
@@ -104,7 +99,8 @@ static MANY: OsConfig<64, 0, 1, 32> = {
             min_cycle: 1,
         }],
         alarms,
-    ))
+        [IsrConfig::cat2("Tick", 0)],
+    )))
 };
 
 // Callgrind collects a probe by its function name, so every op has its own function;
@@ -113,8 +109,8 @@ macro_rules! kernel_probe {
     ($(#[$doc:meta])* $name:ident($os:ident $(, $arg:ident: $ty:ty)*) $body:block) => {
         $(#[$doc])*
         #[inline(never)]
-        fn $name<const T: usize, const A: usize, const Q: usize, K: Tables<OsConfig<T, 0, 1, A>>>(
-            $os: &mut Os<T, 0, 1, A, Q, K>,
+        fn $name<const T: usize, const A: usize, const Q: usize, K: Tables<OsConfig<T, 0, 1, A, 1>>>(
+            $os: &mut Os<T, 0, 1, A, 1, Q, K>,
             $($arg: $ty),*
         ) {
             $body
@@ -147,17 +143,19 @@ kernel_probe!(probe_alarm_tick_idle_32(os) {
     let _ = os.increment_counter(black_box(CounterId(0)));
 });
 
+/// The alarm's callback runs (an empty one: the cost is the kernel's). Returns the status,
+/// so that LLVM does not merge this probe with the idle one (the same call on the same
+/// kernel type).
 #[inline(never)]
 fn probe_alarm_tick_due<
     const T: usize,
     const A: usize,
     const Q: usize,
-    K: Tables<OsConfig<T, 0, 1, A>>,
+    K: Tables<OsConfig<T, 0, 1, A, 1>>,
 >(
-    os: &mut Os<T, 0, 1, A, Q, K>,
-) -> u32 {
-    os.increment_counter(black_box(CounterId(0)))
-        .map_or(0, |r| r.callbacks)
+    os: &mut Os<T, 0, 1, A, 1, Q, K>,
+) -> bool {
+    os.increment_counter(black_box(CounterId(0))).is_ok()
 }
 
 // Com main functions with nothing due. The runner needs 2000 consecutive idle calls, 20 s
@@ -305,23 +303,40 @@ fn com_idle<const TX: usize, const RX: usize, C: Tables<ComConfig<8, TX, RX, 0>>
     Ok(())
 }
 
-/// Puts `high` running and leaves `low` suspended, so that activating `low` is a pure
-/// "queue it, no preemption" decision.
-fn reset<const T: usize, const A: usize, const Q: usize, K: Tables<OsConfig<T, 0, 1, A>>>(
-    os: &mut Os<T, 0, 1, A, Q, K>,
+/// Puts `high` running (started from the timer ISR, as nothing runs) and leaves `low`
+/// suspended, so that activating `low` is a pure "queue it, no preemption" decision.
+fn reset<const T: usize, const A: usize, const Q: usize, K: Tables<OsConfig<T, 0, 1, A, 1>>>(
+    os: &mut Os<T, 0, 1, A, 1, Q, K>,
     high: TaskId,
 ) {
     while os.running().is_some() {
         let _ = os.terminate_task();
     }
+    let _ = os.enter_isr(TICK_ISR);
     let _ = os.activate_task(high);
+    let _ = os.exit_isr();
 }
 
-fn kernel<const T: usize, const A: usize, const Q: usize, K: Tables<OsConfig<T, 0, 1, A>>>(
+fn kernel<const T: usize, const A: usize, const Q: usize, K: Tables<OsConfig<T, 0, 1, A, 1>>>(
     cfg: K,
-) -> Result<Os<T, 0, 1, A, Q, K>, String> {
-    let mut os = Os::<T, 0, 1, A, Q, K>::new(cfg).map_err(|e| e.describe().to_string())?;
-    os.start().map_err(|e| e.name().to_string())?;
+) -> Result<Os<T, 0, 1, A, 1, Q, K>, String> {
+    let mut os = Os::<T, 0, 1, A, 1, Q, K>::new(cfg).map_err(|e| e.describe().to_string())?;
+    os.start_os(OSDEFAULTAPPMODE)
+        .map_err(|e| e.name().to_string())?;
+    Ok(os)
+}
+
+/// A kernel inside the timer ISR, where the counter ticks.
+fn in_tick_isr<
+    const T: usize,
+    const A: usize,
+    const Q: usize,
+    K: Tables<OsConfig<T, 0, 1, A, 1>>,
+>(
+    cfg: K,
+) -> Result<Os<T, 0, 1, A, 1, Q, K>, String> {
+    let mut os = kernel(cfg)?;
+    os.enter_isr(TICK_ISR).map_err(|e| e.name().to_string())?;
     Ok(os)
 }
 
@@ -389,13 +404,13 @@ fn main() -> Result<(), String> {
             }
         }
         "alarm_tick_idle" => {
-            let mut os = kernel::<2, 1, 2, _>(&TWO)?;
+            let mut os = in_tick_isr::<2, 1, 2, _>(&TWO)?;
             os.set_rel_alarm(AlarmId(0), u32::MAX - 1, 0)
                 .map_err(|e| e.name())?;
             (0..n).for_each(|_| probe_alarm_tick_idle(&mut os));
         }
         "alarm_tick_idle_32" => {
-            let mut os = kernel::<64, 32, 64, _>(&MANY)?;
+            let mut os = in_tick_isr::<64, 32, 64, _>(&MANY)?;
             for a in 0..32 {
                 os.set_rel_alarm(AlarmId(a), u32::MAX - 1 - u32::from(a), 0)
                     .map_err(|e| e.name())?;
@@ -403,9 +418,9 @@ fn main() -> Result<(), String> {
             (0..n).for_each(|_| probe_alarm_tick_idle_32(&mut os));
         }
         "alarm_tick_due" => {
-            let mut os = kernel::<2, 1, 2, _>(&TWO)?;
+            let mut os = in_tick_isr::<2, 1, 2, _>(&TWO)?;
             os.set_rel_alarm(AlarmId(0), 1, 1).map_err(|e| e.name())?;
-            (0..n).for_each(|_| sink ^= u64::from(probe_alarm_tick_due(&mut os)));
+            (0..n).for_each(|_| sink += u64::from(probe_alarm_tick_due(&mut os)));
         }
         "com_main_idle_1" => com_idle(Com1Tables, n, probe_com_main_idle_1)?,
         "com_main_idle_32" => com_idle(Com32Tables, n, probe_com_main_idle_32)?,

@@ -9,9 +9,10 @@
 //! | Dio (`Dio_WriteChannel`, `Dio_ReadChannel`) | [`Board::dio_out`] (`OutputPin`), [`Board::dio_in`] (`InputPin`) |
 //! | Gpt (time base, delays, the echo's duration) | [`Board::now_ms`], [`Board::gpt_delay`] (`DelayNs`), [`Board::gpt_capture`] ([`PulseCapture`]) |
 //! | Can | [`Board::can`] ([`CanDriver`]) |
+//! | interrupt controller (OS port) | [`Board::irq`] ([`InterruptControl`]): the kernel's interrupt mask, applied after every kernel call |
 
 use cw_core::can::CanDriver;
-use cw_core::os::TaskId;
+use cw_core::os::{InterruptControl, TaskId};
 use embedded_hal::delay::DelayNs;
 use embedded_hal::digital::{InputPin, OutputPin};
 
@@ -55,6 +56,8 @@ pub trait Board {
     type Delay: DelayNs;
     /// The Gpt input capture on the echo line.
     type Capture: PulseCapture;
+    /// The interrupt controller, as the OS drives it.
+    type Irq: InterruptControl;
 
     /// `Port_Init`: every pin to its configured direction and initial level (outputs low).
     /// Runs once, in EcuM start-up one, before any Dio access.
@@ -74,6 +77,10 @@ pub trait Board {
 
     /// The Gpt input capture.
     fn gpt_capture(&mut self) -> &mut Self::Capture;
+
+    /// The interrupt controller: the ECU applies the kernel's interrupt mask to it after
+    /// every kernel call that can change it.
+    fn irq(&mut self) -> &mut Self::Irq;
 
     /// Milliseconds since start (the Gpt time base).
     fn now_ms(&self) -> u64;

@@ -14,6 +14,18 @@
 //! `OsComTask` sits just above the sonar task: the sample the sonar task writes leaves as a
 //! CAN frame as soon as the sonar task's write completes, and the periodic tasks, which
 //! keep the LEDs in time, still outrank it.
+//!
+//! | ISR | category | priority | does |
+//! |---|---|---|---|
+//! | `SysTickIsr` | 2 | 2 | advances the 1 ms system counter; due alarms activate tasks |
+//! | `CanIsr` | 2 | 1 | takes the CAN controller's events into CanIf (receptions, confirmations, bus-off) |
+//!
+//! The OS runs in conformance class BCC1 (basic tasks, one activation each, one task per
+//! priority: the paper's task set needs no more), with extended status (every misuse is
+//! refused and reported to `ErrorHook`, which the ECU counts; the call-level check is one
+//! test of a cached mask, so the fast paths cost the same as in standard status: see the
+//! README's instruction counts), and AUTOSAR's behaviour where OSEK and AUTOSAR differ (the
+//! paper's stack is an AUTOSAR one).
 
 use cw_core::can::{CanId, Hrh, Hth};
 use cw_core::canif::{CanIfConfig, RxPduConfig, TxPduConfig, TxPduId};
@@ -24,8 +36,8 @@ use cw_core::com::ipdu::{
 };
 use cw_core::com::signal::{ByteOrder, Signedness};
 use cw_core::os::{
-    AlarmAction, AlarmAutostart, AlarmConfig, CounterConfig, CounterId, OsConfig, TaskConfig,
-    TaskId,
+    AlarmAction, AlarmConfig, ConformanceClass, CounterConfig, CounterId, Dialect, HookSet,
+    IsrConfig, IsrId, OsConfig, OsDescription, Status, TaskConfig, TaskId,
 };
 use cw_core::pdur::{PduRConfig, RxRoute};
 
@@ -43,45 +55,56 @@ pub const COM_TASK: TaskId = TaskId(4);
 pub const SONAR_TASK: TaskId = TaskId(5);
 /// The 1 ms system counter.
 pub const SYSTEM_COUNTER: CounterId = CounterId(0);
+/// The system timer's interrupt (SysTick on a Cortex-M): drives [`SYSTEM_COUNTER`].
+pub const SYSTICK_ISR: IsrId = IsrId(0);
+/// The CAN controller's interrupt.
+pub const CAN_ISR: IsrId = IsrId(1);
 
 /// Task periods in ms (0: not periodic), indexed by task.
 pub const PERIOD_MS: [u32; 6] = [0, 10, 10, 20, 0, 40];
 
 const fn cyclic(name: &'static str, task: TaskId, period_ms: u32) -> AlarmConfig {
-    AlarmConfig {
-        name,
-        counter: SYSTEM_COUNTER,
-        action: AlarmAction::ActivateTask(task),
-        autostart: AlarmAutostart::Relative {
-            increment: period_ms,
-            cycle: period_ms,
-        },
-    }
+    AlarmConfig::new(name, SYSTEM_COUNTER, AlarmAction::ActivateTask(task))
+        .relative(period_ms, period_ms)
 }
 
-/// The OS: six tasks, four cyclic alarms on a 1 ms counter.
-pub static OS: OsConfig<6, 0, 1, 4> = match OsConfig::new(
-    [
-        TaskConfig::basic("OsStartupTask", 7)
-            .non_preemptive()
-            .autostart(),
-        TaskConfig::basic("OsLEDTask", 6),
-        TaskConfig::basic("OsBswServiceTask", 5),
-        TaskConfig::basic("OsObstacleDetectionTask", 4),
-        TaskConfig::basic("OsComTask", 3),
-        TaskConfig::basic("OsSonarTask", 2),
-    ],
-    [CounterConfig {
-        max_allowed_value: 0xFFFF,
-        ticks_per_base: 1,
-        min_cycle: 1,
-    }],
-    [
-        cyclic("LedAlarm", LED_TASK, 10),
-        cyclic("BswAlarm", BSW_TASK, 10),
-        cyclic("ObstacleAlarm", OBSTACLE_TASK, 20),
-        cyclic("SonarAlarm", SONAR_TASK, 40),
-    ],
+/// The OS: six tasks, four cyclic alarms on a 1 ms counter, two category-2 ISRs.
+pub static OS: OsConfig<6, 0, 1, 4, 2> = match OsConfig::new(
+    OsDescription::new(
+        [
+            TaskConfig::basic("OsStartupTask", 7)
+                .non_preemptive()
+                .autostart(),
+            TaskConfig::basic("OsLEDTask", 6),
+            TaskConfig::basic("OsBswServiceTask", 5),
+            TaskConfig::basic("OsObstacleDetectionTask", 4),
+            TaskConfig::basic("OsComTask", 3),
+            TaskConfig::basic("OsSonarTask", 2),
+        ],
+        [CounterConfig {
+            max_allowed_value: 0xFFFF,
+            ticks_per_base: 1,
+            min_cycle: 1,
+        }],
+        [
+            cyclic("LedAlarm", LED_TASK, 10),
+            cyclic("BswAlarm", BSW_TASK, 10),
+            cyclic("ObstacleAlarm", OBSTACLE_TASK, 20),
+            cyclic("SonarAlarm", SONAR_TASK, 40),
+        ],
+        [
+            IsrConfig::cat2("SysTickIsr", 2),
+            IsrConfig::cat2("CanIsr", 1),
+        ],
+    )
+    .class(ConformanceClass::Bcc1)
+    .status(Status::Extended)
+    .dialect(Dialect::Autosar)
+    .hooks(HookSet {
+        error: true,
+        shutdown: true,
+        ..HookSet::NONE
+    }),
 ) {
     Ok(cfg) => cfg,
     Err(e) => panic!("{}", e.describe()),
@@ -89,11 +112,11 @@ pub static OS: OsConfig<6, 0, 1, 4> = match OsConfig::new(
 
 cw_core::static_tables!(
     /// [`OS`] as a build-time constant: the kernel's table lookups fold away.
-    pub OsTables: OsConfig<6, 0, 1, 4> = OS
+    pub OsTables: OsConfig<6, 0, 1, 4, 2> = OS
 );
 
-/// The OS kernel type for [`OS`].
-pub type Kernel = cw_core::os::Os<6, 0, 1, 4, 6, OsTables>;
+/// The OS kernel type for [`OS`], with the ECU's hooks.
+pub type Kernel = cw_core::os::Os<6, 0, 1, 4, 2, 6, OsTables, crate::ecu::EcuHooks>;
 
 const fn std_id(raw: u16) -> CanId {
     match CanId::standard(raw) {

@@ -4,16 +4,28 @@
 //! Execution model: the kernel decides who runs; [`Ecu::dispatch`] executes it. Tasks are
 //! basic and run to completion, so a task that another one preempts (the sonar task
 //! activating `OsComTask`) is simply suspended on the Rust stack while the higher one runs,
-//! exactly as a single-stack OSEK kernel does. The timer and CAN interrupts enter the
-//! kernel at interrupt level ([`Ecu::tick`], [`Ecu::can_event`]) and rescheduling happens
-//! when they leave.
+//! exactly as a single-stack OSEK kernel does. The timer and CAN interrupts are the
+//! configuration's category-2 ISRs `SysTickIsr` and `CanIsr` ([`Ecu::tick`],
+//! [`Ecu::can_isr`]): the board's interrupt controller takes them when the kernel's
+//! interrupt mask admits them, the kernel is told of their entry and return, and
+//! rescheduling happens when they return. The board applies the kernel's interrupt mask
+//! ([`cw_core::os::InterruptControl`]) after every kernel call that can change it other
+//! than an ISR's own entry and return, whose masking the interrupt controller does by
+//! itself: here, `StartOS` and `ShutdownOS` (the ECU's tasks take no interrupt lock and
+//! no resource shared with an ISR).
+//!
+//! Hooks ([`EcuHooks`]): `ErrorHook` counts every error a kernel service returned (none is
+//! expected); `ShutdownHook` records the status `ShutdownOS` was given. EcuM's shutdown
+//! calls `ShutdownOS`: from then on no task, ISR or alarm runs.
 
 use cw_core::canif::{CanIf, RxDropped, TxPduId};
 use cw_core::cansm::{self, Actions, CanSm};
 use cw_core::com::ipdu::Com;
 use cw_core::com::signal::SignalValue;
-use cw_core::ecum::{bswm_execute, BswMRequest, EcuM, EcuMState};
-use cw_core::os::{OsError, TaskId};
+use cw_core::ecum::{bswm_execute, BswMRequest, EcuM};
+use cw_core::os::{
+    Hooks, InterruptControl, IsrId, OsError, ServiceId, StatusType, TaskId, E_OK, OSDEFAULTAPPMODE,
+};
 use cw_core::rte::RteError;
 use cw_core::sonar::SonarConfig;
 use cw_core::warning::{Measurement, WarningLevel};
@@ -35,6 +47,32 @@ pub enum CanInterrupt {
     BusOff,
 }
 
+/// The ECU's hook routines and their data (the OS configuration enables `ErrorHook` and
+/// `ShutdownHook`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+pub struct EcuHooks {
+    /// Errors reported to `ErrorHook`: services that returned one, alarm actions that
+    /// failed (a period overrun would show here), tasks and ISRs that ended badly.
+    pub errors: u32,
+    /// The last error: the service and its status.
+    pub last_error: Option<(ServiceId, OsError)>,
+    /// The status `ShutdownOS` was given, once it ran.
+    pub shutdown: Option<StatusType>,
+}
+
+impl Hooks<Kernel> for EcuHooks {
+    fn error_hook(os: &mut Kernel, error: OsError) {
+        let service = os.error_service_id();
+        let hooks = os.hooks_mut();
+        hooks.errors = hooks.errors.saturating_add(1);
+        hooks.last_error = service.map(|s| (s, error));
+    }
+
+    fn shutdown_hook(os: &mut Kernel, error: StatusType) {
+        os.hooks_mut().shutdown = Some(error);
+    }
+}
+
 /// Counters an engineer looks at after a run.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub struct EcuStats {
@@ -44,7 +82,8 @@ pub struct EcuStats {
     pub frames_refused: u32,
     /// Received frames dropped by CanIf (unknown id, wrong DLC, wrong mailbox, off-line).
     pub rx_dropped: u32,
-    /// Kernel services that returned an error (none expected).
+    /// Kernel errors (none expected): those `ErrorHook` saw, and ISR entries or returns the
+    /// kernel refused.
     pub os_errors: u32,
     /// LED writes a Dio channel refused.
     pub pin_faults: u32,
@@ -68,6 +107,9 @@ pub struct Ecu {
     applied_thresholds: (u64, u64),
     last_measurement: Measurement,
     stats: EcuStats,
+    /// ISR entries or returns the kernel refused (the board took an interrupt the mask
+    /// held, or returned from one not active).
+    port_errors: u32,
 }
 
 impl Ecu {
@@ -91,6 +133,7 @@ impl Ecu {
             applied_thresholds: (1000, 2000),
             last_measurement: Measurement::Invalid,
             stats: EcuStats::default(),
+            port_errors: 0,
         })
     }
 
@@ -130,13 +173,18 @@ impl Ecu {
     }
 
     /// Run counters.
-    pub const fn stats(&self) -> &EcuStats {
-        &self.stats
+    pub fn stats(&self) -> EcuStats {
+        EcuStats {
+            os_errors: self.os.hooks().errors.saturating_add(self.port_errors),
+            ..self.stats
+        }
     }
 
-    fn os_result(&mut self, result: Result<(), OsError>) {
+    /// A kernel call the board makes as the port (ISR entry and return, `StartOS`): these
+    /// have no `ErrorHook`, so their refusals are counted here.
+    fn port_result(&mut self, result: Result<(), OsError>) {
         if result.is_err() {
-            self.stats.os_errors = self.stats.os_errors.saturating_add(1);
+            self.port_errors = self.port_errors.saturating_add(1);
         }
     }
 
@@ -150,9 +198,14 @@ impl Ecu {
         self.rte.mode_requests.send(request).map(|_| ())
     }
 
-    /// Whether the ECU has shut down (EcuM `Shutdown`: it no longer runs).
+    /// Whether the ECU has shut down (`ShutdownOS` ran: it no longer runs).
     pub fn is_off(&self) -> bool {
-        self.ecum.state() == EcuMState::Shutdown
+        self.os.is_shut_down()
+    }
+
+    /// The hooks' record (errors, shutdown status).
+    pub fn hooks(&self) -> &EcuHooks {
+        self.os.hooks()
     }
 
     /// Power-on: `EcuM_Init` (start-up one), then `StartOS`, which runs `OsStartupTask`.
@@ -162,42 +215,56 @@ impl Ecu {
         }
         // Start-up one: Mcu, Port (every pin to its direction, outputs low), Dio, Gpt.
         board.port_init();
-        let started = self.os.start();
-        self.os_result(started);
+        let started = self.os.start_os(OSDEFAULTAPPMODE);
+        self.port_result(started);
+        board.irq().apply_mask(self.os.interrupt_mask());
         self.dispatch(board);
     }
 
-    /// The 1 ms timer interrupt: the system counter advances and due alarms activate tasks,
-    /// which then run.
-    pub fn tick<B: Board>(&mut self, board: &mut B) {
+    /// Runs an ISR as the port does: the kernel is told of its entry, `body` runs, the
+    /// kernel is told of its return (a rescheduling point), and the tasks it made ready run.
+    fn isr<B: Board>(&mut self, board: &mut B, isr: IsrId, body: impl FnOnce(&mut Self, &mut B)) {
         if self.is_off() {
             return;
         }
-        let entered = self.os.enter_isr();
-        self.os_result(entered);
-        let ticked = self
-            .os
-            .increment_counter(config::SYSTEM_COUNTER)
-            .map(|report| {
-                // Every alarm action is an activation of a task at its limit if it fails: a
-                // period overrun, which the paper's Table 1 would show as a missed period.
-                report.failed_actions
-            });
-        if let Ok(failed) = ticked {
-            self.stats.os_errors = self.stats.os_errors.saturating_add(u32::from(failed));
+        let entered = self.os.enter_isr(isr);
+        self.port_result(entered);
+        if entered.is_err() {
+            return;
+        }
+        body(self, board);
+        if self.is_off() {
+            return;
         }
         let left = self.os.exit_isr();
-        self.os_result(left);
+        self.port_result(left);
         self.dispatch(board);
     }
 
-    /// The CAN interrupt: one controller event into CanIf and upwards.
-    pub fn can_event<B: Board>(&mut self, board: &mut B, event: CanInterrupt) {
-        if self.is_off() {
-            return;
-        }
-        let entered = self.os.enter_isr();
-        self.os_result(entered);
+    /// `SysTickIsr`, every 1 ms: the system counter advances and due alarms activate tasks,
+    /// which then run. An alarm that cannot activate its task (a period overrun, which the
+    /// paper's Table 1 would show as a missed period) reaches `ErrorHook`.
+    pub fn tick<B: Board>(&mut self, board: &mut B) {
+        self.isr(board, config::SYSTICK_ISR, |ecu, _| {
+            let _ = ecu.os.increment_counter(config::SYSTEM_COUNTER);
+        });
+    }
+
+    /// `CanIsr`: the CAN controller's pending events, in order, into CanIf and upwards.
+    pub fn can_isr<B: Board>(
+        &mut self,
+        board: &mut B,
+        events: impl IntoIterator<Item = CanInterrupt>,
+    ) {
+        self.isr(board, config::CAN_ISR, |ecu, board| {
+            for event in events {
+                ecu.can_event(board, event);
+            }
+        });
+    }
+
+    /// One controller event, inside `CanIsr`.
+    fn can_event<B: Board>(&mut self, board: &mut B, event: CanInterrupt) {
         match event {
             CanInterrupt::TxConfirmation(pdu) => {
                 if let Some(TxPduId(p)) = self.canif.tx_confirmation(board.can(), pdu) {
@@ -223,9 +290,6 @@ impl Ecu {
                 self.apply(board, actions);
             }
         }
-        let left = self.os.exit_isr();
-        self.os_result(left);
-        self.dispatch(board);
     }
 
     /// Runs tasks while the kernel has one to run that is not already on the stack.
@@ -264,8 +328,8 @@ impl Ecu {
             // The ECU shut down inside this task: the OS is gone, nothing terminates.
             return;
         }
-        let ended = self.os.terminate_task();
-        self.os_result(ended);
+        // An error here reaches ErrorHook, which counts it.
+        let _ = self.os.terminate_task();
     }
 
     /// `OsStartupTask`: `EcuM_StartupTwo`, then the ModeManagerInit runnable asks BswM for
@@ -280,7 +344,7 @@ impl Ecu {
     }
 
     /// EcuM's main function: in post-run, the outputs go to their safe state (LEDs off)
-    /// and the ECU shuts down (`ShutdownOS`: no more ticks, tasks or interrupts).
+    /// and the ECU shuts down (`ShutdownOS(E_OK)`: no more ticks, tasks or interrupts).
     fn ecum_main_function<B: Board>(&mut self, board: &mut B) {
         if !self.ecum.main_function() {
             return;
@@ -290,6 +354,8 @@ impl Ecu {
                 self.stats.pin_faults = self.stats.pin_faults.saturating_add(1);
             }
         }
+        let _ = self.os.shutdown_os(E_OK);
+        board.irq().apply_mask(self.os.interrupt_mask());
     }
 
     /// BswM's main function for one request; a request whose rule does not hold now (e.g.
@@ -363,8 +429,8 @@ impl Ecu {
         self.last_measurement = measurement;
         let _ = self.rte.sonar_to_obstacle.write(measurement);
         if self.rte.sonar_to_can.write(measurement).0 {
-            let activated = self.os.activate_task(config::COM_TASK);
-            self.os_result(activated);
+            // An error here reaches ErrorHook, which counts it.
+            let _ = self.os.activate_task(config::COM_TASK);
             self.run_preempting(board, config::SONAR_TASK);
         }
     }

@@ -7,10 +7,12 @@
 //! Corpora live under `src/__fuzz__/<target>/corpus` and are committed.
 
 use cw_core::os::spec::Service;
-use cw_core::os::{AlarmId, CounterId, ResourceId, TaskId, RES_SCHEDULER};
+use cw_core::os::{AlarmId, CounterId, IsrId, ResourceId, ServiceCall, TaskId, RES_SCHEDULER};
 
-/// Decodes four fuzzer bytes into a scheduler service. Ids range a little beyond every
-/// configuration used here so that `E_OS_ID` paths are exercised.
+/// Decodes four fuzzer bytes into one step of the code running on the processor: any
+/// service, an ISR's entry or return, a whole ISR making one call, or a task body that
+/// returns. Ids range a little beyond every configuration used here so that `E_OS_ID`
+/// paths are exercised.
 pub fn decode_service(op: u8, a: u8, b: u8, c: u8) -> Service {
     let task = TaskId(a % 8);
     let res = if b % 4 == 3 {
@@ -19,26 +21,51 @@ pub fn decode_service(op: u8, a: u8, b: u8, c: u8) -> Service {
         ResourceId(b % 4)
     };
     let mask = u32::from(b % 4);
-    match op % 18 {
-        0 => Service::ActivateTask(task),
-        1 => Service::TerminateTask,
-        2 => Service::ChainTask(task),
-        3 => Service::Schedule,
-        4 => Service::SetEvent(task, mask),
-        5 => Service::ClearEvent(mask),
-        6 => Service::WaitEvent(mask),
-        7 => Service::GetResource(res),
-        8 => Service::ReleaseResource(res),
-        9 => Service::SetRelAlarm(AlarmId(a % 6), u32::from(b), u32::from(c % 50)),
-        10 => Service::SetAbsAlarm(AlarmId(a % 6), u32::from(b), u32::from(c % 50)),
-        11 => Service::CancelAlarm(AlarmId(a % 6)),
-        12 => Service::IncrementCounter(CounterId(a % 2)),
-        13 => Service::EnterIsr,
-        14 => Service::ExitIsr,
-        15 => Service::IsrTick(CounterId(a % 2)),
-        16 => Service::IsrActivateTask(task),
-        _ => Service::IsrSetEvent(task, mask),
-    }
+    let isr = IsrId(c % 4);
+    let call = match op % 26 {
+        0 => ServiceCall::ActivateTask(task),
+        1 => ServiceCall::TerminateTask,
+        2 => ServiceCall::ChainTask(task),
+        3 => ServiceCall::Schedule,
+        4 => ServiceCall::SetEvent(task, mask),
+        5 => ServiceCall::ClearEvent(mask),
+        6 => ServiceCall::WaitEvent(mask),
+        7 => ServiceCall::GetResource(res),
+        8 => ServiceCall::ReleaseResource(res),
+        9 => ServiceCall::SetRelAlarm {
+            alarm: AlarmId(a % 6),
+            increment: u32::from(b),
+            cycle: u32::from(c % 50),
+        },
+        10 => ServiceCall::SetAbsAlarm {
+            alarm: AlarmId(a % 6),
+            start: u32::from(b),
+            cycle: u32::from(c % 50),
+        },
+        11 => ServiceCall::CancelAlarm(AlarmId(a % 6)),
+        12 => ServiceCall::IncrementCounter(CounterId(a % 2)),
+        13 => return Service::EnterIsr(isr),
+        14 => return Service::ExitIsr,
+        15 => return Service::Isr(isr, ServiceCall::IncrementCounter(CounterId(a % 2))),
+        16 => return Service::Isr(isr, ServiceCall::ActivateTask(task)),
+        17 => return Service::Isr(isr, ServiceCall::SetEvent(task, mask)),
+        18 => return Service::TaskReturn,
+        19 => match b % 6 {
+            0 => ServiceCall::DisableAllInterrupts,
+            1 => ServiceCall::EnableAllInterrupts,
+            2 => ServiceCall::SuspendAllInterrupts,
+            3 => ServiceCall::ResumeAllInterrupts,
+            4 => ServiceCall::SuspendOsInterrupts,
+            _ => ServiceCall::ResumeOsInterrupts,
+        },
+        20 => ServiceCall::GetTaskId,
+        21 => ServiceCall::GetTaskState(task),
+        22 => ServiceCall::GetEvent(task),
+        23 => ServiceCall::GetAlarm(AlarmId(a % 6)),
+        24 => ServiceCall::GetIsrId,
+        _ => ServiceCall::ShutdownOs(c),
+    };
+    Service::Call(call)
 }
 
 #[cfg(test)]
@@ -46,8 +73,8 @@ mod targets {
     use super::decode_service;
     use cw_core::com::signal::{spec, ByteOrder, SignalLayout, Signedness};
     use cw_core::os::spec::call_and_check;
-    use cw_core::os::Os;
-    use cw_proofs::configs;
+    use cw_core::os::OSDEFAULTAPPMODE;
+    use cw_proofs::{configs, Kernel};
 
     fn codec_case<const N: usize>(
         start: u16,
@@ -108,35 +135,38 @@ mod targets {
         const R: usize,
         const C: usize,
         const A: usize,
+        const I: usize,
         const Q: usize,
     >(
-        cfg: &'static cw_core::os::OsConfig<T, R, C, A>,
+        cfg: &'static cw_core::os::OsConfig<T, R, C, A, I>,
         calls: &[(u8, u8, u8, u8)],
     ) {
-        let Ok(mut os) = Os::<T, R, C, A, Q>::new(cfg) else {
+        let Ok(mut os) = Kernel::<T, R, C, A, I, Q>::new(cfg) else {
             panic!("configuration refused");
         };
-        assert_eq!(os.start(), Ok(()));
+        assert_eq!(os.start_os(OSDEFAULTAPPMODE), Ok(()));
         for &(op, a, b, c) in calls.iter().take(256) {
             let service = decode_service(op, a, b, c);
             if let Err(rule) = call_and_check(&mut os, service) {
                 panic!("{service:?}: {rule}");
             }
+            if let Some(rule) = os.hooks().broken() {
+                panic!("{service:?}: {rule}");
+            }
         }
     }
 
-    /// Any sequence of services on the paper's task set and on the event-heavy set: every
-    /// transition rule and kernel invariant holds after every call.
+    /// Any sequence of steps (services, ISR entries and returns, interrupt locks, missing
+    /// ends, shutdown) on the paper's task set, the event-heavy set and the interrupt set:
+    /// every transition rule, kernel invariant and hook rule holds after every step.
     #[test]
     fn scheduler_api() {
         bolero::check!()
-            .with_type::<(bool, Vec<(u8, u8, u8, u8)>)>()
-            .for_each(|(paper, calls)| {
-                if *paper {
-                    run_services::<6, 1, 1, 4, 6>(&configs::PAPER, calls);
-                } else {
-                    run_services::<3, 1, 1, 2, 4>(&configs::EVENTS, calls);
-                }
+            .with_type::<(u8, Vec<(u8, u8, u8, u8)>)>()
+            .for_each(|(set, calls)| match set % 3 {
+                0 => run_services::<6, 2, 1, 4, 2, 6>(&configs::PAPER, calls),
+                1 => run_services::<3, 1, 1, 2, 1, 4>(&configs::EVENTS, calls),
+                _ => run_services::<3, 1, 0, 0, 3, 3>(&configs::INTERRUPTS, calls),
             });
     }
 }

@@ -1,257 +1,332 @@
-//! Named predicates: the scheduler's contract, stated over the kernel's public inspection
-//! methods. The harnesses in this crate, the fuzz targets, the stateright model in
-//! `proofs/` and `debug_assert!`s inside the kernel all execute these same functions.
+//! Named predicates: the kernel's contract, stated over its public inspection methods.
+//! The harnesses in this crate, the fuzz targets, the stateright model in `proofs/`, the
+//! conformance tests and `debug_assert!`s inside the kernel all execute these same
+//! functions.
 
-use super::OsConfig;
+use super::call::{perform, Returned, ServiceCall};
+use super::callevel::Context;
+use super::config::{IsrCategory, Status};
 use super::{
-    AlarmId, CounterId, EventMask, Os, OsError, ResourceId, TaskId, TaskKind, TickType,
-    RES_SCHEDULER,
+    Hooks, IsrId, Os, OsConfig, OsError, Phase, ResourceId, TaskId, TaskKind, RES_SCHEDULER,
 };
 use crate::tables::Tables;
 
-/// OSEK §4.6: at task level, the running task has the highest priority among ready
-/// activations (ties go to the running task); with nothing running, nothing is ready.
-pub fn running_is_highest_ready<
-    const T: usize,
-    const R: usize,
-    const C: usize,
-    const A: usize,
-    const Q: usize,
-    K: Tables<OsConfig<T, R, C, A>>,
->(
-    os: &Os<T, R, C, A, Q, K>,
-) -> bool {
-    if os.isr_depth() != 0 {
-        return true;
-    }
-    match (os.running_priority(), os.highest_ready()) {
-        (_, None) => true,
-        (None, Some(_)) => false,
-        (Some(running), Some(ready)) => ready <= running,
-    }
-}
-
-/// Immediate priority ceiling: the running task's priority is exactly the highest of its
-/// dispatch priority and the ceilings of the resources it holds.
-pub fn running_priority_is_ceiling<
-    const T: usize,
-    const R: usize,
-    const C: usize,
-    const A: usize,
-    const Q: usize,
-    K: Tables<OsConfig<T, R, C, A>>,
->(
-    os: &Os<T, R, C, A, Q, K>,
-) -> bool {
-    let Some(task) = os.running() else {
-        return true;
+/// Declares a predicate over any kernel: the generic parameters are the same for all.
+macro_rules! predicate {
+    ($(#[$meta:meta])* pub fn $name:ident($os:ident) -> bool $body:block) => {
+        $(#[$meta])*
+        pub fn $name<
+            const T: usize,
+            const R: usize,
+            const C: usize,
+            const A: usize,
+            const I: usize,
+            const Q: usize,
+            K,
+            H,
+        >(
+            $os: &Os<T, R, C, A, I, Q, K, H>,
+        ) -> bool
+        where
+            K: Tables<OsConfig<T, R, C, A, I>>,
+            H: Hooks<Os<T, R, C, A, I, Q, K, H>>,
+        $body
     };
-    let mut expected = os.dispatch_priority(task).unwrap_or(0);
-    for res in os.held_resources(task) {
-        let ceiling = os.ceiling(res).unwrap_or(0);
-        if ceiling > expected {
-            expected = ceiling;
+}
+
+/// Whether the processor is at task level: the OS runs, no ISR is active and no hook runs.
+fn at_task_level<
+    const T: usize,
+    const R: usize,
+    const C: usize,
+    const A: usize,
+    const I: usize,
+    const Q: usize,
+    K,
+    H,
+>(
+    os: &Os<T, R, C, A, I, Q, K, H>,
+) -> bool
+where
+    K: Tables<OsConfig<T, R, C, A, I>>,
+    H: Hooks<Os<T, R, C, A, I, Q, K, H>>,
+{
+    os.phase() == Phase::Running
+        && os.isr_nesting() == 0
+        && matches!(os.context(), Context::Task | Context::Idle)
+}
+
+predicate! {
+    /// OSEK §4.6: whenever the processor is at task level, the running task has the highest
+    /// priority among ready activations (ties go to the running task); with nothing
+    /// running, nothing is ready.
+    pub fn running_is_highest_ready(os) -> bool {
+        if !at_task_level(os) {
+            return true;
+        }
+        match (os.running_priority(), os.highest_ready()) {
+            (_, None) => true,
+            (None, Some(_)) => false,
+            (Some(running), Some(ready)) => ready <= running,
         }
     }
-    os.running_priority() == Some(expected)
 }
 
-/// No activation is lost or invented: for every task, ready records plus the running or
-/// waiting instance equal its activation count, which never exceeds the configured limit.
-pub fn activations_accounted<
-    const T: usize,
-    const R: usize,
-    const C: usize,
-    const A: usize,
-    const Q: usize,
-    K: Tables<OsConfig<T, R, C, A>>,
->(
-    os: &Os<T, R, C, A, Q, K>,
-) -> bool {
-    (0..T).all(|t| {
-        let id = TaskId(t as u8);
-        let on_cpu = usize::from(os.running() == Some(id)) + usize::from(os.is_waiting(id));
-        let count = os.activation_count(id);
-        count <= os.config().tasks()[t].max_activations
-            && os.queued_records(id) + on_cpu == usize::from(count)
-            && on_cpu <= 1
-    })
+predicate! {
+    /// Immediate priority ceiling: the running task's priority is exactly the highest of
+    /// its dispatch priority and the ceilings of the resources it holds.
+    pub fn running_priority_is_ceiling(os) -> bool {
+        let Some(task) = os.running() else {
+            return true;
+        };
+        let mut expected = os.dispatch_priority(task).unwrap_or(0);
+        for res in os.held_resources(task) {
+            expected = expected.max(os.ceiling(res).unwrap_or(0));
+        }
+        os.running_priority() == Some(expected)
+    }
 }
 
-/// Resources: each held resource has exactly one owner, it appears exactly once on that
-/// owner's stack, its ceiling is at least the owner's priority, and only tasks that have
-/// started hold resources. Waiting tasks hold none.
-pub fn resources_consistent<
-    const T: usize,
-    const R: usize,
-    const C: usize,
-    const A: usize,
-    const Q: usize,
-    K: Tables<OsConfig<T, R, C, A>>,
->(
-    os: &Os<T, R, C, A, Q, K>,
-) -> bool {
-    let ids = (0..R as u8)
-        .map(ResourceId)
-        .chain(core::iter::once(RES_SCHEDULER));
-    for res in ids {
-        if let Some(owner) = os.resource_owner(res) {
-            if !os.is_started(owner) || os.is_waiting(owner) {
+predicate! {
+    /// No activation is lost or invented: for every task, ready records plus the running or
+    /// waiting instance equal its activation count, which never exceeds the configured
+    /// limit.
+    pub fn activations_accounted(os) -> bool {
+        (0..T).all(|t| {
+            let id = TaskId(t as u8);
+            let on_cpu = usize::from(os.running() == Some(id)) + usize::from(os.is_waiting(id));
+            let count = os.activation_count(id);
+            count <= os.config().tasks()[t].max_activations
+                && os.queued_records(id) + on_cpu == usize::from(count)
+                && on_cpu <= 1
+        })
+    }
+}
+
+predicate! {
+    /// Resources: each held resource has exactly one owner (a started, not waiting task, or
+    /// an active ISR), it appears exactly once on that owner's stack, and (in extended
+    /// status) its ceiling is at least the owner's priority, so `RES_SCHEDULER` is never an
+    /// ISR's. Waiting tasks hold none.
+    pub fn resources_consistent(os) -> bool {
+        let extended = os.config().status() == Status::Extended;
+        let ids = (0..R as u8)
+            .map(ResourceId)
+            .chain(core::iter::once(RES_SCHEDULER));
+        for res in ids {
+            let ceiling = os.ceiling(res).unwrap_or(0);
+            if let Some(owner) = os.resource_owner(res) {
+                if !os.is_started(owner) || os.is_waiting(owner) {
+                    return false;
+                }
+                if os.held_resources(owner).filter(|r| *r == res).count() != 1 {
+                    return false;
+                }
+                let base = os.config().tasks()[owner.0 as usize].priority;
+                if extended && ceiling < base {
+                    return false;
+                }
+            }
+            if let Some(isr) = os.resource_isr_owner(res) {
+                if os.active_isrs().all(|(active, _)| active != isr) {
+                    return false;
+                }
+                if os.isr_held_resources(isr).filter(|r| *r == res).count() != 1 {
+                    return false;
+                }
+                let level = os.config().isr_level(isr.0 as usize).unwrap_or(u8::MAX);
+                if extended && ceiling < level {
+                    return false;
+                }
+            }
+        }
+        (0..T as u8).map(TaskId).all(|t| {
+            os.held_resources(t)
+                .all(|r| os.resource_owner(r) == Some(t))
+        }) && os.active_isrs().all(|(isr, _)| {
+            os.isr_held_resources(isr)
+                .all(|r| os.resource_isr_owner(r) == Some(isr))
+        })
+    }
+}
+
+predicate! {
+    /// Waiting tasks are extended and wait for something not yet set. (`WaitEvent(0)` is
+    /// legal in OSEK and waits forever, so an empty mask is allowed.)
+    pub fn waiting_is_blocked(os) -> bool {
+        (0..T).all(|t| {
+            let id = TaskId(t as u8);
+            !os.is_waiting(id)
+                || (os.config().tasks()[t].kind == TaskKind::Extended
+                    && os.events(id) & os.wait_mask(id) == 0)
+        })
+    }
+}
+
+predicate! {
+    /// ISRs: every active ISR was taken only above the priority it interrupted and only when
+    /// the locks then in force let it through (so an ISR never runs below its priority, and
+    /// none runs while interrupts are disabled); ISR priorities strictly increase inward;
+    /// each runs at exactly the highest of its own level and the ceilings it holds; and
+    /// while one is active, the code running is that ISR (or a hook it caused).
+    pub fn isr_nesting_consistent(os) -> bool {
+        let cfg = os.config();
+        for (depth, (isr, level)) in os.active_isrs().enumerate() {
+            let Some(config) = cfg.isrs().get(isr.0 as usize) else {
+                return false;
+            };
+            let Some(own) = cfg.isr_level(isr.0 as usize) else {
+                return false;
+            };
+            let Some((below, _, locks)) = os.interrupted_by(depth) else {
+                return false;
+            };
+            if own <= below || locks.masks_all() {
                 return false;
             }
-            if os.held_resources(owner).filter(|r| *r == res).count() != 1 {
+            if config.category == IsrCategory::Two && locks.suspend_os != 0 {
                 return false;
             }
-            let base = os.config().tasks()[owner.0 as usize].priority;
-            if os.ceiling(res).unwrap_or(0) < base {
+            let mut expected = own;
+            for res in os.isr_held_resources(isr) {
+                expected = expected.max(os.ceiling(res).unwrap_or(0));
+            }
+            if level != expected {
                 return false;
             }
         }
+        if let Some(innermost) = os.active_isr() {
+            let category = cfg
+                .isrs()
+                .get(innermost.0 as usize)
+                .map(|c| c.category);
+            let context_ok = match os.context() {
+                Context::Isr1 => category == Some(IsrCategory::One),
+                Context::Isr2 => category == Some(IsrCategory::Two),
+                other => other.is_hook(),
+            };
+            if !context_ok {
+                return false;
+            }
+        }
+        true
     }
-    (0..T as u8).map(TaskId).all(|t| {
-        os.held_resources(t)
-            .all(|r| os.resource_owner(r) == Some(t))
-    })
 }
 
-/// Waiting tasks are extended and wait for something not yet set. (`WaitEvent(0)` is legal
-/// in OSEK and waits forever, so an empty mask is allowed.)
-pub fn waiting_is_blocked<
-    const T: usize,
-    const R: usize,
-    const C: usize,
-    const A: usize,
-    const Q: usize,
-    K: Tables<OsConfig<T, R, C, A>>,
->(
-    os: &Os<T, R, C, A, Q, K>,
-) -> bool {
-    (0..T).all(|t| {
-        let id = TaskId(t as u8);
-        !os.is_waiting(id)
-            || (os.config().tasks()[t].kind == TaskKind::Extended
-                && os.events(id) & os.wait_mask(id) == 0)
-    })
+predicate! {
+    /// The call level follows the state: at task level the context is `Task` exactly when
+    /// a task runs; after `ShutdownOS` nothing runs, nothing is ready and nothing is active.
+    pub fn context_consistent(os) -> bool {
+        match os.phase() {
+            Phase::ShutDown => {
+                os.running().is_none()
+                    && os.ready_bitmap() == 0
+                    && os.isr_nesting() == 0
+                    && os.context() == Context::ShutDown
+            }
+            Phase::Running if os.isr_nesting() == 0 && !os.context().is_hook() => {
+                (os.context() == Context::Task) == os.running().is_some()
+                    && matches!(os.context(), Context::Task | Context::Idle)
+            }
+            _ => true,
+        }
+    }
 }
 
-/// All of the above.
-pub fn kernel_invariants<
-    const T: usize,
-    const R: usize,
-    const C: usize,
-    const A: usize,
-    const Q: usize,
-    K: Tables<OsConfig<T, R, C, A>>,
->(
-    os: &Os<T, R, C, A, Q, K>,
-) -> bool {
-    running_is_highest_ready(os)
-        && running_priority_is_ceiling(os)
-        && activations_accounted(os)
-        && resources_consistent(os)
-        && waiting_is_blocked(os)
+predicate! {
+    /// All of the above.
+    pub fn kernel_invariants(os) -> bool {
+        running_is_highest_ready(os)
+            && running_priority_is_ceiling(os)
+            && activations_accounted(os)
+            && resources_consistent(os)
+            && waiting_is_blocked(os)
+            && isr_nesting_consistent(os)
+            && context_consistent(os)
+    }
 }
 
-/// One call into the kernel: a service at the current call level, or a whole category-2
-/// ISR that calls one service (entered, run, left: rescheduling happens at its exit).
+/// One step of the code running on the processor: a service call, the entry or return of
+/// an ISR as the hardware and the port report them, a whole ISR that calls one service, or
+/// a task body that returns without ending itself.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum Service {
-    /// `ActivateTask`.
-    ActivateTask(TaskId),
-    /// `TerminateTask`.
-    TerminateTask,
-    /// `ChainTask`.
-    ChainTask(TaskId),
-    /// `Schedule`.
-    Schedule,
-    /// `SetEvent`.
-    SetEvent(TaskId, EventMask),
-    /// `ClearEvent`.
-    ClearEvent(EventMask),
-    /// `WaitEvent`.
-    WaitEvent(EventMask),
-    /// `GetResource`.
-    GetResource(ResourceId),
-    /// `ReleaseResource`.
-    ReleaseResource(ResourceId),
-    /// `SetRelAlarm`.
-    SetRelAlarm(AlarmId, TickType, TickType),
-    /// `SetAbsAlarm`.
-    SetAbsAlarm(AlarmId, TickType, TickType),
-    /// `CancelAlarm`.
-    CancelAlarm(AlarmId),
-    /// `IncrementCounter` at the current level.
-    IncrementCounter(CounterId),
-    /// Enter interrupt level.
-    EnterIsr,
-    /// Leave interrupt level.
+    /// A service called by the code running now.
+    Call(ServiceCall),
+    /// The hardware takes interrupt `isr` (refused when masked).
+    EnterIsr(IsrId),
+    /// The running ISR returns.
     ExitIsr,
-    /// A timer ISR: `IncrementCounter` inside an ISR.
-    IsrTick(CounterId),
-    /// An ISR that calls `ActivateTask`.
-    IsrActivateTask(TaskId),
-    /// An ISR that calls `SetEvent`.
-    IsrSetEvent(TaskId, EventMask),
-}
-
-impl Service {
-    /// Whether this is a whole ISR (whose inner service may fail without undoing the
-    /// ISR's own entry and exit).
-    pub const fn is_isr(self) -> bool {
-        matches!(
-            self,
-            Self::IsrTick(_) | Self::IsrActivateTask(_) | Self::IsrSetEvent(..)
-        )
-    }
-}
-
-fn in_isr<const T: usize, const R: usize, const C: usize, const A: usize, const Q: usize, K>(
-    os: &mut Os<T, R, C, A, Q, K>,
-    service: impl FnOnce(&mut Os<T, R, C, A, Q, K>) -> Result<(), OsError>,
-) -> Result<(), OsError>
-where
-    K: Tables<OsConfig<T, R, C, A>>,
-{
-    os.enter_isr()?;
-    let result = service(os);
-    os.exit_isr()?;
-    result
+    /// A whole ISR that calls one service: entered, the call, returned. Rescheduling
+    /// happens at its return.
+    Isr(IsrId, ServiceCall),
+    /// The running task's body returns without `TerminateTask` (AUTOSAR: missing end).
+    TaskReturn,
 }
 
 /// Performs one [`Service`] on the kernel.
-pub fn call<const T: usize, const R: usize, const C: usize, const A: usize, const Q: usize, K>(
-    os: &mut Os<T, R, C, A, Q, K>,
+///
+/// # Errors
+/// The status of the step (for a whole ISR: of its entry, else of its call).
+pub fn call<
+    const T: usize,
+    const R: usize,
+    const C: usize,
+    const A: usize,
+    const I: usize,
+    const Q: usize,
+    K,
+    H,
+>(
+    os: &mut Os<T, R, C, A, I, Q, K, H>,
     service: Service,
-) -> Result<(), OsError>
+) -> Result<Returned, OsError>
 where
-    K: Tables<OsConfig<T, R, C, A>>,
+    K: Tables<OsConfig<T, R, C, A, I>>,
+    H: Hooks<Os<T, R, C, A, I, Q, K, H>>,
 {
     match service {
-        Service::ActivateTask(t) => os.activate_task(t),
-        Service::TerminateTask => os.terminate_task(),
-        Service::ChainTask(t) => os.chain_task(t),
-        Service::Schedule => os.schedule(),
-        Service::SetEvent(t, m) => os.set_event(t, m),
-        Service::ClearEvent(m) => os.clear_event(m),
-        Service::WaitEvent(m) => os.wait_event(m),
-        Service::GetResource(r) => os.get_resource(r),
-        Service::ReleaseResource(r) => os.release_resource(r),
-        Service::SetRelAlarm(a, inc, cyc) => os.set_rel_alarm(a, inc, cyc),
-        Service::SetAbsAlarm(a, start, cyc) => os.set_abs_alarm(a, start, cyc),
-        Service::CancelAlarm(a) => os.cancel_alarm(a),
-        Service::IncrementCounter(c) => os.increment_counter(c).map(|_| ()),
-        Service::EnterIsr => os.enter_isr(),
-        Service::ExitIsr => os.exit_isr(),
-        Service::IsrTick(c) => in_isr(os, |os| os.increment_counter(c).map(|_| ())),
-        Service::IsrActivateTask(t) => in_isr(os, |os| os.activate_task(t)),
-        Service::IsrSetEvent(t, m) => in_isr(os, |os| os.set_event(t, m)),
+        Service::Call(c) => perform(os, c),
+        Service::EnterIsr(isr) => os.enter_isr(isr).map(|()| Returned::Nothing),
+        Service::ExitIsr => os.exit_isr().map(|()| Returned::Nothing),
+        Service::Isr(isr, c) => {
+            os.enter_isr(isr)?;
+            let result = perform(os, c);
+            // The ISR returns whatever its call did (after a ShutdownOS nothing is left).
+            let _ = os.exit_isr();
+            result
+        }
+        Service::TaskReturn => os.task_returned().map(|()| Returned::Nothing),
     }
 }
 
+/// Whether two kernels are in the same state apart from the hooks' data.
+pub fn same_kernel_state<
+    const T: usize,
+    const R: usize,
+    const C: usize,
+    const A: usize,
+    const I: usize,
+    const Q: usize,
+    K,
+    H,
+>(
+    a: &Os<T, R, C, A, I, Q, K, H>,
+    b: &Os<T, R, C, A, I, Q, K, H>,
+) -> bool
+where
+    K: Tables<OsConfig<T, R, C, A, I>>,
+    H: Hooks<Os<T, R, C, A, I, Q, K, H>>,
+{
+    let mut a = *a;
+    *a.hooks_mut() = *b.hooks();
+    a == *b
+}
+
 /// Whether the sequence `prefix` is a prefix of `seq`.
-fn starts_with<I: PartialEq>(
-    mut seq: impl Iterator<Item = I>,
-    prefix: impl Iterator<Item = I>,
+fn starts_with<It: PartialEq>(
+    mut seq: impl Iterator<Item = It>,
+    prefix: impl Iterator<Item = It>,
 ) -> bool {
     prefix.into_iter().all(|p| seq.next() == Some(p))
 }
@@ -264,12 +339,21 @@ pub fn fifo_discipline<
     const R: usize,
     const C: usize,
     const A: usize,
+    const I: usize,
     const Q: usize,
-    K: Tables<OsConfig<T, R, C, A>>,
+    K,
+    H,
 >(
-    before: &Os<T, R, C, A, Q, K>,
-    after: &Os<T, R, C, A, Q, K>,
-) -> Result<(), &'static str> {
+    before: &Os<T, R, C, A, I, Q, K, H>,
+    after: &Os<T, R, C, A, I, Q, K, H>,
+) -> Result<(), &'static str>
+where
+    K: Tables<OsConfig<T, R, C, A, I>>,
+    H: Hooks<Os<T, R, C, A, I, Q, K, H>>,
+{
+    if after.phase() == Phase::ShutDown {
+        return Ok(());
+    }
     let preempted = before.running().filter(|r| {
         after.running() != Some(*r)
             && !after.is_waiting(*r)
@@ -308,57 +392,73 @@ pub fn fifo_discipline<
     Ok(())
 }
 
-/// The rules of one call, judged from the states before and after it and its result:
-/// a refused service changes nothing; `ActivateTask` fails with `E_OS_LIMIT` exactly at the
-/// limit and otherwise adds one activation; `ReleaseResource` succeeds only for the most
-/// recently taken resource and restores the caller's priority to the ceiling of what it
-/// still holds; `GetResource` raises it to the ceiling; a waiting task becomes ready exactly
-/// when an event it waits for is set; FIFO discipline ([`fifo_discipline`]).
+/// The `ActivateTask` carried out by a step, if any.
+fn activation(service: Service) -> Option<TaskId> {
+    match service {
+        Service::Call(ServiceCall::ActivateTask(t))
+        | Service::Isr(_, ServiceCall::ActivateTask(t)) => Some(t),
+        _ => None,
+    }
+}
+
+/// The rules of one step, judged from the states before and after it and its result:
+/// - a refused step changes nothing but the hooks' data;
+/// - `ActivateTask` fails with `E_OS_LIMIT` exactly at the limit and otherwise adds one
+///   activation;
+/// - `ReleaseResource` succeeds only for the most recently taken resource and restores the
+///   caller's priority to the ceiling of what it still holds; `GetResource` raises it to
+///   the ceiling;
+/// - a waiting task becomes ready exactly when an event it waits for is set;
+/// - an ISR is entered only when the interrupt mask admits it;
+/// - no task switch happens while an ISR stays active or an interrupt lock stays in force;
+/// - FIFO discipline ([`fifo_discipline`]).
 pub fn transition_rules<
     const T: usize,
     const R: usize,
     const C: usize,
     const A: usize,
+    const I: usize,
     const Q: usize,
-    K: Tables<OsConfig<T, R, C, A>>,
+    K,
+    H,
 >(
-    before: &Os<T, R, C, A, Q, K>,
-    after: &Os<T, R, C, A, Q, K>,
+    before: &Os<T, R, C, A, I, Q, K, H>,
+    after: &Os<T, R, C, A, I, Q, K, H>,
     service: Service,
-    result: Result<(), OsError>,
-) -> Result<(), &'static str> {
-    let caller = if before.isr_depth() == 0 {
-        before.running()
-    } else {
-        None
-    };
-    if result.is_err()
-        && !service.is_isr()
-        && !matches!(service, Service::IncrementCounter(_))
-        && after != before
-    {
+    result: Result<Returned, OsError>,
+) -> Result<(), &'static str>
+where
+    K: Tables<OsConfig<T, R, C, A, I>>,
+    H: Hooks<Os<T, R, C, A, I, Q, K, H>>,
+{
+    let caller = (before.context() == Context::Task)
+        .then(|| before.running())
+        .flatten();
+    let composite = matches!(service, Service::Isr(..));
+    if result.is_err() && !composite && !same_kernel_state(before, after) {
         return Err("a refused service changed the state");
     }
-    if let Service::ActivateTask(t) | Service::IsrActivateTask(t) = service {
+    if let Some(t) = activation(service) {
         if let Some(task) = before.config().tasks().get(t.0 as usize) {
             let had = before.activation_count(t);
             match result {
+                Ok(_) if after.activation_count(t) != had + 1 => {
+                    return Err("an activation was lost")
+                }
                 Err(OsError::Limit) if had != task.max_activations => {
                     return Err("E_OS_LIMIT below the limit")
                 }
-                Ok(()) if after.activation_count(t) != had + 1 => {
-                    return Err("an activation was lost")
-                }
-                Err(e) if e != OsError::Limit => {
-                    return Err("ActivateTask of a valid task failed otherwise")
-                }
+                // Any other refusal came before the activation (call level, a lock, the
+                // interrupt mask), and changed nothing (checked above).
                 _ => {}
             }
-        } else if result != Err(OsError::Id) {
-            return Err("ActivateTask of an invalid task did not return E_OS_ID");
+        } else if result.is_ok() {
+            return Err("ActivateTask of an invalid task succeeded");
         }
     }
-    if let (Service::ReleaseResource(r), Ok(()), Some(t)) = (service, result, caller) {
+    if let (Service::Call(ServiceCall::ReleaseResource(r)), Ok(_), Some(t)) =
+        (service, result, caller)
+    {
         if before.held_resources(t).next() != Some(r) {
             return Err("a resource was released out of LIFO order");
         }
@@ -375,7 +475,8 @@ pub fn transition_rules<
             return Err("ReleaseResource did not restore the priority");
         }
     }
-    if let (Service::GetResource(r), Ok(()), Some(_)) = (service, result, caller) {
+    if let (Service::Call(ServiceCall::GetResource(r)), Ok(_), Some(_)) = (service, result, caller)
+    {
         let ceiling = after.ceiling(r).unwrap_or(0);
         if after.running_priority() != before.running_priority().map(|p| p.max(ceiling)) {
             return Err("GetResource did not raise the priority to the ceiling");
@@ -385,28 +486,59 @@ pub fn transition_rules<
         let was = before.is_waiting(t);
         let released = was && !after.is_waiting(t);
         let event_arrived = after.events(t) & before.wait_mask(t) != 0;
-        if released && !event_arrived {
+        if after.phase() != Phase::ShutDown && released && !event_arrived {
             return Err("a waiting task was released without its event");
         }
         if was && event_arrived && !released {
             return Err("a waited event was set but the task still waits");
         }
     }
+    if let Service::EnterIsr(isr) | Service::Isr(isr, _) = service {
+        let admitted = before
+            .config()
+            .isrs()
+            .get(isr.0 as usize)
+            .is_some_and(|c| before.interrupt_mask().admits(c.priority));
+        let entered = match service {
+            Service::EnterIsr(_) => result.is_ok(),
+            _ => !same_kernel_state(before, after),
+        };
+        if entered && !admitted {
+            return Err("an ISR was entered although the interrupt mask held it");
+        }
+    }
+    if after.phase() != Phase::ShutDown && after.running() != before.running() {
+        if before.isr_nesting() > 0 && after.isr_nesting() > 0 {
+            return Err("a task switch happened while an ISR was active");
+        }
+        if before.locks().any() && after.locks().any() {
+            return Err("a task switch happened while interrupts were disabled");
+        }
+    }
     fifo_discipline(before, after)
 }
 
 /// Performs `service` and checks [`transition_rules`] and [`kernel_invariants`].
+///
+/// # Errors
+/// The first rule or invariant broken.
 pub fn call_and_check<
     const T: usize,
     const R: usize,
     const C: usize,
     const A: usize,
+    const I: usize,
     const Q: usize,
-    K: Tables<OsConfig<T, R, C, A>>,
+    K,
+    H,
 >(
-    os: &mut Os<T, R, C, A, Q, K>,
+    os: &mut Os<T, R, C, A, I, Q, K, H>,
     service: Service,
-) -> Result<Result<(), OsError>, &'static str> {
+) -> Result<Result<Returned, OsError>, &'static str>
+where
+    K: Tables<OsConfig<T, R, C, A, I>>,
+    H: Hooks<Os<T, R, C, A, I, Q, K, H>>,
+{
     let before = *os;
     let result = call(os, service);
     transition_rules(&before, os, service, result)?;

@@ -1,10 +1,11 @@
-//! Scheduler harnesses: each OSEK service's error codes and effects, scenario tests of the
-//! scheduling rules, and a bolero harness that drives random service sequences and checks
-//! the [`spec`] invariants after every call.
+//! Kernel harnesses: the configuration rules, each service's error codes and effects,
+//! interrupts, locks, hooks and shutdown, and a bolero harness that drives random step
+//! sequences (task services, ISRs, locks) and checks the [`spec`] invariants and transition
+//! rules after every step. The OSEK test plan's sequences are in `core/tests/osek/`.
 extern crate std;
 
 use super::*;
-use crate::os::config::CounterConfig;
+use std::vec::Vec;
 
 const COUNTER: CounterConfig = CounterConfig {
     max_allowed_value: 99,
@@ -15,41 +16,117 @@ const COUNTER: CounterConfig = CounterConfig {
 // Tasks: 0 Low(1, basic, 3 activations, uses R0), 1 Mid(3, extended, uses R0 and R1),
 // 2 High(5, basic), 3 Np(2, non-preemptive basic), 4 Low2(1, basic, 2 activations).
 // Alarms on counter 0: activate High, set event 1 of Mid, callback 7.
-static CFG: OsConfig<5, 2, 1, 3> = match OsConfig::new(
-    [
-        TaskConfig::basic("Low", 1).activations(3).uses(0b01),
-        TaskConfig::extended("Mid", 3).uses(0b11),
-        TaskConfig::basic("High", 5),
-        TaskConfig::basic("Np", 2).non_preemptive(),
-        TaskConfig::basic("Low2", 1).activations(2),
-    ],
-    [COUNTER],
-    [
-        AlarmConfig {
-            name: "ActHigh",
-            counter: CounterId(0),
-            action: AlarmAction::ActivateTask(TaskId(2)),
-            autostart: AlarmAutostart::Off,
-        },
-        AlarmConfig {
-            name: "EvMid",
-            counter: CounterId(0),
-            action: AlarmAction::SetEvent(TaskId(1), 1),
-            autostart: AlarmAutostart::Off,
-        },
-        AlarmConfig {
-            name: "Cb",
-            counter: CounterId(0),
-            action: AlarmAction::Callback(7),
-            autostart: AlarmAutostart::Off,
-        },
-    ],
+// ISRs: 0 Tick (cat. 2, priority 1), 1 Can (cat. 2, priority 3, uses R1), 2 Fast (cat. 1, 6).
+static CFG: OsConfig<5, 2, 1, 3, 3> = match OsConfig::new(
+    OsDescription::new(
+        [
+            TaskConfig::basic("Low", 1).activations(3).uses(0b01),
+            TaskConfig::extended("Mid", 3).uses(0b11),
+            TaskConfig::basic("High", 5),
+            TaskConfig::basic("Np", 2).non_preemptive(),
+            TaskConfig::basic("Low2", 1).activations(2),
+        ],
+        [COUNTER],
+        [
+            AlarmConfig::new(
+                "ActHigh",
+                CounterId(0),
+                AlarmAction::ActivateTask(TaskId(2)),
+            ),
+            AlarmConfig::new("EvMid", CounterId(0), AlarmAction::SetEvent(TaskId(1), 1)),
+            AlarmConfig::new("Cb", CounterId(0), AlarmAction::Callback(7)),
+        ],
+        [
+            IsrConfig::cat2("Tick", 1),
+            IsrConfig::cat2("Can", 3).uses(0b10),
+            IsrConfig::cat1("Fast", 6),
+        ],
+    )
+    .hooks(HookSet::ALL)
+    .app_modes(2),
 ) {
     Ok(c) => c,
     Err(e) => panic!("{}", e.describe()),
 };
 
-type TestOs = Os<5, 2, 1, 3, 8>;
+/// What the hooks saw, in order (a fixed ring, so the kernel stays `Copy`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+enum Seen {
+    Startup(AppMode),
+    Shutdown(StatusType),
+    Pre(Option<TaskId>),
+    Post(Option<TaskId>),
+    Error(OsError, ServiceCall, Option<IsrId>),
+    Callback(u8, Result<(), OsError>),
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+struct Recorder {
+    seen: [Option<Seen>; 24],
+    len: usize,
+    /// Make ErrorHook call a service that fails (to show it is not re-entered).
+    fail_inside_error_hook: bool,
+    /// Make ErrorHook shut the OS down.
+    shutdown_in_error_hook: bool,
+}
+
+impl Recorder {
+    fn push(&mut self, seen: Seen) {
+        if let Some(slot) = self.seen.get_mut(self.len) {
+            *slot = Some(seen);
+        }
+        self.len += 1;
+    }
+
+    fn take(&mut self) -> Vec<Seen> {
+        let out = self.seen.iter().take(self.len).flatten().copied().collect();
+        *self = Self {
+            fail_inside_error_hook: self.fail_inside_error_hook,
+            shutdown_in_error_hook: self.shutdown_in_error_hook,
+            ..Self::default()
+        };
+        out
+    }
+}
+
+type TestOs = Os<5, 2, 1, 3, 3, 8, &'static OsConfig<5, 2, 1, 3, 3>, Recorder>;
+
+impl Hooks<TestOs> for Recorder {
+    fn startup_hook(os: &mut TestOs) {
+        let mode = os.get_active_application_mode().unwrap_or(AppMode(99));
+        os.hooks_mut().push(Seen::Startup(mode));
+    }
+    fn shutdown_hook(os: &mut TestOs, error: StatusType) {
+        os.hooks_mut().push(Seen::Shutdown(error));
+    }
+    fn pre_task_hook(os: &mut TestOs) {
+        let id = os.get_task_id().unwrap_or(None);
+        os.hooks_mut().push(Seen::Pre(id));
+    }
+    fn post_task_hook(os: &mut TestOs) {
+        let id = os.get_task_id().unwrap_or(None);
+        os.hooks_mut().push(Seen::Post(id));
+    }
+    fn error_hook(os: &mut TestOs, error: OsError) {
+        let call = os.error_call().unwrap_or(ServiceCall::HookMissingEnd);
+        let isr = os.get_isr_id().unwrap_or(None);
+        os.hooks_mut().push(Seen::Error(error, call, isr));
+        if os.hooks().fail_inside_error_hook {
+            let _ = os.activate_task(TaskId(0));
+        }
+        if os.hooks().shutdown_in_error_hook {
+            let _ = os.shutdown_os(error.status());
+        }
+    }
+    fn alarm_callback(os: &mut TestOs, callback: u8) {
+        // Only the SuspendAll pair is allowed here (OSEK); ActivateTask is not.
+        let refused = os.activate_task(TaskId(0));
+        let _ = os.suspend_all_interrupts();
+        let _ = os.resume_all_interrupts();
+        os.hooks_mut().push(Seen::Callback(callback, refused));
+    }
+}
+
 const LOW: TaskId = TaskId(0);
 const MID: TaskId = TaskId(1);
 const HIGH: TaskId = TaskId(2);
@@ -57,33 +134,54 @@ const NP: TaskId = TaskId(3);
 const LOW2: TaskId = TaskId(4);
 const R0: ResourceId = ResourceId(0);
 const R1: ResourceId = ResourceId(1);
+const TICK: IsrId = IsrId(0);
+const CAN: IsrId = IsrId(1);
+const FAST: IsrId = IsrId(2);
 
 fn os() -> TestOs {
     match TestOs::new(&CFG) {
         Ok(mut os) => {
-            assert_eq!(os.start(), Ok(()));
+            assert_eq!(os.start_os(OSDEFAULTAPPMODE), Ok(()));
+            os.hooks_mut().take();
             os
         }
         Err(e) => panic!("{e:?}"),
     }
 }
 
+/// Runs `body` inside ISR `isr` (entered and left around it).
+fn in_isr<V>(
+    os: &mut TestOs,
+    isr: IsrId,
+    body: impl FnOnce(&mut TestOs) -> Result<V, OsError>,
+) -> Result<V, OsError> {
+    assert_eq!(os.enter_isr(isr), Ok(()));
+    let result = body(os);
+    assert_eq!(os.exit_isr(), Ok(()));
+    result
+}
+
+/// `ActivateTask` from the tick ISR: how a task starts when nothing runs.
+fn activate_from_isr(os: &mut TestOs, task: TaskId) -> Result<(), OsError> {
+    in_isr(os, TICK, |os| os.activate_task(task))
+}
+
 fn check(os: &TestOs) {
-    assert!(spec::running_is_highest_ready(os), "not highest: {os:?}");
-    assert!(spec::running_priority_is_ceiling(os), "ceiling: {os:?}");
-    assert!(spec::activations_accounted(os), "activations: {os:?}");
-    assert!(spec::resources_consistent(os), "resources: {os:?}");
-    assert!(spec::waiting_is_blocked(os), "waiting: {os:?}");
+    assert!(spec::kernel_invariants(os), "invariants: {os:?}");
 }
 
 #[test]
 fn derived_configuration() {
     assert_eq!(CFG.resource_ceiling(0), Some(3));
-    assert_eq!(CFG.resource_ceiling(1), Some(3));
+    // R1 is shared with the Can ISR (priority 3): its ceiling lies at interrupt level.
+    assert_eq!(CFG.resource_ceiling(1), Some(ISR_LEVEL_BASE + 3));
     assert_eq!(CFG.scheduler_ceiling(), 5);
     assert_eq!(CFG.total_activations(), 8);
+    assert_eq!(CFG.isr_level(2), Some(ISR_LEVEL_BASE + 6));
+    // SuspendOSInterrupts masks up to the highest category-2 ISR (Can), not Fast.
+    assert_eq!(CFG.os_interrupt_level(), ISR_LEVEL_BASE + 3);
     assert_eq!(
-        Os::<5, 2, 1, 3, 7>::new(&CFG).err(),
+        Os::<5, 2, 1, 3, 3, 7>::new(&CFG).err(),
         Some(ConfigError::QueueCapacity { needed: 8 })
     );
 }
@@ -91,82 +189,188 @@ fn derived_configuration() {
 #[test]
 fn impossible_configurations_are_refused_with_the_item() {
     let t = |p| TaskConfig::basic("t", p);
+    let tasks = |tasks| OsConfig::<1, 1, 0, 0, 0>::new(OsDescription::new(tasks, [], [], [])).err();
+    assert_eq!(tasks([t(64)]), Some(ConfigError::TaskPriority { task: 0 }));
     assert_eq!(
-        OsConfig::<1, 0, 0, 0>::new([t(64)], [], []).err(),
-        Some(ConfigError::TaskPriority { task: 0 })
+        tasks([t(1).activations(0)]),
+        Some(ConfigError::TaskActivations { task: 0 })
     );
     assert_eq!(
-        OsConfig::<2, 0, 0, 0>::new([t(1), t(1).activations(0)], [], []).err(),
-        Some(ConfigError::TaskActivations { task: 1 })
-    );
-    assert_eq!(
-        OsConfig::<1, 0, 0, 0>::new([TaskConfig::extended("e", 1).activations(2)], [], []).err(),
+        tasks([TaskConfig::extended("e", 1).activations(2)]),
         Some(ConfigError::ExtendedActivations { task: 0 })
     );
     assert_eq!(
-        OsConfig::<1, 1, 0, 0>::new([t(1).uses(0b10)], [], []).err(),
+        tasks([t(1).uses(0b10)]),
         Some(ConfigError::TaskResource { task: 0 })
+    );
+    assert_eq!(
+        tasks([t(1).autostart_in(0b10)]),
+        Some(ConfigError::TaskAppMode { task: 0 })
+    );
+    assert_eq!(
+        OsConfig::<1, 0, 0, 0, 0>::new(OsDescription::new([t(1)], [], [], []).app_modes(0)).err(),
+        Some(ConfigError::AppModes)
     );
     let bad_counter = CounterConfig {
         min_cycle: 0,
         ..COUNTER
     };
     assert_eq!(
-        OsConfig::<1, 0, 1, 0>::new([t(1)], [bad_counter], []).err(),
+        OsConfig::<1, 0, 1, 0, 0>::new(OsDescription::new([t(1)], [bad_counter], [], [])).err(),
         Some(ConfigError::CounterLimits { counter: 0 })
     );
     // One task, one counter and one alarm: the error the alarm alone causes.
-    let one_alarm = |counter, action, autostart| {
-        OsConfig::<1, 0, 1, 1>::new(
-            [t(1)],
-            [COUNTER],
-            [AlarmConfig {
-                name: "a",
-                counter,
-                action,
-                autostart,
-            }],
-        )
-        .err()
+    let one_alarm = |alarm: AlarmConfig| {
+        OsConfig::<1, 0, 1, 1, 0>::new(OsDescription::new([t(1)], [COUNTER], [alarm], [])).err()
     };
+    let cb = AlarmConfig::new("a", CounterId(0), AlarmAction::Callback(0));
     assert_eq!(
-        one_alarm(CounterId(1), AlarmAction::Callback(0), AlarmAutostart::Off),
+        one_alarm(AlarmConfig {
+            counter: CounterId(1),
+            ..cb
+        }),
         Some(ConfigError::AlarmCounter { alarm: 0 })
     );
     assert_eq!(
-        one_alarm(
+        one_alarm(AlarmConfig::new(
+            "a",
             CounterId(0),
-            AlarmAction::SetEvent(TaskId(0), 1),
-            AlarmAutostart::Off
-        ),
+            AlarmAction::SetEvent(TaskId(0), 1)
+        )),
         Some(ConfigError::AlarmAction { alarm: 0 })
     );
     assert_eq!(
-        one_alarm(
-            CounterId(0),
-            AlarmAction::ActivateTask(TaskId(0)),
-            AlarmAutostart::Relative {
-                increment: 0,
-                cycle: 10
-            }
-        ),
+        one_alarm(cb.relative(0, 10)),
         Some(ConfigError::AlarmAutostart { alarm: 0 })
     );
+    assert_eq!(
+        one_alarm(cb.relative(1, 10).in_modes(0b10)),
+        Some(ConfigError::AlarmAppMode { alarm: 0 })
+    );
+}
+
+#[test]
+fn conformance_classes_refuse_what_they_do_not_allow() {
+    let two = |class, a: TaskConfig, b: TaskConfig| {
+        OsConfig::<2, 0, 0, 0, 0>::new(OsDescription::new([a, b], [], [], []).class(class)).err()
+    };
+    let basic = |p| TaskConfig::basic("b", p);
+    let ext = |p| TaskConfig::extended("e", p);
+    use ConformanceClass::*;
+    for class in [Bcc1, Bcc2] {
+        assert_eq!(
+            two(class, basic(1), ext(2)),
+            Some(ConfigError::ClassExtendedTask { task: 1 })
+        );
+    }
+    for class in [Bcc1, Ecc1] {
+        assert_eq!(
+            two(class, basic(1), basic(2).activations(2)),
+            Some(ConfigError::ClassMultipleActivations { task: 1 })
+        );
+        assert_eq!(
+            two(class, basic(3), basic(3)),
+            Some(ConfigError::ClassSharedPriority { task: 1, other: 0 })
+        );
+    }
+    assert_eq!(two(Bcc1, basic(1), basic(2)), None);
+    assert_eq!(two(Bcc2, basic(3), basic(3).activations(4)), None);
+    assert_eq!(two(Ecc1, basic(1), ext(2)), None);
+    assert_eq!(two(Ecc2, ext(2), basic(2).activations(3)), None);
+}
+
+#[test]
+fn isr_configuration_rules() {
+    let one_task = [TaskConfig::basic("t", 1)];
+    let isrs =
+        |isrs| OsConfig::<1, 1, 0, 0, 2>::new(OsDescription::new(one_task, [], [], isrs)).err();
+    let cat2 = IsrConfig::cat2;
+    assert_eq!(
+        isrs([cat2("a", 64), cat2("b", 1)]),
+        Some(ConfigError::IsrPriority { isr: 0 })
+    );
+    assert_eq!(
+        isrs([cat2("a", 1), cat2("b", 2).uses(0b10)]),
+        Some(ConfigError::IsrResource { isr: 1 })
+    );
+    assert_eq!(
+        isrs([cat2("a", 1), IsrConfig::cat1("b", 9).uses(0b1)]),
+        Some(ConfigError::Cat1Resource { isr: 1 })
+    );
+    assert_eq!(
+        isrs([IsrConfig::cat1("a", 4), cat2("b", 4)]),
+        Some(ConfigError::Cat1BelowCat2 { cat1: 0, cat2: 1 })
+    );
+    assert_eq!(isrs([IsrConfig::cat1("a", 5), cat2("b", 4)]), None);
+}
+
+#[test]
+fn start_os_activates_the_mode_autostart_and_calls_startup_hook() {
+    static MODES: OsConfig<2, 0, 1, 2, 0> = match OsConfig::new(
+        OsDescription::new(
+            [
+                TaskConfig::basic("A", 1).autostart(),
+                TaskConfig::basic("B", 2).autostart_in(0b10),
+            ],
+            [COUNTER],
+            [
+                AlarmConfig::new("a0", CounterId(0), AlarmAction::ActivateTask(TaskId(0)))
+                    .relative(5, 0),
+                AlarmConfig::new("a1", CounterId(0), AlarmAction::ActivateTask(TaskId(1)))
+                    .relative(7, 0)
+                    .in_modes(0b11),
+            ],
+            [],
+        )
+        .app_modes(2),
+    ) {
+        Ok(c) => c,
+        Err(e) => panic!("{}", e.describe()),
+    };
+    let mut os = match Os::<2, 0, 1, 2, 0, 2>::new(&MODES) {
+        Ok(os) => os,
+        Err(e) => panic!("{e:?}"),
+    };
+    assert_eq!(os.context(), Context::BeforeStart);
+    assert_eq!(os.activate_task(TaskId(0)), Err(OsError::CallLevel));
+    assert_eq!(os.start_os(AppMode(2)), Err(OsError::Value));
+    assert_eq!(os.phase(), Phase::BeforeStart);
+    assert_eq!(os.start_os(AppMode(1)), Ok(()));
+    assert_eq!(os.running(), Some(TaskId(1)));
+    assert_eq!(os.get_active_application_mode(), Ok(AppMode(1)));
+    assert!(!os.alarm_armed(AlarmId(0)));
+    assert!(os.alarm_armed(AlarmId(1)));
+    assert_eq!(os.start_os(AppMode(1)), Err(OsError::CallLevel));
+
+    // The recording kernel: StartupHook sees the mode, then the first task is dispatched.
+    let mut os = match TestOs::new(&CFG) {
+        Ok(os) => os,
+        Err(e) => panic!("{e:?}"),
+    };
+    assert_eq!(os.start_os(AppMode(1)), Ok(()));
+    assert_eq!(os.hooks_mut().take(), [Seen::Startup(AppMode(1))]);
 }
 
 #[test]
 fn activate_task_errors_and_limit() {
     let mut os = os();
     assert_eq!(os.running(), None);
-    assert_eq!(os.activate_task(TaskId(5)), Err(OsError::Id));
-    assert_eq!(os.activate_task(LOW), Ok(()));
+    assert_eq!(os.context(), Context::Idle);
+    assert_eq!(
+        os.activate_task(LOW),
+        Err(OsError::CallLevel),
+        "the idle loop calls nothing"
+    );
+    assert_eq!(activate_from_isr(&mut os, TaskId(5)), Err(OsError::Id));
+    assert_eq!(activate_from_isr(&mut os, LOW), Ok(()));
     assert_eq!(os.running(), Some(LOW));
+    assert_eq!(os.context(), Context::Task);
     // Two more activations queue up; the fourth is beyond the limit and changes nothing.
     assert_eq!(os.activate_task(LOW), Ok(()));
     assert_eq!(os.activate_task(LOW), Ok(()));
     let before = os;
     assert_eq!(os.activate_task(LOW), Err(OsError::Limit));
-    assert_eq!(os, before);
+    assert!(spec::same_kernel_state(&os, &before));
     assert_eq!(os.activation_count(LOW), 3);
     // None is lost: the task runs three times.
     for remaining in (0..3).rev() {
@@ -176,36 +380,30 @@ fn activate_task_errors_and_limit() {
         check(&os);
     }
     assert_eq!(os.running(), None);
-    assert_eq!(os.get_task_state(LOW), Ok(TaskState::Suspended));
+    assert_eq!(os.task_state(LOW), Some(TaskState::Suspended));
 }
 
 #[test]
 fn preemption_and_fifo_within_a_priority() {
     let mut os = os();
-    assert_eq!(os.activate_task(LOW), Ok(()));
+    assert_eq!(activate_from_isr(&mut os, LOW), Ok(()));
     // Equal priority does not preempt, and queues behind in activation order.
     assert_eq!(os.activate_task(LOW2), Ok(()));
     assert_eq!(os.activate_task(LOW), Ok(()));
     assert_eq!(os.activate_task(LOW2), Ok(()));
     assert_eq!(os.running(), Some(LOW));
-    assert_eq!(
-        os.ready_at(1).collect::<std::vec::Vec<_>>(),
-        [LOW2, LOW, LOW2]
-    );
+    assert_eq!(os.ready_at(1).collect::<Vec<_>>(), [LOW2, LOW, LOW2]);
     // A higher priority preempts; the preempted task becomes the oldest of its priority.
     assert_eq!(os.activate_task(HIGH), Ok(()));
     assert_eq!(os.running(), Some(HIGH));
     assert_eq!(os.get_task_state(LOW), Ok(TaskState::Ready));
-    assert_eq!(
-        os.ready_at(1).collect::<std::vec::Vec<_>>(),
-        [LOW, LOW2, LOW, LOW2]
-    );
+    assert_eq!(os.ready_at(1).collect::<Vec<_>>(), [LOW, LOW2, LOW, LOW2]);
     check(&os);
     assert_eq!(os.terminate_task(), Ok(()));
     // The preempted instance resumes (it was started), then the queue in FIFO order.
     assert_eq!(os.running(), Some(LOW));
     assert!(os.is_started(LOW));
-    let mut order = std::vec::Vec::new();
+    let mut order = Vec::new();
     while let Some(t) = os.running() {
         order.push(t);
         assert_eq!(os.terminate_task(), Ok(()));
@@ -218,9 +416,7 @@ fn preemption_and_fifo_within_a_priority() {
 fn terminate_and_chain_errors() {
     let mut os = os();
     assert_eq!(os.terminate_task(), Err(OsError::CallLevel));
-    assert_eq!(os.chain_task(LOW), Err(OsError::CallLevel));
-    assert_eq!(os.schedule(), Err(OsError::CallLevel));
-    assert_eq!(os.activate_task(LOW), Ok(()));
+    assert_eq!(activate_from_isr(&mut os, LOW), Ok(()));
     assert_eq!(os.get_resource(R0), Ok(()));
     assert_eq!(os.terminate_task(), Err(OsError::Resource));
     assert_eq!(os.chain_task(HIGH), Err(OsError::Resource));
@@ -228,9 +424,14 @@ fn terminate_and_chain_errors() {
     assert_eq!(os.release_resource(R0), Ok(()));
     assert_eq!(os.chain_task(TaskId(9)), Err(OsError::Id));
     // At interrupt level.
-    assert_eq!(os.enter_isr(), Ok(()));
-    assert_eq!(os.terminate_task(), Err(OsError::CallLevel));
-    assert_eq!(os.exit_isr(), Ok(()));
+    assert_eq!(
+        in_isr(&mut os, TICK, |os| os.terminate_task()),
+        Err(OsError::CallLevel)
+    );
+    assert_eq!(
+        in_isr(&mut os, TICK, |os| os.schedule()),
+        Err(OsError::CallLevel)
+    );
     assert_eq!(os.exit_isr(), Err(OsError::CallLevel));
     // Chain to a task at its limit: E_OS_LIMIT and the caller keeps running.
     assert_eq!(os.activate_task(LOW2), Ok(()));
@@ -240,7 +441,7 @@ fn terminate_and_chain_errors() {
     // Chain to itself: the task is re-queued as the newest of its priority.
     assert_eq!(os.chain_task(LOW), Ok(()));
     assert_eq!(os.running(), Some(LOW2));
-    assert_eq!(os.ready_at(1).collect::<std::vec::Vec<_>>(), [LOW2, LOW]);
+    assert_eq!(os.ready_at(1).collect::<Vec<_>>(), [LOW2, LOW]);
     assert_eq!(os.activation_count(LOW), 1);
     check(&os);
     // Chain to a higher task.
@@ -253,7 +454,7 @@ fn terminate_and_chain_errors() {
 #[test]
 fn non_preemptive_task_yields_only_at_schedule() {
     let mut os = os();
-    assert_eq!(os.activate_task(NP), Ok(()));
+    assert_eq!(activate_from_isr(&mut os, NP), Ok(()));
     assert_eq!(os.running_priority(), Some(5));
     assert_eq!(os.activate_task(HIGH), Ok(()));
     assert_eq!(
@@ -286,7 +487,7 @@ fn non_preemptive_task_yields_only_at_schedule() {
 #[test]
 fn resources_ceiling_and_lifo() {
     let mut os = os();
-    assert_eq!(os.activate_task(LOW), Ok(()));
+    assert_eq!(activate_from_isr(&mut os, LOW), Ok(()));
     assert_eq!(os.get_resource(ResourceId(2)), Err(OsError::Id));
     assert_eq!(os.get_resource(R0), Ok(()));
     assert_eq!(os.running_priority(), Some(3));
@@ -310,7 +511,7 @@ fn resources_ceiling_and_lifo() {
     assert_eq!(os.release_resource(R0), Err(OsError::NoFunc), "not LIFO");
     assert_eq!(os.release_resource(R1), Err(OsError::NoFunc), "not held");
     assert_eq!(
-        os.held_resources(LOW).collect::<std::vec::Vec<_>>(),
+        os.held_resources(LOW).collect::<Vec<_>>(),
         [RES_SCHEDULER, R0]
     );
     assert_eq!(os.release_resource(RES_SCHEDULER), Ok(()));
@@ -321,30 +522,144 @@ fn resources_ceiling_and_lifo() {
     assert_eq!(os.running(), Some(MID));
     assert_eq!(os.ready_at(1).next(), Some(LOW));
     check(&os);
-    // Interrupt level never takes task resources.
-    assert_eq!(os.enter_isr(), Ok(()));
-    assert_eq!(os.get_resource(R1), Err(OsError::Access));
+    // An ISR may not take RES_SCHEDULER nor a resource whose ceiling lies below it.
+    assert_eq!(
+        in_isr(&mut os, CAN, |os| os.get_resource(RES_SCHEDULER)),
+        Err(OsError::Access)
+    );
+    assert_eq!(
+        in_isr(&mut os, CAN, |os| os.get_resource(R0)),
+        Err(OsError::Access)
+    );
+}
+
+#[test]
+fn a_resource_shared_with_an_isr_masks_it() {
+    let mut os = os();
+    assert_eq!(activate_from_isr(&mut os, MID), Ok(()));
+    assert_eq!(os.interrupt_mask(), InterruptMask::None);
+    assert_eq!(os.get_resource(R1), Ok(()));
+    // Mid now runs at the Can ISR's level: Can (3) and Tick (1) are held, Fast (6) is not.
+    assert_eq!(os.running_priority(), Some(ISR_LEVEL_BASE + 3));
+    assert_eq!(os.interrupt_mask(), InterruptMask::UpTo(3));
+    assert_eq!(os.enter_isr(CAN), Err(OsError::Access));
+    assert_eq!(os.enter_isr(TICK), Err(OsError::Access));
+    assert_eq!(in_isr(&mut os, FAST, |_| Ok(())), Ok(()));
+    assert_eq!(os.release_resource(R1), Ok(()));
+    assert_eq!(os.interrupt_mask(), InterruptMask::None);
+    // The ISR takes it too, raising its own level (nothing above 3 shares it, so the mask
+    // stays at 3) and releases it.
+    assert_eq!(os.enter_isr(CAN), Ok(()));
+    assert_eq!(os.get_resource(R1), Ok(()));
+    assert_eq!(os.isr_held_resources(CAN).collect::<Vec<_>>(), [R1]);
+    assert_eq!(os.resource_isr_owner(R1), Some(CAN));
+    assert_eq!(os.interrupt_mask(), InterruptMask::UpTo(3));
+    check(&os);
+    assert_eq!(os.release_resource(R1), Ok(()));
     assert_eq!(os.exit_isr(), Ok(()));
+    check(&os);
+}
+
+#[test]
+fn isrs_nest_by_priority_and_reschedule_when_the_last_returns() {
+    let mut os = os();
+    assert_eq!(activate_from_isr(&mut os, LOW), Ok(()));
+    assert_eq!(os.enter_isr(TICK), Ok(()));
+    assert_eq!(os.context(), Context::Isr2);
+    // Equal or lower priority stays pending; higher nests.
+    assert_eq!(os.enter_isr(TICK), Err(OsError::Access));
+    assert_eq!(os.enter_isr(CAN), Ok(()));
+    assert_eq!(os.enter_isr(TICK), Err(OsError::Access));
+    assert_eq!(os.activate_task(HIGH), Ok(()));
+    assert_eq!(os.get_task_id(), Ok(Some(LOW)), "GetTaskID in an ISR");
+    assert_eq!(os.get_isr_id(), Ok(Some(CAN)));
+    assert_eq!(os.enter_isr(FAST), Ok(()));
+    assert_eq!(os.context(), Context::Isr1);
+    assert_eq!(os.get_isr_id(), Err(OsError::CallLevel));
+    assert_eq!(os.activate_task(HIGH), Err(OsError::CallLevel));
+    assert_eq!(os.exit_isr(), Ok(()));
+    check(&os);
+    assert_eq!(os.exit_isr(), Ok(()));
+    assert_eq!(os.running(), Some(LOW), "an ISR is still active");
+    check(&os);
+    assert_eq!(os.exit_isr(), Ok(()));
+    assert_eq!(os.running(), Some(HIGH));
+    assert_eq!(os.get_isr_id(), Ok(None));
+    check(&os);
+    // Bad port calls.
+    assert_eq!(os.enter_isr(IsrId(3)), Err(OsError::Id));
+}
+
+#[test]
+fn interrupt_locks_nest_mask_and_refuse_other_services() {
+    let mut os = os();
+    assert_eq!(activate_from_isr(&mut os, LOW), Ok(()));
+    // Unpaired enable/resume: ignored.
+    assert_eq!(os.enable_all_interrupts(), Err(OsError::NoFunc));
+    assert_eq!(os.resume_all_interrupts(), Err(OsError::NoFunc));
+    assert_eq!(os.resume_os_interrupts(), Err(OsError::NoFunc));
+    check(&os);
+    // SuspendOS holds the category-2 ISRs, not the category-1 one.
+    assert_eq!(os.suspend_os_interrupts(), Ok(()));
+    assert_eq!(os.interrupt_mask(), InterruptMask::UpTo(3));
+    assert_eq!(os.enter_isr(TICK), Err(OsError::Access));
+    assert_eq!(in_isr(&mut os, FAST, |_| Ok(())), Ok(()));
+    // Every other service is refused with E_OS_DISABLEDINT and changes nothing.
+    let before = os;
+    assert_eq!(os.activate_task(HIGH), Err(OsError::DisabledInt));
+    assert_eq!(os.terminate_task(), Err(OsError::DisabledInt));
+    assert_eq!(os.get_task_id(), Err(OsError::DisabledInt));
+    assert!(spec::same_kernel_state(&os, &before));
+    // Nesting across kinds; all interrupts held while SuspendAll is in force.
+    assert_eq!(os.suspend_all_interrupts(), Ok(()));
+    assert_eq!(os.suspend_all_interrupts(), Ok(()));
+    assert_eq!(os.interrupt_mask(), InterruptMask::All);
+    assert_eq!(os.enter_isr(FAST), Err(OsError::Access));
+    assert_eq!(os.resume_all_interrupts(), Ok(()));
+    assert_eq!(os.interrupt_mask(), InterruptMask::All, "one level left");
+    assert_eq!(os.resume_all_interrupts(), Ok(()));
+    assert_eq!(os.resume_os_interrupts(), Ok(()));
+    assert_eq!(os.interrupt_mask(), InterruptMask::None);
+    assert_eq!(os.activate_task(HIGH), Ok(()));
+    assert_eq!(os.running(), Some(HIGH));
+    // DisableAll does not nest.
+    assert_eq!(os.disable_all_interrupts(), Ok(()));
+    assert_eq!(os.disable_all_interrupts(), Err(OsError::NoFunc));
+    assert_eq!(os.enable_all_interrupts(), Ok(()));
+    assert_eq!(os.locks(), Locks::default());
+    check(&os);
 }
 
 #[test]
 fn events_wait_and_release() {
     let mut os = os();
+    assert_eq!(
+        activate_from_isr(&mut os, HIGH),
+        Ok(()),
+        "a task to call from"
+    );
     assert_eq!(os.set_event(MID, 1), Err(OsError::State), "suspended");
     assert_eq!(os.set_event(LOW, 1), Err(OsError::Access), "basic task");
     assert_eq!(os.get_event(LOW), Err(OsError::Access));
     assert_eq!(os.get_event(MID), Err(OsError::State));
     assert_eq!(os.set_event(TaskId(7), 1), Err(OsError::Id));
-    assert_eq!(os.clear_event(1), Err(OsError::CallLevel));
-    assert_eq!(os.wait_event(1), Err(OsError::CallLevel));
-    assert_eq!(os.activate_task(LOW), Ok(()));
     assert_eq!(os.wait_event(1), Err(OsError::Access));
     assert_eq!(os.clear_event(1), Err(OsError::Access));
+    assert_eq!(
+        in_isr(&mut os, TICK, |os| os.clear_event(1)),
+        Err(OsError::CallLevel)
+    );
+    assert_eq!(
+        in_isr(&mut os, TICK, |os| os.wait_event(1)),
+        Err(OsError::CallLevel)
+    );
+    assert_eq!(os.terminate_task(), Ok(()));
+    assert_eq!(activate_from_isr(&mut os, LOW), Ok(()));
     assert_eq!(os.activate_task(MID), Ok(()));
     assert_eq!(os.running(), Some(MID));
-    assert_eq!(os.get_resource(R1), Ok(()));
+    assert_eq!(os.get_resource(R0), Ok(()));
     assert_eq!(os.wait_event(0b10), Err(OsError::Resource));
-    assert_eq!(os.release_resource(R1), Ok(()));
+    assert_eq!(os.release_resource(R0), Ok(()));
     // An event already set: WaitEvent returns at once.
     assert_eq!(os.set_event(MID, 0b100), Ok(()));
     assert_eq!(os.wait_event(0b110), Ok(()));
@@ -359,7 +674,7 @@ fn events_wait_and_release() {
     assert_eq!(os.set_event(MID, 0b1), Ok(()));
     assert_eq!(os.get_task_state(MID), Ok(TaskState::Waiting));
     check(&os);
-    assert_eq!(os.set_event(MID, 0b10), Ok(()));
+    assert_eq!(in_isr(&mut os, TICK, |os| os.set_event(MID, 0b10)), Ok(()));
     assert_eq!(os.running(), Some(MID));
     assert_eq!(os.get_event(MID), Ok(0b11));
     check(&os);
@@ -370,26 +685,272 @@ fn events_wait_and_release() {
 }
 
 #[test]
-fn isr_defers_rescheduling() {
+fn hooks_are_called_where_the_standard_says() {
     let mut os = os();
-    assert_eq!(os.activate_task(LOW), Ok(()));
-    assert_eq!(os.enter_isr(), Ok(()));
-    assert_eq!(os.enter_isr(), Ok(()));
+    assert_eq!(activate_from_isr(&mut os, LOW), Ok(()));
+    assert_eq!(os.hooks_mut().take(), [Seen::Pre(Some(LOW))]);
+    // Preemption: PostTaskHook sees the old task, PreTaskHook the new one.
     assert_eq!(os.activate_task(HIGH), Ok(()));
-    assert_eq!(os.get_task_id(), Some(LOW));
-    assert_eq!(os.exit_isr(), Ok(()));
-    assert_eq!(os.running(), Some(LOW), "nested ISR still active");
-    assert_eq!(os.exit_isr(), Ok(()));
-    assert_eq!(os.running(), Some(HIGH));
+    assert_eq!(os.terminate_task(), Ok(()));
+    assert_eq!(
+        os.hooks_mut().take(),
+        [
+            Seen::Post(Some(LOW)),
+            Seen::Pre(Some(HIGH)),
+            Seen::Post(Some(HIGH)),
+            Seen::Pre(Some(LOW)),
+        ]
+    );
+    // An ISR that changes nothing switches nothing: no hooks.
+    assert_eq!(in_isr(&mut os, TICK, |_| Ok(())), Ok(()));
+    assert_eq!(os.hooks_mut().take(), []);
+    // ErrorHook: the service and its parameters, and GetISRID inside an ISR.
+    assert_eq!(os.activate_task(TaskId(9)), Err(OsError::Id));
+    assert_eq!(
+        in_isr(&mut os, CAN, |os| os.get_resource(R0)),
+        Err(OsError::Access)
+    );
+    assert_eq!(
+        os.hooks_mut().take(),
+        [
+            Seen::Error(OsError::Id, ServiceCall::ActivateTask(TaskId(9)), None),
+            Seen::Error(OsError::Access, ServiceCall::GetResource(R0), Some(CAN)),
+        ]
+    );
+    assert_eq!(os.error_service_id(), None, "only inside ErrorHook");
+    // Never recursively: the failing call inside ErrorHook is not reported again.
+    os.hooks_mut().fail_inside_error_hook = true;
+    assert_eq!(os.set_rel_alarm(AlarmId(7), 1, 0), Err(OsError::Id));
+    let seen = os.hooks_mut().take();
+    assert_eq!(seen.len(), 1, "{seen:?}");
+    os.hooks_mut().fail_inside_error_hook = false;
+    // Alarm actions: a failing one goes to ErrorHook with its own service; a callback runs
+    // at its own call level, where ActivateTask is refused.
+    assert_eq!(os.set_rel_alarm(AlarmId(1), 1, 0), Ok(()));
+    assert_eq!(os.set_rel_alarm(AlarmId(2), 1, 0), Ok(()));
+    assert_eq!(os.increment_counter(CounterId(0)), Ok(()));
+    assert_eq!(
+        os.hooks_mut().take(),
+        [
+            Seen::Error(OsError::State, ServiceCall::SetEvent(MID, 1), None),
+            // The refused ActivateTask inside the callback is reported too.
+            Seen::Error(OsError::CallLevel, ServiceCall::ActivateTask(LOW), None),
+            Seen::Callback(7, Err(OsError::CallLevel)),
+        ]
+    );
     check(&os);
+}
+
+#[test]
+fn shutdown_calls_the_hook_and_stops_everything() {
+    let mut os = os();
+    assert_eq!(activate_from_isr(&mut os, LOW), Ok(()));
+    os.hooks_mut().take();
+    assert_eq!(os.set_rel_alarm(AlarmId(0), 5, 5), Ok(()));
+    assert_eq!(os.suspend_all_interrupts(), Ok(()));
+    assert_eq!(os.shutdown_os(E_OK), Err(OsError::DisabledInt));
+    assert_eq!(os.resume_all_interrupts(), Ok(()));
+    assert_eq!(
+        in_isr(&mut os, FAST, |os| os.shutdown_os(E_OK)),
+        Err(OsError::CallLevel)
+    );
+    assert_eq!(os.shutdown_os(42), Ok(()));
+    // No PostTaskHook at ShutdownOS (AUTOSAR SWS_Os_00071).
+    assert_eq!(os.hooks_mut().take(), [Seen::Shutdown(42)]);
+    assert!(os.is_shut_down());
+    assert_eq!(os.running(), None);
+    assert_eq!(os.interrupt_mask(), InterruptMask::All);
+    assert_eq!(os.enter_isr(TICK), Err(OsError::State));
+    assert_eq!(os.activate_task(LOW), Err(OsError::CallLevel));
+    assert!(!os.alarm_armed(AlarmId(0)));
+    check(&os);
+
+    // From ErrorHook, inside an ISR: the ISR's return finds nothing left to do.
+    let mut os = os_after(|os| os.hooks_mut().shutdown_in_error_hook = true);
+    assert_eq!(os.enter_isr(TICK), Ok(()));
+    assert_eq!(os.activate_task(TaskId(9)), Err(OsError::Id));
+    assert!(os.is_shut_down());
+    assert_eq!(os.exit_isr(), Err(OsError::State));
+    assert_eq!(
+        os.hooks_mut().take().last(),
+        Some(&Seen::Shutdown(OsError::Id.status()))
+    );
+    check(&os);
+}
+
+fn os_after(setup: impl FnOnce(&mut TestOs)) -> TestOs {
+    let mut os = os();
+    setup(&mut os);
+    os
+}
+
+#[test]
+fn missing_ends_are_cleaned_up_and_reported() {
+    let mut os = os();
+    assert_eq!(activate_from_isr(&mut os, LOW), Ok(()));
+    assert_eq!(os.activate_task(LOW), Ok(()));
+    assert_eq!(os.get_resource(R0), Ok(()));
+    assert_eq!(os.suspend_os_interrupts(), Ok(()));
+    os.hooks_mut().take();
+    // The task's body returns holding a resource and a lock.
+    assert_eq!(os.task_returned(), Ok(()));
+    assert_eq!(
+        os.hooks_mut().take(),
+        [
+            Seen::Error(OsError::MissingEnd, ServiceCall::TaskMissingEnd(LOW), None),
+            Seen::Post(Some(LOW)),
+            Seen::Pre(Some(LOW)),
+        ]
+    );
+    assert_eq!(os.locks(), Locks::default());
+    assert_eq!(os.resource_owner(R0), None);
+    assert_eq!(os.activation_count(LOW), 1);
+    check(&os);
+    // A category-2 ISR returns holding a resource and a lock.
+    assert_eq!(os.enter_isr(CAN), Ok(()));
+    assert_eq!(os.get_resource(R1), Ok(()));
+    assert_eq!(os.suspend_all_interrupts(), Ok(()));
+    assert_eq!(os.exit_isr(), Ok(()));
+    assert_eq!(
+        os.hooks_mut().take(),
+        [
+            Seen::Error(
+                OsError::DisabledInt,
+                ServiceCall::IsrMissingEnd(CAN),
+                Some(CAN)
+            ),
+            Seen::Error(
+                OsError::Resource,
+                ServiceCall::IsrMissingEnd(CAN),
+                Some(CAN)
+            ),
+        ]
+    );
+    assert_eq!(os.resource_isr_owner(R1), None);
+    assert_eq!(os.interrupt_mask(), InterruptMask::None);
+    check(&os);
+}
+
+#[test]
+fn dialects_differ_where_the_standards_do() {
+    fn config(dialect: Dialect) -> OsConfig<1, 0, 1, 1, 0> {
+        match OsConfig::new(
+            OsDescription::new(
+                [TaskConfig::basic("T", 1).autostart()],
+                [COUNTER],
+                [AlarmConfig::new(
+                    "a",
+                    CounterId(0),
+                    AlarmAction::ActivateTask(TaskId(0)),
+                )],
+                [],
+            )
+            .dialect(dialect),
+        ) {
+            Ok(c) => c,
+            Err(e) => panic!("{}", e.describe()),
+        }
+    }
+    static OSEK: std::sync::LazyLock<OsConfig<1, 0, 1, 1, 0>> =
+        std::sync::LazyLock::new(|| config(Dialect::Osek));
+    static AUTOSAR: std::sync::LazyLock<OsConfig<1, 0, 1, 1, 0>> =
+        std::sync::LazyLock::new(|| config(Dialect::Autosar));
+    let start = |cfg: &'static OsConfig<1, 0, 1, 1, 0>| {
+        let Ok(os) = Os::<1, 0, 1, 1, 0, 1>::new(cfg) else {
+            panic!("refused");
+        };
+        os
+    };
+    // Interrupt services before StartOS: AUTOSAR only (SWS_Os_00299).
+    let mut osek = start(&OSEK);
+    let mut autosar = start(&AUTOSAR);
+    assert_eq!(osek.suspend_all_interrupts(), Err(OsError::CallLevel));
+    assert_eq!(autosar.suspend_all_interrupts(), Ok(()));
+    assert_eq!(autosar.resume_all_interrupts(), Ok(()));
+    assert_eq!(autosar.suspend_os_interrupts(), Err(OsError::CallLevel));
+    assert_eq!(osek.start_os(OSDEFAULTAPPMODE), Ok(()));
+    assert_eq!(autosar.start_os(OSDEFAULTAPPMODE), Ok(()));
+    // SetRelAlarm with increment 0.
+    assert_eq!(autosar.set_rel_alarm(AlarmId(0), 0, 0), Err(OsError::Value));
+    assert_eq!(osek.set_rel_alarm(AlarmId(0), 0, 0), Ok(()));
+    assert_eq!(
+        osek.alarm_remaining(AlarmId(0)),
+        Some(100),
+        "a full revolution"
+    );
+    // The call-level tables differ only in the interrupt services.
+    for context in Context::ALL {
+        let diff = callevel::allowed(Dialect::Osek, context)
+            ^ callevel::allowed(Dialect::Autosar, context);
+        assert_eq!(diff & !callevel::INTERRUPT_SERVICES, 0, "{context:?}");
+    }
+}
+
+#[test]
+fn standard_status_leaves_out_only_harmless_checks() {
+    fn config(status: Status) -> OsConfig<2, 1, 1, 1, 0> {
+        match OsConfig::new(
+            OsDescription::new(
+                [
+                    TaskConfig::basic("B", 1).uses(0b1),
+                    TaskConfig::basic("H", 4).autostart(),
+                ],
+                [COUNTER],
+                [AlarmConfig::new(
+                    "a",
+                    CounterId(0),
+                    AlarmAction::ActivateTask(TaskId(0)),
+                )],
+                [],
+            )
+            .status(status),
+        ) {
+            Ok(c) => c,
+            Err(e) => panic!("{}", e.describe()),
+        }
+    }
+    static STANDARD: std::sync::LazyLock<OsConfig<2, 1, 1, 1, 0>> =
+        std::sync::LazyLock::new(|| config(Status::Standard));
+    static EXTENDED: std::sync::LazyLock<OsConfig<2, 1, 1, 1, 0>> =
+        std::sync::LazyLock::new(|| config(Status::Extended));
+    let start = |cfg: &'static OsConfig<2, 1, 1, 1, 0>| {
+        let Ok(mut os) = Os::<2, 1, 1, 1, 0, 2>::new(cfg) else {
+            panic!("refused");
+        };
+        assert_eq!(os.start_os(OSDEFAULTAPPMODE), Ok(()));
+        os
+    };
+    let (mut std_os, mut ext_os) = (start(&STANDARD), start(&EXTENDED));
+    // H (4) above R0's ceiling (1); an increment above the counter's range; events of a
+    // basic task: refused in extended status only.
+    assert_eq!(ext_os.get_resource(ResourceId(0)), Err(OsError::Access));
+    assert_eq!(std_os.get_resource(ResourceId(0)), Ok(()));
+    assert_eq!(std_os.release_resource(ResourceId(0)), Ok(()));
+    assert_eq!(
+        ext_os.set_rel_alarm(AlarmId(0), 500, 0),
+        Err(OsError::Value)
+    );
+    assert_eq!(std_os.set_rel_alarm(AlarmId(0), 500, 0), Ok(()));
+    assert_eq!(ext_os.get_event(TaskId(1)), Err(OsError::Access));
+    assert_eq!(std_os.get_event(TaskId(1)), Ok(0));
+    // Checks that keep the kernel consistent stay (extended status finds the caller above
+    // the ceiling first).
+    assert_eq!(std_os.release_resource(ResourceId(0)), Err(OsError::NoFunc));
+    assert_eq!(ext_os.release_resource(ResourceId(0)), Err(OsError::Access));
+    for os in [&mut std_os, &mut ext_os] {
+        assert_eq!(os.activate_task(TaskId(2)), Err(OsError::Id));
+        assert_eq!(os.wait_event(1), Err(OsError::Access));
+        assert!(spec::kernel_invariants(os));
+    }
 }
 
 #[test]
 fn alarms_relative_absolute_cyclic() {
     let mut os = os();
-    let (act_high, ev_mid, cb) = (AlarmId(0), AlarmId(1), AlarmId(2));
+    assert_eq!(activate_from_isr(&mut os, LOW), Ok(()));
+    os.hooks_mut().take();
+    let (act_high, cb) = (AlarmId(0), AlarmId(2));
     assert_eq!(os.set_rel_alarm(AlarmId(3), 1, 0), Err(OsError::Id));
-    assert_eq!(os.set_rel_alarm(act_high, 0, 0), Err(OsError::Value));
     assert_eq!(os.set_rel_alarm(act_high, 100, 0), Err(OsError::Value));
     assert_eq!(os.set_rel_alarm(act_high, 5, 100), Err(OsError::Value));
     assert_eq!(os.get_alarm(act_high), Err(OsError::NoFunc));
@@ -413,33 +974,32 @@ fn alarms_relative_absolute_cyclic() {
     assert_eq!(os.cancel_alarm(cb), Ok(()));
     assert_eq!(os.set_abs_alarm(cb, 3, 0), Ok(()));
     assert_eq!(os.get_alarm(cb), Ok(3));
-    let mut callbacks = std::vec::Vec::new();
-    let mut high_runs = std::vec::Vec::new();
+    os.hooks_mut().take();
+    let mut high_runs = Vec::new();
     for tick in 1..=30u32 {
-        let report = match os.increment_counter(CounterId(0)) {
-            Ok(r) => r,
-            Err(e) => panic!("{e:?}"),
-        };
-        if report.callbacks != 0 {
-            callbacks.push((tick, report.callbacks));
-        }
+        assert_eq!(
+            in_isr(&mut os, TICK, |os| os.increment_counter(CounterId(0))),
+            Ok(())
+        );
         if os.running() == Some(HIGH) {
             high_runs.push(tick);
             assert_eq!(os.terminate_task(), Ok(()));
         }
         check(&os);
     }
-    assert_eq!(callbacks, [(3, 1 << 7)]);
     assert_eq!(high_runs, [5, 15, 25]);
+    let callbacks: Vec<_> = os
+        .hooks_mut()
+        .take()
+        .into_iter()
+        .filter(|s| matches!(s, Seen::Callback(..)))
+        .collect();
+    assert_eq!(callbacks, [Seen::Callback(7, Err(OsError::CallLevel))]);
     assert_eq!(os.counter_value(CounterId(0)), Some(30));
+    assert_eq!(os.get_counter_value(CounterId(0)), Ok(30));
+    assert_eq!(os.get_elapsed_value(CounterId(0), 95), Ok((30, 35)));
+    assert_eq!(os.get_elapsed_value(CounterId(0), 100), Err(OsError::Value));
     assert_eq!(os.get_alarm(act_high), Ok(5));
-    // Event alarm on a suspended task: the failure is counted, not lost silently.
-    assert_eq!(os.set_rel_alarm(ev_mid, 1, 0), Ok(()));
-    let report = os.increment_counter(CounterId(0));
-    assert_eq!(
-        report.map(|r| (r.failed_actions, r.last_failure)),
-        Ok((1, Some(OsError::State)))
-    );
     assert_eq!(os.increment_counter(CounterId(1)), Err(OsError::Id));
     assert_eq!(os.cancel_alarm(act_high), Ok(()));
     assert!(!os.alarm_armed(act_high));
@@ -448,26 +1008,59 @@ fn alarms_relative_absolute_cyclic() {
 #[test]
 fn counter_wraps_and_simultaneous_alarms_fire_in_arming_order() {
     let mut os = os();
+    assert_eq!(activate_from_isr(&mut os, LOW), Ok(()));
     for _ in 0..98 {
-        assert!(os.increment_counter(CounterId(0)).is_ok());
+        assert_eq!(os.increment_counter(CounterId(0)), Ok(()));
     }
     assert_eq!(os.counter_value(CounterId(0)), Some(98));
     assert_eq!(os.set_abs_alarm(AlarmId(2), 1, 0), Ok(()));
     assert_eq!(os.set_rel_alarm(AlarmId(0), 3, 0), Ok(()));
     assert_eq!(os.get_alarm(AlarmId(2)), Ok(3));
-    assert!(os.increment_counter(CounterId(0)).is_ok());
-    assert!(os.increment_counter(CounterId(0)).is_ok());
+    assert_eq!(os.increment_counter(CounterId(0)), Ok(()));
+    assert_eq!(os.increment_counter(CounterId(0)), Ok(()));
     assert_eq!(os.counter_value(CounterId(0)), Some(0));
-    assert_eq!(os.running(), None);
-    let report = os.increment_counter(CounterId(0));
-    assert_eq!(report.map(|r| r.callbacks), Ok(1 << 7));
+    assert_eq!(os.running(), Some(LOW));
+    os.hooks_mut().take();
+    assert_eq!(os.increment_counter(CounterId(0)), Ok(()));
+    // The callback (armed first) runs before High is activated and dispatched.
+    assert_eq!(
+        os.hooks_mut().take(),
+        [
+            Seen::Error(OsError::CallLevel, ServiceCall::ActivateTask(LOW), None),
+            Seen::Callback(7, Err(OsError::CallLevel)),
+            Seen::Post(Some(LOW)),
+            Seen::Pre(Some(HIGH)),
+        ]
+    );
     assert_eq!(os.running(), Some(HIGH));
 }
 
-/// One call into the kernel, generated by bolero, mapped onto [`spec::Service`] with ids
-/// slightly beyond the configuration so that `E_OS_ID` paths are taken too.
+#[test]
+fn virtual_interrupt_controller_takes_the_highest_admitted_request() {
+    let mut os = os();
+    let mut irq = VirtualInterrupts::new();
+    assert!(irq.raise(TICK));
+    assert!(!irq.raise(TICK), "one flag per request");
+    assert!(irq.raise(CAN));
+    assert!(irq.raise(FAST));
+    assert!(!irq.raise(IsrId(64)));
+    irq.apply_mask(InterruptMask::All);
+    assert_eq!(irq.take_next(CFG.isrs()), None);
+    irq.apply_mask(os.interrupt_mask());
+    assert_eq!(irq.take_next(CFG.isrs()), Some(FAST));
+    irq.apply_mask(InterruptMask::UpTo(1));
+    assert_eq!(irq.take_next(CFG.isrs()), Some(CAN));
+    assert_eq!(irq.take_next(CFG.isrs()), None, "Tick is masked");
+    assert!(irq.is_pending(TICK));
+    assert_eq!(os.enter_isr(TICK), Ok(()));
+    irq.apply_mask(os.interrupt_mask());
+    assert_eq!(irq.mask(), InterruptMask::UpTo(1));
+}
+
+/// One step, generated by bolero, mapped onto [`spec::Service`] with ids slightly beyond
+/// the configuration so that `E_OS_ID` paths are taken too.
 #[derive(Debug, Clone, Copy, bolero::TypeGenerator)]
-enum Call {
+enum Step {
     Activate(u8),
     Terminate,
     Chain(u8),
@@ -481,14 +1074,18 @@ enum Call {
     SetAbs(u8, u8, u8),
     Cancel(u8),
     Tick,
-    EnterIsr,
+    Lock(u8),
+    EnterIsr(u8),
     ExitIsr,
-    IsrTick,
-    IsrActivate(u8),
+    IsrTick(u8),
+    IsrActivate(u8, u8),
+    TaskReturn,
+    Query(u8),
 }
 
-fn service(call: Call) -> spec::Service {
+fn step(s: Step) -> spec::Service {
     use spec::Service as S;
+    use ServiceCall as Call;
     let res = |r: u8| {
         if r % 3 == 2 {
             RES_SCHEDULER
@@ -496,54 +1093,72 @@ fn service(call: Call) -> spec::Service {
             ResourceId(r % 4)
         }
     };
-    match call {
-        Call::Activate(t) => S::ActivateTask(TaskId(t % 6)),
-        Call::Terminate => S::TerminateTask,
-        Call::Chain(t) => S::ChainTask(TaskId(t % 6)),
-        Call::Schedule => S::Schedule,
-        Call::SetEvent(t, m) => S::SetEvent(TaskId(t % 6), EventMask::from(m % 4)),
-        Call::ClearEvent(m) => S::ClearEvent(EventMask::from(m % 4)),
-        Call::WaitEvent(m) => S::WaitEvent(EventMask::from(m % 4)),
-        Call::GetResource(r) => S::GetResource(res(r)),
-        Call::ReleaseResource(r) => S::ReleaseResource(res(r)),
-        Call::SetRel(a, inc, cyc) => S::SetRelAlarm(
-            AlarmId(a % 4),
-            TickType::from(inc % 8),
-            TickType::from(cyc % 4),
-        ),
-        Call::SetAbs(a, st, cyc) => {
-            S::SetAbsAlarm(AlarmId(a % 4), TickType::from(st), TickType::from(cyc % 4))
-        }
-        Call::Cancel(a) => S::CancelAlarm(AlarmId(a % 4)),
-        Call::Tick => S::IncrementCounter(CounterId(0)),
-        Call::EnterIsr => S::EnterIsr,
-        Call::ExitIsr => S::ExitIsr,
-        Call::IsrTick => S::IsrTick(CounterId(0)),
-        Call::IsrActivate(t) => S::IsrActivateTask(TaskId(t % 6)),
+    let isr = |i: u8| IsrId(i % 4);
+    match s {
+        Step::Activate(t) => S::Call(Call::ActivateTask(TaskId(t % 6))),
+        Step::Terminate => S::Call(Call::TerminateTask),
+        Step::Chain(t) => S::Call(Call::ChainTask(TaskId(t % 6))),
+        Step::Schedule => S::Call(Call::Schedule),
+        Step::SetEvent(t, m) => S::Call(Call::SetEvent(TaskId(t % 6), EventMask::from(m % 4))),
+        Step::ClearEvent(m) => S::Call(Call::ClearEvent(EventMask::from(m % 4))),
+        Step::WaitEvent(m) => S::Call(Call::WaitEvent(EventMask::from(m % 4))),
+        Step::GetResource(r) => S::Call(Call::GetResource(res(r))),
+        Step::ReleaseResource(r) => S::Call(Call::ReleaseResource(res(r))),
+        Step::SetRel(a, inc, cyc) => S::Call(Call::SetRelAlarm {
+            alarm: AlarmId(a % 4),
+            increment: TickType::from(inc % 8),
+            cycle: TickType::from(cyc % 4),
+        }),
+        Step::SetAbs(a, st, cyc) => S::Call(Call::SetAbsAlarm {
+            alarm: AlarmId(a % 4),
+            start: TickType::from(st),
+            cycle: TickType::from(cyc % 4),
+        }),
+        Step::Cancel(a) => S::Call(Call::CancelAlarm(AlarmId(a % 4))),
+        Step::Tick => S::Call(Call::IncrementCounter(CounterId(0))),
+        Step::Lock(k) => S::Call(match k % 6 {
+            0 => Call::DisableAllInterrupts,
+            1 => Call::EnableAllInterrupts,
+            2 => Call::SuspendAllInterrupts,
+            3 => Call::ResumeAllInterrupts,
+            4 => Call::SuspendOsInterrupts,
+            _ => Call::ResumeOsInterrupts,
+        }),
+        Step::EnterIsr(i) => S::EnterIsr(isr(i)),
+        Step::ExitIsr => S::ExitIsr,
+        Step::IsrTick(i) => S::Isr(isr(i), Call::IncrementCounter(CounterId(0))),
+        Step::IsrActivate(i, t) => S::Isr(isr(i), Call::ActivateTask(TaskId(t % 6))),
+        Step::TaskReturn => S::TaskReturn,
+        Step::Query(q) => S::Call(match q % 5 {
+            0 => Call::GetTaskId,
+            1 => Call::GetTaskState(TaskId(q % 6)),
+            2 => Call::GetIsrId,
+            3 => Call::GetActiveApplicationMode,
+            _ => Call::GetAlarm(AlarmId(q % 4)),
+        }),
     }
 }
 
 #[test]
 #[cfg_attr(kani, kani::proof, kani::unwind(9))]
-fn random_service_sequences_keep_the_invariants() {
-    bolero::check!()
-        .with_type::<std::vec::Vec<Call>>()
-        .for_each(|calls| {
-            let mut os = os();
-            for call in calls.iter().take(64) {
-                if let Err(rule) = spec::call_and_check(&mut os, service(*call)) {
-                    panic!("{call:?}: {rule}\n{os:?}");
-                }
+fn random_step_sequences_keep_the_invariants() {
+    bolero::check!().with_type::<Vec<Step>>().for_each(|steps| {
+        let mut os = os();
+        for s in steps.iter().take(64) {
+            if let Err(rule) = spec::call_and_check(&mut os, step(*s)) {
+                panic!("{s:?}: {rule}\n{os:?}");
             }
-        });
+        }
+    });
 }
 
 #[test]
 fn transition_rules_can_fail() {
     let before = os();
+    let activate = spec::Service::Isr(TICK, ServiceCall::ActivateTask(LOW));
     // A successful ActivateTask that changed nothing would be a lost activation.
     assert_eq!(
-        spec::transition_rules(&before, &before, spec::Service::ActivateTask(LOW), Ok(())),
+        spec::transition_rules(&before, &before, activate, Ok(Returned::Nothing)),
         Err("an activation was lost")
     );
     let mut queued_ab = before;
@@ -552,10 +1167,44 @@ fn transition_rules_can_fail() {
         (&mut queued_ab, [HIGH, LOW, LOW2]),
         (&mut queued_ba, [HIGH, LOW2, LOW]),
     ] {
+        assert_eq!(os.enter_isr(TICK), Ok(()));
         for t in order {
             assert_eq!(os.activate_task(t), Ok(()));
         }
+        assert_eq!(os.exit_isr(), Ok(()));
     }
     assert!(spec::fifo_discipline(&queued_ab, &queued_ba).is_err());
     assert_eq!(spec::fifo_discipline(&queued_ab, &queued_ab), Ok(()));
+    // A task switch while an ISR is active.
+    let mut in_isr_a = queued_ab;
+    assert_eq!(in_isr_a.enter_isr(TICK), Ok(()));
+    let mut switched = in_isr_a;
+    assert_eq!(switched.exit_isr(), Ok(()));
+    assert_eq!(switched.terminate_task(), Ok(()));
+    assert_eq!(switched.enter_isr(TICK), Ok(()));
+    assert_eq!(
+        spec::transition_rules(
+            &in_isr_a,
+            &switched,
+            spec::Service::Call(ServiceCall::GetTaskId),
+            Ok(Returned::Nothing)
+        ),
+        Err("a task switch happened while an ISR was active")
+    );
+    // An ISR entered under a mask that held it.
+    let mut locked = queued_ab;
+    assert_eq!(locked.suspend_os_interrupts(), Ok(()));
+    let mut forced = queued_ab;
+    assert_eq!(forced.enter_isr(TICK), Ok(()));
+    assert_eq!(
+        spec::transition_rules(
+            &locked,
+            &forced,
+            spec::Service::EnterIsr(TICK),
+            Ok(Returned::Nothing)
+        ),
+        Err("an ISR was entered although the interrupt mask held it")
+    );
+    // The invariants themselves catch a broken nesting.
+    assert!(spec::isr_nesting_consistent(&forced));
 }

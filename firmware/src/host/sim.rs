@@ -6,7 +6,7 @@ use cw_bsp::host::{
 };
 use cw_core::can::Hrh;
 use cw_core::ecum::BswMRequest;
-use cw_core::os::TaskId;
+use cw_core::os::{InterruptControl, TaskId, VirtualInterrupts};
 use cw_core::sonar::{Echo, SonarConfig};
 use cw_core::warning::{Measurement, WarningLevel};
 
@@ -30,6 +30,10 @@ pub struct HostBoard {
     port_inits: u32,
     /// Task starts: (task, virtual time in us).
     task_starts: Vec<(TaskId, u64)>,
+    /// The interrupt controller: pending requests and the kernel's mask.
+    irq: VirtualInterrupts,
+    /// CAN controller events waiting for `CanIsr`.
+    can_pending: Vec<CanInterrupt>,
 }
 
 /// The HC-SR04 on the board's Gpt capture: it answers a capture only for a trigger pulse
@@ -79,6 +83,7 @@ impl Board for HostBoard {
     type In = SimInput;
     type Delay = SimDelay;
     type Capture = HostSonar;
+    type Irq = VirtualInterrupts;
 
     fn port_init(&mut self) {
         self.port_inits += 1;
@@ -111,6 +116,10 @@ impl Board for HostBoard {
 
     fn gpt_capture(&mut self) -> &mut HostSonar {
         &mut self.sonar
+    }
+
+    fn irq(&mut self) -> &mut VirtualInterrupts {
+        &mut self.irq
     }
 
     fn now_ms(&self) -> u64 {
@@ -234,6 +243,8 @@ impl Simulation {
             can,
             port_inits: 0,
             task_starts: Vec::new(),
+            irq: VirtualInterrupts::new(),
+            can_pending: Vec::new(),
         };
         let ecu = Ecu::new(SonarConfig::HC_SR04)
             .map_err(|e| SimulationError(e.describe().to_string()))?;
@@ -363,7 +374,8 @@ impl Simulation {
             .sonar
             .sensor
             .set_forced_dropout(self.scenario.in_dropout(t));
-        self.ecu.tick(&mut self.board);
+        self.board.irq.raise(config::SYSTICK_ISR);
+        self.take_interrupts();
         self.frames.extend(self.bus.take_trace());
         if t % 10 == 0 {
             self.trace.push(TraceRow {
@@ -389,15 +401,41 @@ impl Simulation {
         self.mode_requests_refused
     }
 
+    /// The CAN controller's new events raise its interrupt.
     fn deliver_can_events(&mut self) {
         for timed in self.board.can.take_events() {
-            let event = match timed.event {
+            self.board.can_pending.push(match timed.event {
                 CanEvent::TxConfirmation { pdu } => CanInterrupt::TxConfirmation(pdu),
                 CanEvent::Received { hrh, frame } => CanInterrupt::Received(hrh, frame),
                 CanEvent::BusOff => CanInterrupt::BusOff,
-            };
-            self.ecu.can_event(&mut self.board, event);
+            });
+        }
+        if !self.board.can_pending.is_empty() {
+            self.board.irq.raise(config::CAN_ISR);
+            self.take_interrupts();
         }
         self.frames.extend(self.bus.take_trace());
+    }
+
+    /// The interrupt controller takes every pending request the kernel's mask admits,
+    /// highest priority first, and runs its ISR.
+    fn take_interrupts(&mut self) {
+        while self.board.irq.pending() != 0 {
+            let mask = self.ecu.os().interrupt_mask();
+            self.board.irq.apply_mask(mask);
+            let Some(isr) = self.board.irq.take_next(config::OS.isrs()) else {
+                return;
+            };
+            match isr {
+                config::SYSTICK_ISR => self.ecu.tick(&mut self.board),
+                config::CAN_ISR => {
+                    // Drained in place, so the buffer's allocation is kept for the next one.
+                    let mut events = std::mem::take(&mut self.board.can_pending);
+                    self.ecu.can_isr(&mut self.board, events.drain(..));
+                    self.board.can_pending = events;
+                }
+                _ => {}
+            }
+        }
     }
 }

@@ -1,0 +1,440 @@
+//! Counters and alarms (OSEK OS 2.2.3 §13.6; AUTOSAR `IncrementCounter`,
+//! `GetCounterValue`, `GetElapsedValue`).
+
+use super::{AlarmBase, Os, NONE};
+use crate::os::call::ServiceCall;
+use crate::os::callevel::Context;
+use crate::os::config::{cycle_ok, AlarmAction, AlarmAutostart, Dialect};
+use crate::os::error::ServiceId;
+use crate::os::{AlarmId, CounterId, Hooks, OsConfig, OsError, TickType};
+use crate::tables::Tables;
+
+impl<
+        const T: usize,
+        const R: usize,
+        const C: usize,
+        const A: usize,
+        const I: usize,
+        const Q: usize,
+        K,
+        H,
+    > Os<T, R, C, A, I, Q, K, H>
+where
+    K: Tables<OsConfig<T, R, C, A, I>>,
+    H: Hooks<Self>,
+{
+    /// A counter's current value (inspection).
+    pub fn counter_value(&self, counter: CounterId) -> Option<TickType> {
+        self.counter_value.get(counter.0 as usize).copied()
+    }
+
+    /// Whether an alarm is armed (inspection).
+    pub fn alarm_armed(&self, alarm: AlarmId) -> bool {
+        self.alarm_active
+            .get(alarm.0 as usize)
+            .copied()
+            .unwrap_or(false)
+    }
+
+    fn alarm_index(id: AlarmId) -> Result<usize, OsError> {
+        let a = id.0 as usize;
+        if a < A {
+            Ok(a)
+        } else {
+            Err(OsError::Id)
+        }
+    }
+
+    fn counter_index(id: CounterId) -> Result<usize, OsError> {
+        let c = id.0 as usize;
+        if c < C {
+            Ok(c)
+        } else {
+            Err(OsError::Id)
+        }
+    }
+
+    fn alarm_counter(&self, a: usize) -> usize {
+        self.cfg().alarms[a].counter.0 as usize
+    }
+
+    /// Ticks from now until the counter of `c` next shows `start` (a full revolution if it
+    /// shows it now).
+    fn abs_delay(&self, c: usize, start: TickType) -> u64 {
+        let modulus = u64::from(self.cfg().counters[c].max_allowed_value) + 1;
+        let now = u64::from(self.counter_value[c]);
+        let delay = (u64::from(start) + modulus - now % modulus) % modulus;
+        if delay == 0 {
+            modulus
+        } else {
+            delay
+        }
+    }
+
+    /// Arms the autostart alarms of application mode `mode` (bit) as `StartOS` does.
+    pub(super) fn arm_autostart_alarms(&mut self, mode_bit: u32) {
+        let cfg = self.cfg();
+        for a in 0..A {
+            let alarm = &cfg.alarms[a];
+            if alarm.autostart_modes & mode_bit == 0 {
+                continue;
+            }
+            let c = alarm.counter.0 as usize;
+            match alarm.autostart {
+                AlarmAutostart::Off => {}
+                AlarmAutostart::Relative { increment, cycle } => {
+                    self.arm(a, c, u64::from(increment), cycle);
+                }
+                AlarmAutostart::Absolute { start, cycle } => {
+                    let delay = self.abs_delay(c, start);
+                    self.arm(a, c, delay, cycle);
+                }
+            }
+        }
+    }
+
+    /// Inserts alarm `a` into counter `c`'s delta list, `delay >= 1` ticks from now, after
+    /// any alarm due at the same tick.
+    fn arm(&mut self, a: usize, c: usize, delay: u64, cycle: TickType) {
+        let mut prev = NONE;
+        let mut node = self.counter_head[c];
+        let mut rest = delay;
+        while (node as usize) < A && rest >= self.alarm_delta[node as usize] {
+            rest -= self.alarm_delta[node as usize];
+            prev = node;
+            node = self.alarm_next[node as usize];
+        }
+        self.alarm_delta[a] = rest;
+        self.alarm_next[a] = node;
+        if (prev as usize) < A {
+            self.alarm_next[prev as usize] = a as u8;
+        } else {
+            self.counter_head[c] = a as u8;
+        }
+        if (node as usize) < A {
+            self.alarm_delta[node as usize] -= rest;
+        }
+        self.alarm_active[a] = true;
+        self.alarm_cycle[a] = cycle;
+    }
+
+    /// Removes armed alarm `a` from its counter's delta list.
+    fn disarm(&mut self, a: usize) {
+        let c = self.alarm_counter(a);
+        let next = self.alarm_next[a];
+        if (next as usize) < A {
+            self.alarm_delta[next as usize] += self.alarm_delta[a];
+        }
+        if self.counter_head[c] as usize == a {
+            self.counter_head[c] = next;
+        } else {
+            let mut node = self.counter_head[c];
+            while (node as usize) < A {
+                if self.alarm_next[node as usize] as usize == a {
+                    self.alarm_next[node as usize] = next;
+                    break;
+                }
+                node = self.alarm_next[node as usize];
+            }
+        }
+        self.alarm_active[a] = false;
+        self.alarm_delta[a] = 0;
+        self.alarm_next[a] = NONE;
+        self.alarm_cycle[a] = 0;
+    }
+
+    /// Disarms every alarm (the OS shuts down).
+    pub(super) fn disarm_all(&mut self) {
+        self.counter_head = [NONE; C];
+        self.alarm_active = [false; A];
+        self.alarm_delta = [0; A];
+        self.alarm_next = [NONE; A];
+        self.alarm_cycle = [0; A];
+    }
+
+    /// `GetAlarmBase`.
+    ///
+    /// # Errors
+    /// `E_OS_ID` invalid alarm; `E_OS_CALLEVEL`, `E_OS_DISABLEDINT`.
+    pub fn get_alarm_base(&mut self, alarm: AlarmId) -> Result<AlarmBase, OsError> {
+        self.service(
+            ServiceId::GetAlarmBase,
+            || ServiceCall::GetAlarmBase(alarm),
+            |os| {
+                let a = Self::alarm_index(alarm)?;
+                let k = &os.cfg().counters[os.alarm_counter(a)];
+                Ok(AlarmBase {
+                    max_allowed_value: k.max_allowed_value,
+                    ticks_per_base: k.ticks_per_base,
+                    min_cycle: k.min_cycle,
+                })
+            },
+        )
+    }
+
+    /// Ticks before alarm `alarm` expires (inspection behind `GetAlarm`; `None` when it is
+    /// not armed or the id is invalid).
+    pub fn alarm_remaining(&self, alarm: AlarmId) -> Option<u64> {
+        let a = alarm.0 as usize;
+        if a >= A || !self.alarm_active[a] {
+            return None;
+        }
+        let mut node = self.counter_head[self.alarm_counter(a)];
+        let mut ticks = 0u64;
+        while (node as usize) < A {
+            ticks += self.alarm_delta[node as usize];
+            if node as usize == a {
+                break;
+            }
+            node = self.alarm_next[node as usize];
+        }
+        Some(ticks)
+    }
+
+    /// `GetAlarm`: ticks left before the alarm expires.
+    ///
+    /// # Errors
+    /// `E_OS_NOFUNC` the alarm is not armed; `E_OS_ID` invalid alarm; `E_OS_CALLEVEL`,
+    /// `E_OS_DISABLEDINT`.
+    pub fn get_alarm(&mut self, alarm: AlarmId) -> Result<TickType, OsError> {
+        self.service(
+            ServiceId::GetAlarm,
+            || ServiceCall::GetAlarm(alarm),
+            |os| {
+                Self::alarm_index(alarm)?;
+                let ticks = os.alarm_remaining(alarm).ok_or(OsError::NoFunc)?;
+                // At most `maxallowedvalue + 1`, which fits: the counter limits exclude
+                // `u32::MAX`, and standard status never arms beyond `u32::MAX` ticks.
+                Ok(TickType::try_from(ticks).unwrap_or(TickType::MAX))
+            },
+        )
+    }
+
+    /// The checks `SetRelAlarm` and `SetAbsAlarm` share: `E_OS_ID` for an unknown alarm,
+    /// `E_OS_STATE` for an armed one. Returns the alarm and its counter.
+    fn unarmed_alarm(&self, alarm: AlarmId) -> Result<(usize, usize), OsError> {
+        let a = Self::alarm_index(alarm)?;
+        if self.alarm_active[a] {
+            return Err(OsError::State);
+        }
+        Ok((a, self.alarm_counter(a)))
+    }
+
+    /// `SetRelAlarm`: arms the alarm `increment` ticks from now, then every `cycle` ticks
+    /// (0: once).
+    ///
+    /// # Errors
+    /// `E_OS_STATE` already armed; `E_OS_ID` invalid alarm; `E_OS_VALUE` (extended status)
+    /// increment above `maxallowedvalue`, or cycle neither 0 nor in `mincycle ..=
+    /// maxallowedvalue`; with the AUTOSAR dialect, increment 0 in both statuses (with the
+    /// OSEK dialect the alarm then waits a full revolution); `E_OS_CALLEVEL`,
+    /// `E_OS_DISABLEDINT`.
+    pub fn set_rel_alarm(
+        &mut self,
+        alarm: AlarmId,
+        increment: TickType,
+        cycle: TickType,
+    ) -> Result<(), OsError> {
+        let call = ServiceCall::SetRelAlarm {
+            alarm,
+            increment,
+            cycle,
+        };
+        self.service(
+            ServiceId::SetRelAlarm,
+            || call,
+            |os| {
+                let (a, c) = os.unarmed_alarm(alarm)?;
+                let cfg = os.cfg();
+                let k = &cfg.counters[c];
+                let autosar = matches!(cfg.dialect, Dialect::Autosar);
+                if increment == 0 && autosar {
+                    return Err(OsError::Value);
+                }
+                if os.extended() && (increment > k.max_allowed_value || !cycle_ok(k, cycle)) {
+                    return Err(OsError::Value);
+                }
+                let delay = if increment == 0 {
+                    u64::from(k.max_allowed_value) + 1
+                } else {
+                    u64::from(increment)
+                };
+                os.arm(a, c, delay, cycle);
+                Ok(())
+            },
+        )
+    }
+
+    /// `SetAbsAlarm`: arms the alarm to expire when the counter next reaches `start`, then
+    /// every `cycle` ticks (0: once).
+    ///
+    /// # Errors
+    /// `E_OS_STATE` already armed; `E_OS_ID` invalid alarm; `E_OS_VALUE` (extended status)
+    /// start above `maxallowedvalue`, or cycle neither 0 nor in `mincycle ..=
+    /// maxallowedvalue`; `E_OS_CALLEVEL`, `E_OS_DISABLEDINT`.
+    pub fn set_abs_alarm(
+        &mut self,
+        alarm: AlarmId,
+        start: TickType,
+        cycle: TickType,
+    ) -> Result<(), OsError> {
+        let call = ServiceCall::SetAbsAlarm {
+            alarm,
+            start,
+            cycle,
+        };
+        self.service(
+            ServiceId::SetAbsAlarm,
+            || call,
+            |os| {
+                let (a, c) = os.unarmed_alarm(alarm)?;
+                let k = &os.cfg().counters[c];
+                if os.extended() && (start > k.max_allowed_value || !cycle_ok(k, cycle)) {
+                    return Err(OsError::Value);
+                }
+                let delay = os.abs_delay(c, start);
+                os.arm(a, c, delay, cycle);
+                Ok(())
+            },
+        )
+    }
+
+    /// `CancelAlarm`.
+    ///
+    /// # Errors
+    /// `E_OS_NOFUNC` the alarm is not armed; `E_OS_ID` invalid alarm; `E_OS_CALLEVEL`,
+    /// `E_OS_DISABLEDINT`.
+    pub fn cancel_alarm(&mut self, alarm: AlarmId) -> Result<(), OsError> {
+        self.service(
+            ServiceId::CancelAlarm,
+            || ServiceCall::CancelAlarm(alarm),
+            |os| {
+                let a = Self::alarm_index(alarm)?;
+                if !os.alarm_active[a] {
+                    return Err(OsError::NoFunc);
+                }
+                os.disarm(a);
+                Ok(())
+            },
+        )
+    }
+
+    /// `IncrementCounter`: advances a counter by one tick and runs the actions of the alarms
+    /// that expire. At task level this is a rescheduling point. An action that fails is
+    /// reported to `ErrorHook` with its own service and parameters; `IncrementCounter`
+    /// still returns `E_OK` (AUTOSAR SWS_Os_00321).
+    ///
+    /// # Errors
+    /// `E_OS_ID` invalid counter; `E_OS_CALLEVEL`, `E_OS_DISABLEDINT`.
+    #[inline]
+    pub fn increment_counter(&mut self, counter: CounterId) -> Result<(), OsError> {
+        self.service(
+            ServiceId::IncrementCounter,
+            || ServiceCall::IncrementCounter(counter),
+            |os| {
+                let c = Self::counter_index(counter)?;
+                let max = os.cfg().counters[c].max_allowed_value;
+                let value = os.counter_value[c];
+                os.counter_value[c] = if value >= max { 0 } else { value + 1 };
+                let head = os.counter_head[c] as usize;
+                if head >= A {
+                    return Ok(());
+                }
+                // The head's delta is at least 1 between ticks; were it 0, the alarm would be
+                // due now, which is what happens.
+                let delta = os.alarm_delta[head];
+                if delta > 1 {
+                    os.alarm_delta[head] = delta - 1;
+                    return Ok(());
+                }
+                os.alarm_delta[head] = 0;
+                os.expire(c);
+                os.reschedule();
+                Ok(())
+            },
+        )
+    }
+
+    /// Pops and runs every alarm of counter `c` that is due now.
+    #[inline(never)]
+    fn expire(&mut self, c: usize) {
+        loop {
+            let a = self.counter_head[c] as usize;
+            if a >= A || self.alarm_delta[a] != 0 || self.is_shut_down() {
+                break;
+            }
+            let cycle = self.alarm_cycle[a];
+            self.counter_head[c] = self.alarm_next[a];
+            self.alarm_next[a] = NONE;
+            self.alarm_active[a] = false;
+            self.alarm_cycle[a] = 0;
+            if cycle != 0 {
+                self.arm(a, c, u64::from(cycle), cycle);
+            }
+            match self.cfg().alarms[a].action {
+                AlarmAction::ActivateTask(task) => {
+                    let result = Self::task_index(task).and_then(|t| self.activate(t).map(|_| ()));
+                    if let Err(e) = result {
+                        self.report(ServiceCall::ActivateTask(task), e);
+                    }
+                }
+                AlarmAction::SetEvent(task, mask) => {
+                    let result = Self::task_index(task).and_then(|t| self.set_event_inner(t, mask));
+                    if let Err(e) = result {
+                        self.report(ServiceCall::SetEvent(task, mask), e);
+                    }
+                }
+                AlarmAction::Callback(id) => {
+                    self.call_hook(Context::AlarmCallback, |os| H::alarm_callback(os, id));
+                }
+            }
+        }
+    }
+
+    /// `GetCounterValue` (AUTOSAR): the counter's current value.
+    ///
+    /// # Errors
+    /// `E_OS_ID` invalid counter; `E_OS_CALLEVEL`, `E_OS_DISABLEDINT`.
+    pub fn get_counter_value(&mut self, counter: CounterId) -> Result<TickType, OsError> {
+        self.service(
+            ServiceId::GetCounterValue,
+            || ServiceCall::GetCounterValue(counter),
+            |os| {
+                let c = Self::counter_index(counter)?;
+                Ok(os.counter_value[c])
+            },
+        )
+    }
+
+    /// `GetElapsedValue` (AUTOSAR): the counter's value now and the ticks elapsed since
+    /// `previous` (modulo the counter's range).
+    ///
+    /// # Errors
+    /// `E_OS_ID` invalid counter; `E_OS_VALUE` `previous` above `maxallowedvalue`;
+    /// `E_OS_CALLEVEL`, `E_OS_DISABLEDINT`.
+    pub fn get_elapsed_value(
+        &mut self,
+        counter: CounterId,
+        previous: TickType,
+    ) -> Result<(TickType, TickType), OsError> {
+        self.service(
+            ServiceId::GetElapsedValue,
+            || ServiceCall::GetElapsedValue(counter, previous),
+            |os| {
+                let c = Self::counter_index(counter)?;
+                let max = os.cfg().counters[c].max_allowed_value;
+                if previous > max {
+                    return Err(OsError::Value);
+                }
+                let now = os.counter_value[c];
+                let elapsed = if now >= previous {
+                    now - previous
+                } else {
+                    // Wrapped: (max + 1 - previous) + now, which is at most max.
+                    max - previous + now + 1
+                };
+                Ok((now, elapsed))
+            },
+        )
+    }
+}

@@ -1,0 +1,308 @@
+//! Interrupt processing (OSEK OS 2.2.3 §6, §13.3): ISR entry and return as the port
+//! reports them, the six interrupt services, `GetISRID` (AUTOSAR), and the interrupt mask
+//! the board must apply.
+
+use super::{IsrFrame, Os, Phase, NONE, NO_RES};
+use crate::os::call::ServiceCall;
+use crate::os::callevel::Context;
+use crate::os::config::{IsrCategory, ISR_LEVEL_BASE};
+use crate::os::error::ServiceId;
+use crate::os::{Hooks, InterruptMask, IsrId, OsConfig, OsError};
+use crate::tables::Tables;
+
+impl<
+        const T: usize,
+        const R: usize,
+        const C: usize,
+        const A: usize,
+        const I: usize,
+        const Q: usize,
+        K,
+        H,
+    > Os<T, R, C, A, I, Q, K, H>
+where
+    K: Tables<OsConfig<T, R, C, A, I>>,
+    H: Hooks<Self>,
+{
+    /// The interrupts the board must hold pending now (apply it after every kernel call):
+    /// all of them before `StartOS` has finished its start-up hook, after `ShutdownOS`,
+    /// and under `DisableAllInterrupts`/`SuspendAllInterrupts`; otherwise every ISR at or
+    /// below the processor priority (the innermost ISR's, or a task's raised to a ceiling at
+    /// interrupt level), and at least every category-2 ISR under `SuspendOSInterrupts` and
+    /// while a hook or an alarm callback runs.
+    #[inline]
+    pub fn interrupt_mask(&self) -> InterruptMask {
+        let level = self.masked_level();
+        if level == u8::MAX {
+            InterruptMask::All
+        } else if level >= ISR_LEVEL_BASE {
+            InterruptMask::UpTo(level - ISR_LEVEL_BASE)
+        } else {
+            InterruptMask::None
+        }
+    }
+
+    /// The processor priority at or below which interrupts are held (`u8::MAX`: all).
+    #[inline(always)]
+    fn masked_level(&self) -> u8 {
+        self.gate.max(self.current_level())
+    }
+
+    /// The innermost active ISR (any category), if any.
+    pub fn active_isr(&self) -> Option<IsrId> {
+        self.top_frame().map(|frame| IsrId(frame.isr))
+    }
+
+    /// How many ISRs are active (nested).
+    pub const fn isr_nesting(&self) -> u8 {
+        self.isr_depth
+    }
+
+    /// The active ISRs, outermost first, each with the processor priority it runs at now.
+    pub fn active_isrs(&self) -> impl Iterator<Item = (IsrId, u8)> + '_ {
+        self.isr_stack
+            .iter()
+            .take(self.isr_depth as usize)
+            .map(|frame| (IsrId(frame.isr), frame.level))
+    }
+
+    /// The processor priority and context the active ISR at nesting depth `depth`
+    /// (0: outermost) interrupted.
+    pub fn interrupted_by(&self, depth: usize) -> Option<(u8, Context, super::Locks)> {
+        let frame = self.isr_stack.get(..self.isr_depth as usize)?.get(depth)?;
+        let below = match depth.checked_sub(1) {
+            Some(d) => self.isr_stack.get(d).map_or(0, |f| f.level),
+            None => self.running_priority().unwrap_or(0),
+        };
+        Some((below, frame.interrupted, frame.locks))
+    }
+
+    /// The port enters ISR `isr`: the hardware took its interrupt. A category-2 ISR runs
+    /// at interrupt level, where task switches wait until the last ISR returns.
+    ///
+    /// This is how the kernel learns of an interrupt, not an OSEK service: it has no call
+    /// level and never calls `ErrorHook`.
+    ///
+    /// # Errors
+    /// `E_OS_ID` unknown ISR; `E_OS_STATE` the OS is not running (before `StartOS` has
+    /// dispatched, or after `ShutdownOS`); `E_OS_ACCESS` the interrupt mask holds it (its
+    /// priority is not above the processor priority, or a lock is in force): the hardware
+    /// must keep it pending.
+    pub fn enter_isr(&mut self, isr: IsrId) -> Result<(), OsError> {
+        let i = isr.0 as usize;
+        let Some(config) = self.cfg().isrs.get(i) else {
+            return Err(OsError::Id);
+        };
+        let level = ISR_LEVEL_BASE + config.priority;
+        if level <= self.masked_level() {
+            return Err(if matches!(self.phase, Phase::Running) {
+                OsError::Access
+            } else {
+                OsError::State
+            });
+        }
+        let frame = IsrFrame {
+            isr: isr.0,
+            level,
+            res_top: NO_RES,
+            locks: self.locks,
+            interrupted: self.context,
+        };
+        let depth = self.isr_depth as usize;
+        let Some(slot) = self.isr_stack.get_mut(depth) else {
+            return Err(OsError::Access);
+        };
+        *slot = frame;
+        self.isr_depth += 1;
+        self.context = match config.category {
+            IsrCategory::One => Context::Isr1,
+            IsrCategory::Two => Context::Isr2,
+        };
+        // At interrupt level nothing preempts (`threshold`).
+        self.preempt_at = u8::MAX;
+        self.sync_denied();
+        Ok(())
+    }
+
+    /// The innermost ISR returns. An ISR that leaves interrupt locks or resources behind
+    /// has them undone and released; for a category-2 ISR that is reported to `ErrorHook`
+    /// (`E_OS_DISABLEDINT`, `E_OS_RESOURCE`; AUTOSAR SWS_Os_00368, 00369). When the last
+    /// ISR returns to task level, this is a rescheduling point.
+    ///
+    /// # Errors
+    /// `E_OS_CALLEVEL` no ISR is active, or code other than the ISR itself (a hook) is
+    /// running; `E_OS_STATE` the OS was shut down.
+    pub fn exit_isr(&mut self) -> Result<(), OsError> {
+        let Some(frame) = self.top_frame().copied() else {
+            return Err(if self.is_shut_down() {
+                OsError::State
+            } else {
+                OsError::CallLevel
+            });
+        };
+        if !matches!(self.context, Context::Isr1 | Context::Isr2) {
+            return Err(OsError::CallLevel);
+        }
+        if self.locks != frame.locks || frame.res_top != NO_RES {
+            self.isr_missing_end(frame);
+            if self.is_shut_down() {
+                return Ok(());
+            }
+        }
+        self.isr_depth -= 1;
+        self.context = frame.interrupted;
+        if self.isr_depth == 0 && matches!(self.context, Context::Task | Context::Idle) {
+            self.reschedule();
+            self.context = if self.running == NONE {
+                Context::Idle
+            } else {
+                Context::Task
+            };
+        }
+        self.sync_denied();
+        Ok(())
+    }
+
+    /// An ISR returns with interrupt locks or resources it took: undo and release them, and
+    /// for a category-2 ISR report each to `ErrorHook` (AUTOSAR SWS_Os_00368, 00369).
+    #[cold]
+    #[inline(never)]
+    fn isr_missing_end(&mut self, frame: IsrFrame) {
+        let isr = IsrId(frame.isr);
+        let cat2 = self
+            .cfg()
+            .isrs
+            .get(frame.isr as usize)
+            .is_some_and(|c| matches!(c.category, IsrCategory::Two));
+        let unlocked = self.locks != frame.locks;
+        if unlocked {
+            self.set_locks(frame.locks);
+        }
+        let released = self.release_all_of_isr();
+        if cat2 && unlocked {
+            self.report(ServiceCall::IsrMissingEnd(isr), OsError::DisabledInt);
+        }
+        if cat2 && released {
+            self.report(ServiceCall::IsrMissingEnd(isr), OsError::Resource);
+        }
+    }
+
+    /// Runs an interrupt service: call-level check only (they never raise `ErrorHook`,
+    /// AUTOSAR SWS_Os_00367), then `body` on the locks, which then come into force.
+    fn interrupt_service(
+        &mut self,
+        call: ServiceCall,
+        body: impl FnOnce(&mut super::Locks) -> Result<(), OsError>,
+    ) -> Result<(), OsError> {
+        self.check(call.id())?;
+        let mut locks = self.locks;
+        body(&mut locks)?;
+        self.set_locks(locks);
+        Ok(())
+    }
+
+    /// `DisableAllInterrupts`: every interrupt held until `EnableAllInterrupts`. Not
+    /// nestable.
+    ///
+    /// OSEK declares the interrupt services without a status; the result here only says
+    /// whether the call was carried out.
+    ///
+    /// # Errors
+    /// `E_OS_CALLEVEL` not allowed here; `E_OS_NOFUNC` already disabled (ignored).
+    pub fn disable_all_interrupts(&mut self) -> Result<(), OsError> {
+        self.interrupt_service(ServiceCall::DisableAllInterrupts, |locks| {
+            if locks.all_disabled {
+                return Err(OsError::NoFunc);
+            }
+            locks.all_disabled = true;
+            Ok(())
+        })
+    }
+
+    /// `EnableAllInterrupts`: ends `DisableAllInterrupts`.
+    ///
+    /// # Errors
+    /// `E_OS_CALLEVEL` not allowed here; `E_OS_NOFUNC` no `DisableAllInterrupts` in force:
+    /// ignored (AUTOSAR SWS_Os_00092).
+    pub fn enable_all_interrupts(&mut self) -> Result<(), OsError> {
+        self.interrupt_service(ServiceCall::EnableAllInterrupts, |locks| {
+            if !locks.all_disabled {
+                return Err(OsError::NoFunc);
+            }
+            locks.all_disabled = false;
+            Ok(())
+        })
+    }
+
+    /// `SuspendAllInterrupts`: every interrupt held until the matching
+    /// `ResumeAllInterrupts`; nestable.
+    ///
+    /// # Errors
+    /// `E_OS_CALLEVEL` not allowed here; `E_OS_LIMIT` nested 255 deep (ignored).
+    pub fn suspend_all_interrupts(&mut self) -> Result<(), OsError> {
+        self.interrupt_service(ServiceCall::SuspendAllInterrupts, |locks| {
+            locks.suspend_all = locks.suspend_all.checked_add(1).ok_or(OsError::Limit)?;
+            Ok(())
+        })
+    }
+
+    /// `ResumeAllInterrupts`: ends one `SuspendAllInterrupts`; the last one restores the
+    /// interrupts.
+    ///
+    /// # Errors
+    /// `E_OS_CALLEVEL` not allowed here; `E_OS_NOFUNC` none in force: ignored
+    /// (SWS_Os_00092).
+    pub fn resume_all_interrupts(&mut self) -> Result<(), OsError> {
+        self.interrupt_service(ServiceCall::ResumeAllInterrupts, |locks| {
+            locks.suspend_all = locks.suspend_all.checked_sub(1).ok_or(OsError::NoFunc)?;
+            Ok(())
+        })
+    }
+
+    /// `SuspendOSInterrupts`: every category-2 interrupt held until the matching
+    /// `ResumeOSInterrupts`; category-1 ISRs still run. Nestable.
+    ///
+    /// # Errors
+    /// `E_OS_CALLEVEL` not allowed here; `E_OS_LIMIT` nested 255 deep (ignored).
+    pub fn suspend_os_interrupts(&mut self) -> Result<(), OsError> {
+        self.interrupt_service(ServiceCall::SuspendOsInterrupts, |locks| {
+            locks.suspend_os = locks.suspend_os.checked_add(1).ok_or(OsError::Limit)?;
+            Ok(())
+        })
+    }
+
+    /// `ResumeOSInterrupts`: ends one `SuspendOSInterrupts`.
+    ///
+    /// # Errors
+    /// `E_OS_CALLEVEL` not allowed here; `E_OS_NOFUNC` none in force: ignored
+    /// (SWS_Os_00092).
+    pub fn resume_os_interrupts(&mut self) -> Result<(), OsError> {
+        self.interrupt_service(ServiceCall::ResumeOsInterrupts, |locks| {
+            locks.suspend_os = locks.suspend_os.checked_sub(1).ok_or(OsError::NoFunc)?;
+            Ok(())
+        })
+    }
+
+    /// `GetISRID` (AUTOSAR): the category-2 ISR running now (in `ErrorHook`: the one in
+    /// which the error occurred), or `None` (`INVALID_ISR`).
+    ///
+    /// # Errors
+    /// `E_OS_CALLEVEL` not allowed here; `E_OS_DISABLEDINT`.
+    pub fn get_isr_id(&mut self) -> Result<Option<IsrId>, OsError> {
+        self.service(
+            ServiceId::GetIsrId,
+            || ServiceCall::GetIsrId,
+            |os| {
+                let isr = os.top_frame().and_then(|frame| {
+                    let cat2 = os
+                        .cfg()
+                        .isrs
+                        .get(frame.isr as usize)
+                        .is_some_and(|c| matches!(c.category, IsrCategory::Two));
+                    cat2.then_some(IsrId(frame.isr))
+                });
+                Ok(isr)
+            },
+        )
+    }
+}

@@ -1,0 +1,272 @@
+//! Resources (OSEK OS 2.2.3 §8, §13.4): `GetResource` and `ReleaseResource` with the
+//! immediate priority ceiling protocol, for tasks and category-2 ISRs.
+//!
+//! A task holding a resource runs at its ceiling; if an ISR shares the resource the ceiling
+//! lies at that ISR's level, and the task masks it (see `Os::interrupt_mask`). An ISR
+//! holding a resource raises its own level the same way, masking the higher ISRs that share
+//! it.
+
+use super::{IsrFrame, Os, ResState, FREE_RES, NONE, NO_RES};
+use crate::os::call::ServiceCall;
+use crate::os::callevel::Context;
+use crate::os::error::ServiceId;
+use crate::os::{Hooks, IsrId, OsConfig, OsError, ResourceId, TaskId, RES_SCHEDULER};
+use crate::tables::Tables;
+
+/// Who takes or releases a resource.
+#[derive(Clone, Copy)]
+enum Holder {
+    /// A task (its index).
+    Task(usize),
+    /// The innermost active ISR (its frame index).
+    Isr(usize),
+}
+
+impl<
+        const T: usize,
+        const R: usize,
+        const C: usize,
+        const A: usize,
+        const I: usize,
+        const Q: usize,
+        K,
+        H,
+    > Os<T, R, C, A, I, Q, K, H>
+where
+    K: Tables<OsConfig<T, R, C, A, I>>,
+    H: Hooks<Self>,
+{
+    /// The holder of a resource, or `None` if free or the id is invalid.
+    pub fn resource_owner(&self, res: ResourceId) -> Option<TaskId> {
+        let state = self.res_state(res).ok()?;
+        ((state.owner as usize) < T).then_some(TaskId(state.owner))
+    }
+
+    /// The ISR holding a resource, or `None`.
+    pub fn resource_isr_owner(&self, res: ResourceId) -> Option<IsrId> {
+        let state = self.res_state(res).ok()?;
+        let owner = state.owner as usize;
+        (owner != NONE as usize && owner >= T).then(|| IsrId((owner - T) as u8))
+    }
+
+    /// The resources a task holds, most recently taken first.
+    pub fn held_resources(&self, task: TaskId) -> impl Iterator<Item = ResourceId> + '_ {
+        let top = self.res_top.get(task.0 as usize).copied().unwrap_or(NO_RES);
+        self.resource_stack(top)
+    }
+
+    /// The resources the active ISR `isr` holds, most recently taken first (none if it is
+    /// not active).
+    pub fn isr_held_resources(&self, isr: IsrId) -> impl Iterator<Item = ResourceId> + '_ {
+        let top = self.active_frame(isr).map_or(NO_RES, |frame| frame.res_top);
+        self.resource_stack(top)
+    }
+
+    fn resource_stack(&self, mut top: u8) -> impl Iterator<Item = ResourceId> + '_ {
+        core::iter::from_fn(move || {
+            let id = ResourceId(top);
+            let state = self.res_state(id).ok()?;
+            top = state.next;
+            Some(id)
+        })
+    }
+
+    /// The ceiling of a resource (a processor priority).
+    pub fn ceiling(&self, res: ResourceId) -> Option<u8> {
+        if res == RES_SCHEDULER {
+            Some(self.cfg().scheduler_ceiling)
+        } else {
+            self.cfg().resource_ceiling(res.0 as usize)
+        }
+    }
+
+    pub(super) fn active_frame(&self, isr: IsrId) -> Option<&IsrFrame> {
+        self.isr_stack
+            .get(..self.isr_depth as usize)?
+            .iter()
+            .find(|frame| frame.isr == isr.0)
+    }
+
+    fn res_state(&self, id: ResourceId) -> Result<&ResState, OsError> {
+        if id == RES_SCHEDULER {
+            Ok(&self.sched_res)
+        } else {
+            self.res.get(id.0 as usize).ok_or(OsError::Id)
+        }
+    }
+
+    fn res_state_mut(&mut self, id: ResourceId) -> Result<&mut ResState, OsError> {
+        if id == RES_SCHEDULER {
+            Ok(&mut self.sched_res)
+        } else {
+            self.res.get_mut(id.0 as usize).ok_or(OsError::Id)
+        }
+    }
+
+    /// The caller of a resource service, with its owner id, static priority and current
+    /// priority.
+    fn holder(&self) -> Result<(Holder, u8, u8, u8), OsError> {
+        match self.context {
+            Context::Task => {
+                let t = self.calling_task()?;
+                Ok((
+                    Holder::Task(t),
+                    t as u8,
+                    self.base_prio(t),
+                    self.running_prio,
+                ))
+            }
+            Context::Isr2 => {
+                let depth = (self.isr_depth as usize)
+                    .checked_sub(1)
+                    .ok_or(OsError::CallLevel)?;
+                let frame = self.isr_stack.get(depth).ok_or(OsError::CallLevel)?;
+                let isr = frame.isr as usize;
+                let own = self.cfg().isr_level.get(isr).ok_or(OsError::CallLevel)?;
+                Ok((Holder::Isr(depth), (T + isr) as u8, *own, frame.level))
+            }
+            _ => Err(OsError::CallLevel),
+        }
+    }
+
+    fn holder_top(&self, holder: Holder) -> u8 {
+        match holder {
+            Holder::Task(t) => self.res_top[t],
+            Holder::Isr(depth) => self.isr_stack.get(depth).map_or(NO_RES, |f| f.res_top),
+        }
+    }
+
+    fn set_holder_top(&mut self, holder: Holder, top: u8) {
+        match holder {
+            Holder::Task(t) => self.res_top[t] = top,
+            Holder::Isr(depth) => {
+                if let Some(frame) = self.isr_stack.get_mut(depth) {
+                    frame.res_top = top;
+                }
+            }
+        }
+    }
+
+    /// The checks `GetResource` and `ReleaseResource` share: `E_OS_ID` for an unknown
+    /// resource, `E_OS_ACCESS` (extended status) when the caller's static priority is above
+    /// the ceiling (an ISR's always is for `RES_SCHEDULER`).
+    fn resource_caller(&self, res: ResourceId) -> Result<(Holder, u8, u8, u8), OsError> {
+        let ceiling = self.ceiling(res).ok_or(OsError::Id)?;
+        let (holder, owner, own, current) = self.holder()?;
+        if self.extended() && own > ceiling {
+            return Err(OsError::Access);
+        }
+        Ok((holder, owner, current, ceiling))
+    }
+
+    /// `GetResource`: takes a resource, raising the caller to its ceiling.
+    ///
+    /// # Errors
+    /// `E_OS_ID` invalid resource; `E_OS_ACCESS` the resource is occupied, or (extended
+    /// status) the caller's static priority is above its ceiling; `E_OS_CALLEVEL` not
+    /// called by a task or a category-2 ISR; `E_OS_DISABLEDINT`.
+    pub fn get_resource(&mut self, res: ResourceId) -> Result<(), OsError> {
+        self.service(
+            ServiceId::GetResource,
+            || ServiceCall::GetResource(res),
+            |os| {
+                let (holder, owner, current, ceiling) = os.resource_caller(res)?;
+                let top = os.holder_top(holder);
+                let state = os.res_state_mut(res)?;
+                if state.owner != NONE {
+                    return Err(OsError::Access);
+                }
+                *state = ResState {
+                    owner,
+                    prev_prio: current,
+                    next: top,
+                };
+                os.set_holder_top(holder, res.0);
+                if ceiling > current {
+                    match holder {
+                        Holder::Task(_) => {
+                            os.running_prio = ceiling;
+                            os.sync_threshold();
+                        }
+                        Holder::Isr(depth) => {
+                            if let Some(frame) = os.isr_stack.get_mut(depth) {
+                                frame.level = ceiling;
+                            }
+                        }
+                    }
+                }
+                Ok(())
+            },
+        )
+    }
+
+    /// `ReleaseResource`: releases the most recently taken resource and restores the
+    /// priority the caller had before taking it.
+    ///
+    /// # Errors
+    /// `E_OS_ID` invalid resource; `E_OS_NOFUNC` the caller does not hold it, or another
+    /// resource must be released first; `E_OS_ACCESS` (extended status) the caller's
+    /// static priority is above the ceiling; `E_OS_CALLEVEL`, `E_OS_DISABLEDINT`.
+    pub fn release_resource(&mut self, res: ResourceId) -> Result<(), OsError> {
+        self.service(
+            ServiceId::ReleaseResource,
+            || ServiceCall::ReleaseResource(res),
+            |os| {
+                let (holder, _, _, _) = os.resource_caller(res)?;
+                if os.holder_top(holder) != res.0 {
+                    return Err(OsError::NoFunc);
+                }
+                os.release_top(holder, res)?;
+                if matches!(holder, Holder::Task(_)) {
+                    os.reschedule();
+                }
+                Ok(())
+            },
+        )
+    }
+
+    /// Pops `res`, the top of `holder`'s stack, and restores the holder's priority.
+    fn release_top(&mut self, holder: Holder, res: ResourceId) -> Result<(), OsError> {
+        let state = self.res_state_mut(res)?;
+        let released = *state;
+        *state = FREE_RES;
+        self.set_holder_top(holder, released.next);
+        match holder {
+            Holder::Task(_) => self.running_prio = released.prev_prio,
+            Holder::Isr(depth) => {
+                if let Some(frame) = self.isr_stack.get_mut(depth) {
+                    frame.level = released.prev_prio;
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Releases everything the innermost ISR holds (it returned holding resources).
+    /// Returns whether it held any.
+    pub(super) fn release_all_of_isr(&mut self) -> bool {
+        let Some(depth) = (self.isr_depth as usize).checked_sub(1) else {
+            return false;
+        };
+        let holder = Holder::Isr(depth);
+        let mut any = false;
+        loop {
+            let top = self.holder_top(holder);
+            if top == NO_RES || self.release_top(holder, ResourceId(top)).is_err() {
+                return any;
+            }
+            any = true;
+        }
+    }
+
+    /// Releases everything the running task holds (its body returned holding resources).
+    pub(super) fn release_all_of_task(&mut self, t: usize) {
+        let holder = Holder::Task(t);
+        loop {
+            let top = self.holder_top(holder);
+            if top == NO_RES || self.release_top(holder, ResourceId(top)).is_err() {
+                return;
+            }
+        }
+    }
+}

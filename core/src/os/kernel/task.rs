@@ -1,0 +1,161 @@
+//! Task management (OSEK OS 2.2.3 §13.2): `ActivateTask`, `TerminateTask`, `ChainTask`,
+//! `Schedule`, `GetTaskID`, `GetTaskState`.
+
+use super::{Os, NO_RES};
+use crate::os::call::ServiceCall;
+use crate::os::error::ServiceId;
+use crate::os::{Hooks, OsConfig, OsError, TaskId, TaskState};
+use crate::tables::Tables;
+
+impl<
+        const T: usize,
+        const R: usize,
+        const C: usize,
+        const A: usize,
+        const I: usize,
+        const Q: usize,
+        K,
+        H,
+    > Os<T, R, C, A, I, Q, K, H>
+where
+    K: Tables<OsConfig<T, R, C, A, I>>,
+    H: Hooks<Self>,
+{
+    /// `ActivateTask`: one more activation of `task`; it preempts the caller if it has a
+    /// higher priority (at task level).
+    ///
+    /// # Errors
+    /// `E_OS_LIMIT` the task already has `max_activations`; `E_OS_ID` invalid task;
+    /// `E_OS_CALLEVEL` not called by a task or a category-2 ISR; `E_OS_DISABLEDINT`
+    /// interrupts disabled.
+    #[inline]
+    pub fn activate_task(&mut self, task: TaskId) -> Result<(), OsError> {
+        self.service(
+            ServiceId::ActivateTask,
+            || ServiceCall::ActivateTask(task),
+            |os| {
+                let t = Self::task_index(task)?;
+                let prio = os.activate(t)?;
+                // The running task was a highest-priority one before the call (the invariant),
+                // so the only entry that can outrank it now is the one just queued: compare
+                // with that priority instead of searching the bitmap.
+                debug_assert_eq!(os.preempt_at, os.threshold());
+                if prio >= os.preempt_at {
+                    os.switch_to(prio);
+                }
+                Ok(())
+            },
+        )
+    }
+
+    /// `TerminateTask`: ends the calling task. On success the board must stop executing it.
+    ///
+    /// # Errors
+    /// `E_OS_RESOURCE` the task holds a resource; `E_OS_CALLEVEL` not called by a task;
+    /// `E_OS_DISABLEDINT` interrupts disabled.
+    pub fn terminate_task(&mut self) -> Result<(), OsError> {
+        self.service(
+            ServiceId::TerminateTask,
+            || ServiceCall::TerminateTask,
+            |os| {
+                let t = os.calling_task()?;
+                if os.res_top[t] != NO_RES {
+                    return Err(OsError::Resource);
+                }
+                if !os.post_task_hook() {
+                    return Ok(());
+                }
+                os.finish(t);
+                os.reschedule();
+                os.sync_task_context();
+                Ok(())
+            },
+        )
+    }
+
+    /// `ChainTask`: ends the calling task and activates `task` (itself included, which
+    /// re-queues it as the newest of its priority).
+    ///
+    /// # Errors
+    /// `E_OS_LIMIT` the successor is at its activation limit (the caller keeps running);
+    /// `E_OS_ID` invalid task; `E_OS_RESOURCE`, `E_OS_CALLEVEL`, `E_OS_DISABLEDINT` as for
+    /// `TerminateTask`.
+    pub fn chain_task(&mut self, task: TaskId) -> Result<(), OsError> {
+        self.service(
+            ServiceId::ChainTask,
+            || ServiceCall::ChainTask(task),
+            |os| {
+                let t = os.calling_task()?;
+                let n = Self::task_index(task)?;
+                if os.res_top[t] != NO_RES {
+                    return Err(OsError::Resource);
+                }
+                if n != t && os.activations[n] >= os.cfg().max_activations[n] {
+                    return Err(OsError::Limit);
+                }
+                if !os.post_task_hook() {
+                    return Ok(());
+                }
+                os.finish(t);
+                os.activate(n)?;
+                os.reschedule();
+                os.sync_task_context();
+                Ok(())
+            },
+        )
+    }
+
+    /// `Schedule`: lets higher-priority ready tasks run; for a non-preemptive task this is
+    /// the point where it may be preempted.
+    ///
+    /// # Errors
+    /// `E_OS_RESOURCE` the task holds a resource; `E_OS_CALLEVEL` not called by a task;
+    /// `E_OS_DISABLEDINT` interrupts disabled.
+    pub fn schedule(&mut self) -> Result<(), OsError> {
+        self.service(
+            ServiceId::Schedule,
+            || ServiceCall::Schedule,
+            |os| {
+                let t = os.calling_task()?;
+                if os.res_top[t] != NO_RES {
+                    return Err(OsError::Resource);
+                }
+                // Release the internal resource (non-preemption) for the decision, then take it
+                // back if the task keeps the processor.
+                os.running_prio = os.base_prio(t);
+                os.reschedule();
+                if os.running as usize == t {
+                    os.running_prio = os.internal_prio(t);
+                    os.sync_threshold();
+                }
+                Ok(())
+            },
+        )
+    }
+
+    /// `GetTaskID`: the running task; in an ISR or a hook, the task that was running when
+    /// it started; `None` (`INVALID_TASK`) when no task runs.
+    ///
+    /// # Errors
+    /// `E_OS_CALLEVEL` called where it is not allowed (category-1 ISR, start-up or shutdown
+    /// hook, alarm callback); `E_OS_DISABLEDINT` interrupts disabled.
+    pub fn get_task_id(&mut self) -> Result<Option<TaskId>, OsError> {
+        self.service(
+            ServiceId::GetTaskId,
+            || ServiceCall::GetTaskId,
+            |os| Ok(os.running()),
+        )
+    }
+
+    /// `GetTaskState`.
+    ///
+    /// # Errors
+    /// `E_OS_ID` invalid task; `E_OS_CALLEVEL`, `E_OS_DISABLEDINT` as for `GetTaskID`.
+    pub fn get_task_state(&mut self, task: TaskId) -> Result<TaskState, OsError> {
+        self.service(
+            ServiceId::GetTaskState,
+            || ServiceCall::GetTaskState(task),
+            |os| os.task_state(task).ok_or(OsError::Id),
+        )
+    }
+}
