@@ -12,7 +12,7 @@ use cw_core::com::ipdu::{Com, ComConfig, ComConfigError, RxIpduConfig, TxIpduCon
 use cw_core::com::signal::{ByteOrder, SignalLayout, Signedness};
 use cw_core::os::{
     AlarmAction, AlarmConfig, AlarmId, CounterConfig, CounterId, IsrConfig, Os, OsConfig,
-    OsDescription, TaskConfig, TaskId, OSDEFAULTAPPMODE,
+    OsDescription, Status, TaskConfig, TaskId, OSDEFAULTAPPMODE,
 };
 use cw_core::tables::Tables;
 use std::hint::black_box;
@@ -76,6 +76,17 @@ cw_core::static_tables!(
     TwoTables: OsConfig<2, 0, 1, 1, 1> = TWO
 );
 
+/// [`TWO`] in standard status: the fast paths must cost the same as in extended status.
+static TWO_STANDARD: OsConfig<2, 0, 1, 1, 1> = ok(OsConfig::new(
+    OsDescription::new(*TWO.tasks(), *TWO.counters(), *TWO.alarms(), *TWO.isrs())
+        .status(Status::Standard),
+));
+
+cw_core::static_tables!(
+    /// [`TWO_STANDARD`] as a build-time constant.
+    TwoStandardTables: OsConfig<2, 0, 1, 1, 1> = TWO_STANDARD
+);
+
 /// 64 tasks at 64 priorities and 32 alarms on one counter: the same probes must cost the
 /// same as with two tasks and one alarm.
 static MANY: OsConfig<64, 0, 1, 32, 1> = {
@@ -134,6 +145,28 @@ kernel_probe!(
     /// As RTE-generated code calls it: the task id is a constant at the call site.
     probe_activate_task_const_id(os) {
         let _ = os.activate_task(TaskId(0));
+    }
+);
+kernel_probe!(
+    /// The same as `probe_activate_task_static`, in standard status.
+    probe_activate_task_standard(os, task: TaskId) {
+        let _ = os.activate_task(task);
+    }
+);
+kernel_probe!(
+    /// The timer ISR with nothing due, as the port runs it: entry, one tick, return (a
+    /// task runs, nothing preempts it).
+    probe_tick_isr_idle(os) {
+        let _ = os.enter_isr(black_box(TICK_ISR));
+        let _ = os.increment_counter(black_box(CounterId(0)));
+        let _ = os.exit_isr();
+    }
+);
+kernel_probe!(
+    /// A `SuspendOSInterrupts`/`ResumeOSInterrupts` pair at task level.
+    probe_suspend_resume_os(os) {
+        let _ = os.suspend_os_interrupts();
+        let _ = os.resume_os_interrupts();
     }
 );
 kernel_probe!(probe_alarm_tick_idle(os) {
@@ -395,6 +428,25 @@ fn main() -> Result<(), String> {
                 reset(&mut os, TaskId(1));
                 probe_activate_task_const_id(&mut os);
             }
+        }
+        "activate_task_standard" => {
+            let mut os = kernel::<2, 1, 2, _>(TwoStandardTables)?;
+            for _ in 0..n {
+                reset(&mut os, TaskId(1));
+                probe_activate_task_standard(&mut os, black_box(TaskId(0)));
+            }
+        }
+        "tick_isr_idle" => {
+            let mut os = kernel::<2, 1, 2, _>(&TWO)?;
+            reset(&mut os, TaskId(1));
+            os.set_rel_alarm(AlarmId(0), u32::MAX - 1, 0)
+                .map_err(|e| e.name())?;
+            (0..n).for_each(|_| probe_tick_isr_idle(&mut os));
+        }
+        "suspend_resume_os" => {
+            let mut os = kernel::<2, 1, 2, _>(&TWO)?;
+            reset(&mut os, TaskId(1));
+            (0..n).for_each(|_| probe_suspend_resume_os(&mut os));
         }
         "activate_task_64" => {
             let mut os = kernel::<64, 32, 64, _>(&MANY)?;

@@ -50,6 +50,10 @@ pub const PROBES: &[(&str, &str)] = &[
         "OS ActivateTask up to the scheduling decision, constant task id (as RTE calls it)",
     ),
     (
+        "activate_task_standard",
+        "OS ActivateTask up to the scheduling decision, run-time task id, tables constant, standard status",
+    ),
+    (
         "alarm_tick_idle",
         "OS counter tick with no alarm due, 1 alarm armed",
     ),
@@ -60,6 +64,14 @@ pub const PROBES: &[(&str, &str)] = &[
     (
         "alarm_tick_due",
         "OS counter tick that expires a cyclic alarm (callback)",
+    ),
+    (
+        "tick_isr_idle",
+        "OS timer ISR: enter_isr + IncrementCounter (nothing due) + exit_isr, a task running",
+    ),
+    (
+        "suspend_resume_os",
+        "OS SuspendOSInterrupts + ResumeOSInterrupts at task level",
     ),
     (
         "com_main_idle_1",

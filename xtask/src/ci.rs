@@ -32,11 +32,38 @@ pub const STAGES: &[&str] = &[
     "cross",
     "miri",
     "model",
+    "mutants",
     "differential",
     "interop",
     "fuzz",
     "bench",
 ];
+
+/// Each stage's time budget on CI's 2-core machine, seconds: printed with the stage and in
+/// the summary, where a stage over its budget is marked (the whole run must stay within 35
+/// minutes). `setup` is given what a fresh machine needs (the nightly, cargo-bolero,
+/// valgrind, the Python venv); it takes seconds once those are there.
+const BUDGET_S: &[(&str, u32)] = &[
+    ("setup", 600),
+    ("fmt", 30),
+    ("clippy", 240),
+    ("test", 240),
+    ("cross", 180),
+    ("miri", 420),
+    ("model", 90),
+    ("mutants", 420),
+    ("differential", 60),
+    ("interop", 90),
+    ("fuzz", 180),
+    ("bench", 180),
+];
+
+fn budget_s(stage: &str) -> u32 {
+    BUDGET_S
+        .iter()
+        .find(|(name, _)| *name == stage)
+        .map_or(0, |(_, s)| *s)
+}
 
 /// Which stages to run.
 pub struct Options {
@@ -119,7 +146,7 @@ pub fn run(options: &Options) -> Result {
             results.push((stage, Outcome::NotRun, 0.0));
             continue;
         }
-        println!("\n== stage: {stage}");
+        println!("\n== stage: {stage} (budget {} s)", budget_s(stage));
         let start = Instant::now();
         let result = run_stage(stage);
         let secs = start.elapsed().as_secs_f64();
@@ -149,17 +176,27 @@ pub fn run(options: &Options) -> Result {
         .filter(|r| matches!(r.1, Outcome::NotRun))
         .count();
     println!("\n== summary");
-    println!("{:<14} {:<8} {:>9}", "stage", "result", "seconds");
+    println!(
+        "{:<14} {:<8} {:>9} {:>9}",
+        "stage", "result", "seconds", "budget"
+    );
     for (stage, outcome, secs) in &results {
-        let (word, secs) = match outcome {
+        let budget = budget_s(stage);
+        let (word, shown) = match outcome {
             Outcome::Passed => ("pass", format!("{secs:.1}")),
             Outcome::Failed(_) => ("FAIL", format!("{secs:.1}")),
             Outcome::NotRun => ("not run", "-".into()),
         };
-        println!("{stage:<14} {word:<8} {secs:>9}");
+        let over = if *secs > f64::from(budget) {
+            "  OVER BUDGET"
+        } else {
+            ""
+        };
+        println!("{stage:<14} {word:<8} {shown:>9} {budget:>9}{over}");
     }
     let total: f64 = results.iter().map(|r| r.2).sum();
-    println!("{:<14} {:<8} {total:>9.1}", "total", "");
+    let total_budget: u32 = results.iter().map(|r| budget_s(r.0)).sum();
+    println!("{:<14} {:<8} {total:>9.1} {total_budget:>9}", "total", "");
     if not_run == 0 {
         println!("{passed} passed, {failed} failed");
     } else {
@@ -236,6 +273,7 @@ fn run_stage(stage: &str) -> Result {
         "model" => Cmd::new("cargo")
             .args(["run", "--release", "-p", "cw-proofs"])
             .run(),
+        "mutants" => crate::mutants::run(),
         "differential" => differential::run(&differential::Options::default()),
         "interop" => interop(),
         "fuzz" => {

@@ -4,7 +4,8 @@
 //!   from installing the tools (`setup`) to the instruction counts (`bench`);
 //! - `cargo xtask differential [--cases N] [--seed S]`: the Com signal codec against
 //!   cantools on random layouts, values and PDU lengths;
-//! - `cargo xtask callgrind`: instructions per call of the codec and scheduler probes.
+//! - `cargo xtask callgrind`: instructions per call of the codec and scheduler probes;
+//! - `cargo xtask mutants`: kernel mutants the OSEK conformance suite must catch.
 //!
 //! Every command the runner starts is printed first, prefixed with `$`. Child processes get
 //! no stdin, so the runner behaves the same in a terminal and under `CI=true`.
@@ -13,6 +14,7 @@ mod callgrind;
 mod ci;
 mod differential;
 mod json;
+mod mutants;
 mod process;
 mod rng;
 mod setup;
@@ -30,12 +32,16 @@ usage: cargo xtask <command> [options]
 commands:
   ci [--only STAGE[,STAGE..]] [--skip STAGE[,STAGE..]] [--keep-going]
         run the checks in order; stages: setup, fmt, clippy, test, cross, miri, model,
-        differential, fuzz, bench. Stops at the first failing stage unless --keep-going.
+        mutants, differential, interop, fuzz, bench. Stops at the first failing stage
+        unless --keep-going. Each stage prints its time budget.
   differential [--cases N] [--seed SEED]
         compare the Com signal codec with cantools on N random cases (default 20000)
   callgrind [--binary PATH]
         count instructions per call of each probe in core/examples/callgrind_probe.rs
         (built in release), or in a prebuilt probe binary taking `<op> <iterations>`
+  mutants
+        plant each kernel mutant in a copy of the workspace and require the OSEK
+        conformance sequences named for it to fail
   setup
         same as `ci --only setup`: install or check every tool the checks need
   help
@@ -66,6 +72,10 @@ fn run(args: &[String]) -> Result {
         }
         "differential" => differential::run(&differential::Options::parse(rest)?),
         "callgrind" => callgrind::run(&callgrind::Options::parse(rest)?),
+        "mutants" => {
+            no_options(rest)?;
+            mutants::run()
+        }
         "help" | "--help" | "-h" => {
             print!("{USAGE}");
             Ok(())

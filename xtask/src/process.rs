@@ -75,6 +75,13 @@ impl Cmd {
         self
     }
 
+    /// Runs the command in `dir` instead of the workspace root (shown before the program).
+    pub fn dir(mut self, dir: &Path) -> Self {
+        self.shown = format!("(cd {} && {})", quote(&dir.to_string_lossy()), self.shown);
+        self.inner.current_dir(dir);
+        self
+    }
+
     /// Sets an environment variable for the command (shown before the program).
     pub fn env(mut self, key: &str, value: impl AsRef<OsStr>) -> Self {
         let value = value.as_ref();

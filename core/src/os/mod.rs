@@ -29,7 +29,9 @@
 //! - Interrupt services: `DisableAllInterrupts`/`EnableAllInterrupts`,
 //!   `SuspendAllInterrupts`/`ResumeAllInterrupts`, `SuspendOSInterrupts`/
 //!   `ResumeOSInterrupts`, nestable as the standard says; while any is in force every other
-//!   service returns `E_OS_DISABLEDINT`.
+//!   service returns `E_OS_DISABLEDINT`, and inside a `DisableAllInterrupts` section no
+//!   suspend, inside a suspend section no `DisableAllInterrupts` is carried out (OSEK allows
+//!   no service there).
 //! - Hook routines ([`Hooks`]): StartupHook, ShutdownHook, PreTaskHook, PostTaskHook,
 //!   ErrorHook (with `OSErrorGetServiceId` and the parameters), alarm callbacks.
 //! - `StartOS(AppMode)` with application modes, `GetActiveApplicationMode`,

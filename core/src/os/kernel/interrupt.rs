@@ -188,31 +188,42 @@ where
     }
 
     /// Runs an interrupt service: call-level check only (they never raise `ErrorHook`,
-    /// AUTOSAR SWS_Os_00367), then `body` on the locks, which then come into force.
+    /// AUTOSAR SWS_Os_00367), then `body` on the locks, which then come into force. `body`
+    /// also sees the locks the current context found when it started (an ISR's entry), so
+    /// that it can tell this context's own critical sections from those it interrupted.
     fn interrupt_service(
         &mut self,
         call: ServiceCall,
-        body: impl FnOnce(&mut super::Locks) -> Result<(), OsError>,
+        body: impl FnOnce(&mut super::Locks, super::Locks) -> Result<(), OsError>,
     ) -> Result<(), OsError> {
         self.check(call.id())?;
+        let base = self
+            .top_frame()
+            .map_or(super::Locks::default(), |f| f.locks);
         let mut locks = self.locks;
-        body(&mut locks)?;
+        body(&mut locks, base)?;
         self.set_locks(locks);
         Ok(())
     }
 
     /// `DisableAllInterrupts`: every interrupt held until `EnableAllInterrupts`. Not
-    /// nestable.
+    /// nestable, and not allowed inside this context's `Suspend...` section (OSEK §13.3.2:
+    /// only suspend/resume pairs are allowed there), where it is not carried out, and then
+    /// neither is the `EnableAllInterrupts` that would pair with it.
     ///
     /// OSEK declares the interrupt services without a status; the result here only says
     /// whether the call was carried out.
     ///
     /// # Errors
-    /// `E_OS_CALLEVEL` not allowed here; `E_OS_NOFUNC` already disabled (ignored).
+    /// `E_OS_CALLEVEL` not allowed here; `E_OS_NOFUNC` already disabled (ignored);
+    /// `E_OS_DISABLEDINT` inside a `Suspend...` section (ignored).
     pub fn disable_all_interrupts(&mut self) -> Result<(), OsError> {
-        self.interrupt_service(ServiceCall::DisableAllInterrupts, |locks| {
+        self.interrupt_service(ServiceCall::DisableAllInterrupts, |locks, base| {
             if locks.all_disabled {
                 return Err(OsError::NoFunc);
+            }
+            if locks.suspend_all > base.suspend_all || locks.suspend_os > base.suspend_os {
+                return Err(OsError::DisabledInt);
             }
             locks.all_disabled = true;
             Ok(())
@@ -225,7 +236,7 @@ where
     /// `E_OS_CALLEVEL` not allowed here; `E_OS_NOFUNC` no `DisableAllInterrupts` in force:
     /// ignored (AUTOSAR SWS_Os_00092).
     pub fn enable_all_interrupts(&mut self) -> Result<(), OsError> {
-        self.interrupt_service(ServiceCall::EnableAllInterrupts, |locks| {
+        self.interrupt_service(ServiceCall::EnableAllInterrupts, |locks, _| {
             if !locks.all_disabled {
                 return Err(OsError::NoFunc);
             }
@@ -235,12 +246,17 @@ where
     }
 
     /// `SuspendAllInterrupts`: every interrupt held until the matching
-    /// `ResumeAllInterrupts`; nestable.
+    /// `ResumeAllInterrupts`; nestable. Not allowed inside a `DisableAllInterrupts` section
+    /// (OSEK: no service there), where it is not carried out.
     ///
     /// # Errors
-    /// `E_OS_CALLEVEL` not allowed here; `E_OS_LIMIT` nested 255 deep (ignored).
+    /// `E_OS_CALLEVEL` not allowed here; `E_OS_DISABLEDINT` inside `DisableAllInterrupts`
+    /// (ignored); `E_OS_LIMIT` nested 255 deep (ignored).
     pub fn suspend_all_interrupts(&mut self) -> Result<(), OsError> {
-        self.interrupt_service(ServiceCall::SuspendAllInterrupts, |locks| {
+        self.interrupt_service(ServiceCall::SuspendAllInterrupts, |locks, _| {
+            if locks.all_disabled {
+                return Err(OsError::DisabledInt);
+            }
             locks.suspend_all = locks.suspend_all.checked_add(1).ok_or(OsError::Limit)?;
             Ok(())
         })
@@ -253,19 +269,24 @@ where
     /// `E_OS_CALLEVEL` not allowed here; `E_OS_NOFUNC` none in force: ignored
     /// (SWS_Os_00092).
     pub fn resume_all_interrupts(&mut self) -> Result<(), OsError> {
-        self.interrupt_service(ServiceCall::ResumeAllInterrupts, |locks| {
+        self.interrupt_service(ServiceCall::ResumeAllInterrupts, |locks, _| {
             locks.suspend_all = locks.suspend_all.checked_sub(1).ok_or(OsError::NoFunc)?;
             Ok(())
         })
     }
 
     /// `SuspendOSInterrupts`: every category-2 interrupt held until the matching
-    /// `ResumeOSInterrupts`; category-1 ISRs still run. Nestable.
+    /// `ResumeOSInterrupts`; category-1 ISRs still run. Nestable. Not allowed inside a
+    /// `DisableAllInterrupts` section, where it is not carried out.
     ///
     /// # Errors
-    /// `E_OS_CALLEVEL` not allowed here; `E_OS_LIMIT` nested 255 deep (ignored).
+    /// `E_OS_CALLEVEL` not allowed here; `E_OS_DISABLEDINT` inside `DisableAllInterrupts`
+    /// (ignored); `E_OS_LIMIT` nested 255 deep (ignored).
     pub fn suspend_os_interrupts(&mut self) -> Result<(), OsError> {
-        self.interrupt_service(ServiceCall::SuspendOsInterrupts, |locks| {
+        self.interrupt_service(ServiceCall::SuspendOsInterrupts, |locks, _| {
+            if locks.all_disabled {
+                return Err(OsError::DisabledInt);
+            }
             locks.suspend_os = locks.suspend_os.checked_add(1).ok_or(OsError::Limit)?;
             Ok(())
         })
@@ -277,7 +298,7 @@ where
     /// `E_OS_CALLEVEL` not allowed here; `E_OS_NOFUNC` none in force: ignored
     /// (SWS_Os_00092).
     pub fn resume_os_interrupts(&mut self) -> Result<(), OsError> {
-        self.interrupt_service(ServiceCall::ResumeOsInterrupts, |locks| {
+        self.interrupt_service(ServiceCall::ResumeOsInterrupts, |locks, _| {
             locks.suspend_os = locks.suspend_os.checked_sub(1).ok_or(OsError::NoFunc)?;
             Ok(())
         })

@@ -634,8 +634,16 @@ where
         };
         match result {
             Ok(v) => Ok(v),
-            Err(e) => Err(self.report(call(), e)),
+            Err(e) => Err(self.report_with(call, e)),
         }
+    }
+
+    /// The error path of [`Os::service`], out of line: the description of the call is built
+    /// here, so the fast path only passes what the closure captured.
+    #[cold]
+    #[inline(never)]
+    fn report_with(&mut self, call: impl FnOnce() -> ServiceCall, error: OsError) -> OsError {
+        self.report(call(), error)
     }
 
     /// `ErrorHook` for the failed `call`, unless it is running already (OSEK: never
