@@ -88,7 +88,7 @@
 
 pub mod timing;
 
-use core::cell::RefCell;
+use core::cell::{Cell, RefCell, RefMut};
 use core::fmt;
 use std::collections::VecDeque;
 use std::rc::Rc;
@@ -427,7 +427,8 @@ impl Node {
     }
 
     /// Completes a bus-off recovery that has ended by `t_ns`.
-    fn settle(&mut self, t_ns: u64) {
+    /// Returns whether a recovery ended (the node's state changed).
+    fn settle(&mut self, t_ns: u64) -> bool {
         if let Role::Controller(c) = &mut self.role {
             if let Some(end_ns) = c.recovery_end_ns.filter(|&r| c.bus_off && r <= t_ns) {
                 c.bus_off = false;
@@ -436,8 +437,10 @@ impl Node {
                 // Settling early (an accessor at `t_ns`) must not let a frame start before
                 // the recovery ended.
                 self.ready_at_ns = self.ready_at_ns.max(end_ns);
+                return true;
             }
         }
+        false
     }
 
     /// Removes the pending frame `seq` from `slot`; false if it is no longer there.
@@ -519,6 +522,18 @@ struct Bus {
     tracing: bool,
     trace: Vec<BusRecord>,
     stats: BusStats,
+    /// The next transmission as `plan` last computed it, while nothing it depends on has
+    /// changed (`None`: to be computed). The plan is a function of the bus's state alone,
+    /// not of the clock; every access that can change that state clears this.
+    plan_cache: Cell<Option<Option<Plan>>>,
+}
+
+/// Borrows the bus to change what the next transmission depends on (mailboxes, queues,
+/// modes, error counters, bus-off recovery): the cached plan is dropped.
+fn bus_mut(bus: &RefCell<Bus>) -> RefMut<'_, Bus> {
+    let b = bus.borrow_mut();
+    b.plan_cache.set(None);
+    b
 }
 
 impl Bus {
@@ -552,7 +567,17 @@ impl Bus {
     }
 
     /// The next transmission if nothing else is written meanwhile.
+    /// The next transmission (cached: see `plan_cache`).
     fn plan(&self) -> Option<Plan> {
+        if let Some(plan) = self.plan_cache.get() {
+            return plan;
+        }
+        let plan = self.compute_plan();
+        self.plan_cache.set(Some(plan));
+        plan
+    }
+
+    fn compute_plan(&self) -> Option<Plan> {
         let offers = || {
             self.nodes.iter().enumerate().flat_map(|(i, node)| {
                 let ready = node.transmit_ready_ns();
@@ -594,10 +619,11 @@ impl Bus {
     }
 
     fn commit(&mut self, plan: Plan) {
+        self.plan_cache.set(None);
         let Some(node) = self.nodes.get_mut(plan.node) else {
             return;
         };
-        node.settle(plan.start_ns);
+        let _ = node.settle(plan.start_ns);
         if plan.outcome == Outcome::InjectedError {
             node.injected_errors -= 1;
         }
@@ -641,13 +667,14 @@ impl Bus {
     }
 
     fn complete(&mut self, f: InFlight) {
+        self.plan_cache.set(None);
         self.idle_at_ns = f.end_ns.saturating_add(self.bits_ns(INTERMISSION_BITS));
         let suspend_until_ns = self
             .idle_at_ns
             .saturating_add(self.bits_ns(SUSPEND_TRANSMISSION_BITS));
         let time_us = ns_to_us_ceil(f.end_ns);
         for node in &mut self.nodes {
-            node.settle(f.end_ns);
+            let _ = node.settle(f.end_ns);
         }
         let sent = f.outcome == Outcome::Sent;
         if sent {
@@ -788,6 +815,7 @@ impl VirtualBus {
                 tracing: false,
                 trace: Vec::new(),
                 stats: BusStats::default(),
+                plan_cache: Cell::new(None),
             })),
         }
     }
@@ -816,10 +844,7 @@ impl VirtualBus {
 
     /// Attaches a controller (initially `Stopped`, TEC 0).
     pub fn attach(&self, config: &HostCanConfig) -> HostCan {
-        let node = self
-            .bus
-            .borrow_mut()
-            .attach(Role::Controller(Controller::new(config)));
+        let node = bus_mut(&self.bus).attach(Role::Controller(Controller::new(config)));
         HostCan {
             bus: Rc::clone(&self.bus),
             node,
@@ -828,10 +853,7 @@ impl VirtualBus {
 
     /// Attaches a tester node (always active, receives every frame).
     pub fn attach_tester(&self) -> Tester {
-        let node = self
-            .bus
-            .borrow_mut()
-            .attach(Role::Tester(TesterState::default()));
+        let node = bus_mut(&self.bus).attach(Role::Tester(TesterState::default()));
         Tester {
             bus: Rc::clone(&self.bus),
             node,
@@ -869,7 +891,7 @@ impl VirtualBus {
     /// # Errors
     /// [`UnknownNode`] if no such node is attached.
     pub fn inject_tx_errors(&self, node: NodeId, count: u32) -> Result<(), UnknownNode> {
-        let mut bus = self.bus.borrow_mut();
+        let mut bus = bus_mut(&self.bus);
         let n = bus.nodes.get_mut(node.0).ok_or(UnknownNode)?;
         n.injected_errors = n.injected_errors.saturating_add(count);
         Ok(())
@@ -880,8 +902,12 @@ impl VirtualBus {
         let mut bus = self.bus.borrow_mut();
         let now_ns = bus.now_ns();
         let n = bus.nodes.get_mut(node.0)?;
-        n.settle(now_ns);
-        Some(n.tec)
+        let settled = n.settle(now_ns);
+        let tec = n.tec;
+        if settled {
+            bus.plan_cache.set(None);
+        }
+        Some(tec)
     }
 
     /// Starts or stops recording completed frames for [`Self::take_trace`].
@@ -916,13 +942,15 @@ impl HostCan {
     fn with<R>(&self, default: R, f: impl FnOnce(&Node) -> R) -> R {
         let mut bus = self.bus.borrow_mut();
         let now_ns = bus.now_ns();
-        match bus.nodes.get_mut(self.node) {
-            Some(node) => {
-                node.settle(now_ns);
-                f(node)
-            }
-            None => default,
+        let Some(node) = bus.nodes.get_mut(self.node) else {
+            return default;
+        };
+        let settled = node.settle(now_ns);
+        let result = f(node);
+        if settled {
+            bus.plan_cache.set(None);
         }
+        result
     }
 
     /// `Can_Write` with the reason for a refusal.
@@ -930,7 +958,7 @@ impl HostCan {
     /// # Errors
     /// [`WriteError`]; nothing was queued.
     pub fn try_write(&mut self, hth: Hth, pdu: u16, frame: &CanFrame) -> Result<(), WriteError> {
-        let mut bus = self.bus.borrow_mut();
+        let mut bus = bus_mut(&self.bus);
         let pending = bus.new_pending(frame, pdu);
         let c = bus
             .controller_mut(self.node)
@@ -988,7 +1016,7 @@ impl HostCan {
 
     /// Makes the next `count` transmission attempts fail.
     pub fn inject_tx_errors(&self, count: u32) {
-        let mut bus = self.bus.borrow_mut();
+        let mut bus = bus_mut(&self.bus);
         if let Some(n) = bus.nodes.get_mut(self.node) {
             n.injected_errors = n.injected_errors.saturating_add(count);
         }
@@ -1035,11 +1063,11 @@ impl CanDriver for HostCan {
 
     fn set_controller_mode(&mut self, mode: ControllerMode) -> Result<(), ModeRefused> {
         use ControllerMode::{Sleep, Started, Stopped};
-        let mut bus = self.bus.borrow_mut();
+        let mut bus = bus_mut(&self.bus);
         let now_ns = bus.now_ns();
         let recovery_ns = bus.bits_ns(BUS_OFF_RECOVERY_BITS);
         let node = bus.nodes.get_mut(self.node).ok_or(ModeRefused)?;
-        node.settle(now_ns);
+        let _ = node.settle(now_ns);
         let Role::Controller(c) = &mut node.role else {
             return Err(ModeRefused);
         };
@@ -1078,7 +1106,7 @@ impl Tester {
     /// Queues `frame` for transmission from now; frames go out in the order sent. Any id
     /// and any length 0..=8 is fine: the ECU's filters and CanIf decide what to make of it.
     pub fn send(&mut self, frame: &CanFrame) {
-        let mut bus = self.bus.borrow_mut();
+        let mut bus = bus_mut(&self.bus);
         let pending = bus.new_pending(frame, 0);
         if let Some(Node {
             role: Role::Tester(t),
