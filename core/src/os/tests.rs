@@ -868,8 +868,12 @@ fn dialects_differ_where_the_standards_do() {
     assert_eq!(autosar.suspend_all_interrupts(), Ok(()));
     assert_eq!(autosar.resume_all_interrupts(), Ok(()));
     assert_eq!(autosar.suspend_os_interrupts(), Err(OsError::CallLevel));
+    // Start-up code may disable interrupts before StartOS; the OS starts anyway, unlocked.
+    assert_eq!(autosar.disable_all_interrupts(), Ok(()));
     assert_eq!(osek.start_os(OSDEFAULTAPPMODE), Ok(()));
     assert_eq!(autosar.start_os(OSDEFAULTAPPMODE), Ok(()));
+    assert_eq!(autosar.locks(), Locks::default());
+    assert_eq!(autosar.running(), Some(TaskId(0)));
     // SetRelAlarm with increment 0.
     assert_eq!(autosar.set_rel_alarm(AlarmId(0), 0, 0), Err(OsError::Value));
     assert_eq!(osek.set_rel_alarm(AlarmId(0), 0, 0), Ok(()));

@@ -29,16 +29,24 @@ where
     /// the highest-priority task. On a board, `StartOS` does not return: the board runs
     /// what the kernel dispatched from here on.
     ///
+    /// Interrupt locks the start-up code took before (AUTOSAR allows the all-interrupt
+    /// services there, SWS_Os_00299) do not stop it, and do not carry into the OS: the code
+    /// that took them never runs again.
+    ///
     /// # Errors
     /// `E_OS_CALLEVEL` the OS has already started; `E_OS_VALUE` `mode` is not a configured
     /// application mode (the OS does not start). `ErrorHook` is not called: the OS is not
     /// running yet.
     pub fn start_os(&mut self, mode: AppMode) -> Result<(), OsError> {
-        self.check(ServiceId::StartOs)?;
+        // Call level only: SWS_Os_00093's E_OS_DISABLEDINT is for tasks, ISRs and hooks.
+        if self.cfg().denied[self.context as usize] & ServiceId::StartOs.bit() != 0 {
+            return Err(OsError::CallLevel);
+        }
         let cfg = self.cfg();
         if mode.0 >= cfg.app_modes {
             return Err(OsError::Value);
         }
+        self.set_locks(Locks::default());
         self.mode = mode;
         let bit = 1u32 << mode.0;
         for t in 0..T {
