@@ -9,8 +9,10 @@
 //! - [`sonar`]: HC-SR04-class echo width to distance conversion;
 //! - [`com::signal`]: the AUTOSAR Com signal codec (Intel and Motorola byte order, DBC
 //!   start-bit convention, signed and unsigned, PDUs up to 64 bytes);
-//! - [`os`]: an OSEK/VDX OS 2.2.3 scheduler state machine (tasks, events, resources with
-//!   immediate priority ceiling, counters and alarms);
+//! - [`os`]: an OSEK/VDX OS 2.2.3 kernel with AUTOSAR OS's scalability-class-1
+//!   additions, as a state machine (tasks, events, resources with immediate priority
+//!   ceiling, counters and alarms, category-1 and -2 ISRs, interrupt services, hooks,
+//!   application modes, shutdown, call levels);
 //! - [`can`], [`canif`], [`pdur`] and [`com::ipdu`]: the CAN driver interface, the CAN
 //!   Interface (transmit buffering, receive checks, modes, bus-off), the PDU Router's static
 //!   routes, and Com's I-PDUs and signals (transmission modes, update bits, deadlines);

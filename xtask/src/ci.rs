@@ -44,18 +44,18 @@ pub const STAGES: &[&str] = &[
 /// minutes). `setup` is given what a fresh machine needs (the nightly, cargo-bolero,
 /// valgrind, the Python venv); it takes seconds once those are there.
 const BUDGET_S: &[(&str, u32)] = &[
-    ("setup", 600),
+    ("setup", 360),
     ("fmt", 30),
-    ("clippy", 240),
+    ("clippy", 150),
     ("test", 240),
-    ("cross", 180),
-    ("miri", 420),
-    ("model", 90),
-    ("mutants", 420),
-    ("differential", 60),
-    ("interop", 90),
-    ("fuzz", 180),
-    ("bench", 180),
+    ("cross", 60),
+    ("miri", 540),
+    ("model", 60),
+    ("mutants", 120),
+    ("differential", 30),
+    ("interop", 60),
+    ("fuzz", 200),
+    ("bench", 150),
 ];
 
 fn budget_s(stage: &str) -> u32 {
