@@ -651,24 +651,6 @@ pub fn run<
     }
 }
 
-/// Runs `program` and panics with the failure, if any.
-#[track_caller]
-pub fn check<
-    const T: usize,
-    const R: usize,
-    const C: usize,
-    const A: usize,
-    const I: usize,
-    const Q: usize,
->(
-    cfg: &'static OsConfig<T, R, C, A, I>,
-    program: &'static Program,
-) {
-    if let Err(failure) = run::<T, R, C, A, I, Q>(cfg, program) {
-        panic!("sequence failed: {failure}");
-    }
-}
-
 /// Validates a configuration in a `static` (a broken one stops the build).
 #[allow(clippy::panic)]
 pub const fn config<
