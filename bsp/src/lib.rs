@@ -38,3 +38,4 @@ extern crate std;
 
 #[cfg(feature = "host")]
 pub mod host;
+pub mod port;

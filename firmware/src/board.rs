@@ -1,38 +1,42 @@
 //! What this ECU needs from a board: the MCAL drivers the paper configures (§3.2.2:
-//! Port, Dio, Gpt, Can) as embedded-hal 1.0 and `cw_core::can` traits. Each board (the host
-//! simulation first) implements [`Board`]; everything above it, [`crate::iohwab`], the
-//! SWCs, the RTE and the BSW, is the same on every board.
+//! Port, Dio, Gpt, Can) as embedded-hal 1.0 and `cw_core::can` traits. A board (the host
+//! simulation, QEMU's mps2-an386) names their types in [`Board`] and hands the ECU one
+//! [`BoardParts`]; everything above it, [`crate::iohwab`], the SWCs, the RTE and the BSW,
+//! is the same on every board.
+//!
+//! The parts are split by who uses them, because tasks and ISRs preempt each other: the
+//! CAN controller belongs to the Com stack (OSEK resource `RES_COM`), the LEDs to the LED
+//! resource (`RES_LEDS`), the sensor's pins and timer to `OsSonarTask` alone.
 //!
 //! | AUTOSAR module | here |
 //! |---|---|
-//! | Port (`Port_Init`) | [`Board::port_init`]: every pin to its direction and initial level |
-//! | Dio (`Dio_WriteChannel`, `Dio_ReadChannel`) | [`Board::dio_out`] (`OutputPin`), [`Board::dio_in`] (`InputPin`) |
-//! | Gpt (time base, delays, the echo's duration) | [`Board::now_ms`], [`Board::gpt_delay`] (`DelayNs`), [`Board::gpt_capture`] ([`PulseCapture`]) |
-//! | Can | [`Board::can`] ([`CanDriver`]) |
-//! | interrupt controller (OS port) | [`Board::irq`] ([`InterruptControl`]): the kernel's interrupt mask, applied after every kernel call |
+//! | Port (`Port_Init`) | [`PortDriver::port_init`]: every pin to its direction and initial level |
+//! | Dio (`Dio_WriteChannel`, `Dio_ReadChannel`) | [`Leds`], [`SonarIo::trigger`] (`OutputPin`), [`SonarIo::echo`] (`InputPin`) |
+//! | Gpt (delays, the echo's duration) | [`SonarIo::delay`] (`DelayNs`), [`SonarIo::capture`] ([`PulseCapture`]) |
+//! | Can | [`BoardParts::can`] ([`CanDriver`] and [`CanEvents`]) |
+//!
+//! The OS port (time base, interrupt controller, task switching) is the board's too:
+//! `cw_bsp::port::Port`.
 
 use cw_core::can::CanDriver;
-use cw_core::os::{InterruptControl, TaskId};
 use embedded_hal::delay::DelayNs;
 use embedded_hal::digital::{InputPin, OutputPin};
 
-/// The Dio output channels of this ECU.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub enum DioOut {
-    /// The red warning LED (high = lit).
-    RedLed,
-    /// The yellow warning LED (high = lit).
-    YellowLed,
-    /// The ultrasonic sensor's trigger line (a high pulse of at least 10 µs starts a
-    /// measurement).
-    SonarTrigger,
+/// A CAN controller event, taken by the ECU's CAN interrupt (`CanIsr`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum CanInterrupt {
+    /// The frame of this CanIf PDU handle was sent.
+    TxConfirmation(u16),
+    /// A frame arrived in this receive mailbox.
+    Received(cw_core::can::Hrh, cw_core::can::CanFrame),
+    /// The controller went bus-off.
+    BusOff,
 }
 
-/// The Dio input channels of this ECU.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub enum DioIn {
-    /// The ultrasonic sensor's echo line (high while the echo is timed; idle low).
-    SonarEcho,
+/// The CAN controller's interrupt sources, as `CanIsr` reads them.
+pub trait CanEvents {
+    /// The oldest event not yet taken (transmit confirmation, reception, bus-off).
+    fn take_event(&mut self) -> Option<CanInterrupt>;
 }
 
 /// Gpt input capture: the duration of a pulse on the echo line, timed by the hardware
@@ -44,47 +48,59 @@ pub trait PulseCapture {
     fn high_time_us(&mut self, timeout_us: u32) -> Option<u32>;
 }
 
-/// A board the ECU runs on: its MCAL.
+/// The AUTOSAR Port driver.
+pub trait PortDriver {
+    /// `Port_Init`: every pin to its configured direction and initial level (outputs
+    /// low). Runs once, in EcuM start-up one, before any Dio access.
+    fn port_init(&mut self);
+}
+
+/// A board the ECU runs on: the types of its MCAL drivers.
 pub trait Board {
     /// The CAN controller driver.
-    type Can: CanDriver;
-    /// A Dio output channel.
-    type Out: OutputPin;
-    /// A Dio input channel.
-    type In: InputPin;
+    type Can: CanDriver + CanEvents;
+    /// A warning LED's Dio channel (high = lit).
+    type Led: OutputPin;
+    /// The sensor's trigger line (a high pulse of at least 10 µs starts a measurement).
+    type Trigger: OutputPin;
+    /// The sensor's echo line (high while the echo is timed; idle low).
+    type Echo: InputPin;
     /// The Gpt busy-wait delay.
     type Delay: DelayNs;
     /// The Gpt input capture on the echo line.
     type Capture: PulseCapture;
-    /// The interrupt controller, as the OS drives it.
-    type Irq: InterruptControl;
+    /// The Port driver.
+    type Port: PortDriver;
+}
 
-    /// `Port_Init`: every pin to its configured direction and initial level (outputs low).
-    /// Runs once, in EcuM start-up one, before any Dio access.
-    fn port_init(&mut self);
+/// The two warning LEDs.
+pub struct Leds<B: Board> {
+    /// The red LED.
+    pub red: B::Led,
+    /// The yellow LED.
+    pub yellow: B::Led,
+}
 
+/// The ultrasonic sensor's lines and timer.
+pub struct SonarIo<B: Board> {
+    /// The trigger line.
+    pub trigger: B::Trigger,
+    /// The echo line.
+    pub echo: B::Echo,
+    /// The Gpt delay (the trigger pulse's length).
+    pub delay: B::Delay,
+    /// The Gpt capture of the echo's width.
+    pub capture: B::Capture,
+}
+
+/// Everything the ECU takes from a board.
+pub struct BoardParts<B: Board> {
+    /// The Port driver (used once, at start-up).
+    pub port: B::Port,
     /// The CAN controller.
-    fn can(&mut self) -> &mut Self::Can;
-
-    /// A Dio output channel.
-    fn dio_out(&mut self, channel: DioOut) -> &mut Self::Out;
-
-    /// A Dio input channel.
-    fn dio_in(&mut self, channel: DioIn) -> &mut Self::In;
-
-    /// The Gpt delay.
-    fn gpt_delay(&mut self) -> &mut Self::Delay;
-
-    /// The Gpt input capture.
-    fn gpt_capture(&mut self) -> &mut Self::Capture;
-
-    /// The interrupt controller: the ECU applies the kernel's interrupt mask to it after
-    /// every kernel call that can change it.
-    fn irq(&mut self) -> &mut Self::Irq;
-
-    /// Milliseconds since start (the Gpt time base).
-    fn now_ms(&self) -> u64;
-
-    /// Called when a task starts executing (for timing measurements; default: nothing).
-    fn task_started(&mut self, _task: TaskId) {}
+    pub can: B::Can,
+    /// The LEDs.
+    pub leds: Leds<B>,
+    /// The sensor.
+    pub sonar: SonarIo<B>,
 }

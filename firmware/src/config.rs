@@ -20,6 +20,16 @@
 //! | `SysTickIsr` | 2 | 2 | advances the 1 ms system counter; due alarms activate tasks |
 //! | `CanIsr` | 2 | 1 | takes the CAN controller's events into CanIf (receptions, confirmations, bus-off) |
 //!
+//! | resource | guards | taken by | ceiling |
+//! |---|---|---|---|
+//! | `RES_COM` | the Com stack: EcuM, BswM, CanSM, Com, PduR, CanIf and the CAN controller | `OsStartupTask`, `OsBswServiceTask`, `OsObstacleDetectionTask`, `OsComTask`, `CanIsr` | `CanIsr`'s level: a task holding it masks `CanIsr` |
+//! | `RES_RTE` | the RTE's buffers (SonarData, LedRequest, mode requests) | `OsLEDTask`, `OsBswServiceTask`, `OsObstacleDetectionTask`, `OsComTask`, `OsSonarTask` | 6 (`OsLEDTask`) |
+//! | `RES_LEDS` | the LED pins | `OsLEDTask`, `OsBswServiceTask` (EcuM's safe state) | 6 (`OsLEDTask`) |
+//!
+//! The kernel's own data is guarded by the kernel lock (every interrupt masked for the
+//! length of one service call); `SysTickIsr` takes no resource. The ceilings are derived
+//! by `OsConfig::new` from the `uses` declarations below, never written by hand.
+//!
 //! The OS runs in conformance class BCC1 (basic tasks, one activation each, one task per
 //! priority: the paper's task set needs no more), with extended status (every misuse is
 //! refused and reported to `ErrorHook`, which the ECU counts; the call-level check is one
@@ -37,7 +47,7 @@ use cw_core::com::ipdu::{
 use cw_core::com::signal::{ByteOrder, Signedness};
 use cw_core::os::{
     AlarmAction, AlarmConfig, ConformanceClass, CounterConfig, CounterId, Dialect, HookSet,
-    IsrConfig, IsrId, OsConfig, OsDescription, Status, TaskConfig, TaskId,
+    IsrConfig, IsrId, OsConfig, OsDescription, ResourceId, Status, TaskConfig, TaskId,
 };
 use cw_core::pdur::{PduRConfig, RxRoute};
 
@@ -53,6 +63,16 @@ pub const OBSTACLE_TASK: TaskId = TaskId(3);
 pub const COM_TASK: TaskId = TaskId(4);
 /// `OsSonarTask`.
 pub const SONAR_TASK: TaskId = TaskId(5);
+/// `RES_COM`: the Com stack and the CAN controller.
+pub const RES_COM: ResourceId = ResourceId(0);
+/// `RES_RTE`: the RTE's buffers.
+pub const RES_RTE: ResourceId = ResourceId(1);
+/// `RES_LEDS`: the LED pins.
+pub const RES_LEDS: ResourceId = ResourceId(2);
+const USES_COM: u32 = 1 << RES_COM.0;
+const USES_RTE: u32 = 1 << RES_RTE.0;
+const USES_LEDS: u32 = 1 << RES_LEDS.0;
+
 /// The 1 ms system counter.
 pub const SYSTEM_COUNTER: CounterId = CounterId(0);
 /// The system timer's interrupt (SysTick on a Cortex-M): drives [`SYSTEM_COUNTER`].
@@ -68,18 +88,20 @@ const fn cyclic(name: &'static str, task: TaskId, period_ms: u32) -> AlarmConfig
         .relative(period_ms, period_ms)
 }
 
-/// The OS: six tasks, four cyclic alarms on a 1 ms counter, two category-2 ISRs.
-pub static OS: OsConfig<6, 0, 1, 4, 2> = match OsConfig::new(
+/// The OS: six tasks, three resources, four cyclic alarms on a 1 ms counter, two
+/// category-2 ISRs.
+pub static OS: OsConfig<6, 3, 1, 4, 2> = match OsConfig::new(
     OsDescription::new(
         [
             TaskConfig::basic("OsStartupTask", 7)
                 .non_preemptive()
-                .autostart(),
-            TaskConfig::basic("OsLEDTask", 6),
-            TaskConfig::basic("OsBswServiceTask", 5),
-            TaskConfig::basic("OsObstacleDetectionTask", 4),
-            TaskConfig::basic("OsComTask", 3),
-            TaskConfig::basic("OsSonarTask", 2),
+                .autostart()
+                .uses(USES_COM),
+            TaskConfig::basic("OsLEDTask", 6).uses(USES_RTE | USES_LEDS),
+            TaskConfig::basic("OsBswServiceTask", 5).uses(USES_COM | USES_RTE | USES_LEDS),
+            TaskConfig::basic("OsObstacleDetectionTask", 4).uses(USES_COM | USES_RTE),
+            TaskConfig::basic("OsComTask", 3).uses(USES_COM | USES_RTE),
+            TaskConfig::basic("OsSonarTask", 2).uses(USES_RTE),
         ],
         [CounterConfig {
             max_allowed_value: 0xFFFF,
@@ -94,7 +116,7 @@ pub static OS: OsConfig<6, 0, 1, 4, 2> = match OsConfig::new(
         ],
         [
             IsrConfig::cat2("SysTickIsr", 2),
-            IsrConfig::cat2("CanIsr", 1),
+            IsrConfig::cat2("CanIsr", 1).uses(USES_COM),
         ],
     )
     .class(ConformanceClass::Bcc1)
@@ -112,11 +134,20 @@ pub static OS: OsConfig<6, 0, 1, 4, 2> = match OsConfig::new(
 
 cw_core::static_tables!(
     /// [`OS`] as a build-time constant: the kernel's table lookups fold away.
-    pub OsTables: OsConfig<6, 0, 1, 4, 2> = OS
+    pub OsTables: OsConfig<6, 3, 1, 4, 2> = OS
 );
 
 /// The OS kernel type for [`OS`], with the ECU's hooks.
-pub type Kernel = cw_core::os::Os<6, 0, 1, 4, 2, 6, OsTables, crate::ecu::EcuHooks>;
+pub type Kernel = cw_core::os::Os<6, 3, 1, 4, 2, 6, OsTables, crate::ecu::EcuHooks>;
+
+/// The kernel for [`OS`], before `StartOS`.
+///
+/// # Errors
+/// [`cw_core::os::ConfigError`] if the kernel's queue capacity does not match the
+/// configuration (a build-configuration mistake, reported rather than panicking).
+pub fn kernel() -> Result<Kernel, cw_core::os::ConfigError> {
+    Kernel::new(OsTables)
+}
 
 const fn std_id(raw: u16) -> CanId {
     match CanId::standard(raw) {

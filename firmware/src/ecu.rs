@@ -1,51 +1,43 @@
-//! The ECU: the OSEK kernel executing the paper's tasks, the BSW (EcuM/BswM, ComM/CanSM,
-//! Com, PduR, CanIf) and the SWCs connected through the RTE, on any [`Board`].
+//! The ECU: the paper's tasks and ISRs, the BSW (EcuM/BswM, ComM/CanSM, Com, PduR, CanIf)
+//! and the SWCs connected through the RTE, on any board and OS port.
 //!
-//! Execution model: the kernel decides who runs; [`Ecu::dispatch`] executes it. Tasks are
-//! basic and run to completion, so a task that another one preempts (the sonar task
-//! activating `OsComTask`) is simply suspended on the Rust stack while the higher one runs,
-//! exactly as a single-stack OSEK kernel does. The timer and CAN interrupts are the
-//! configuration's category-2 ISRs `SysTickIsr` and `CanIsr` ([`Ecu::tick`],
-//! [`Ecu::can_isr`]): the board's interrupt controller takes them when the kernel's
-//! interrupt mask admits them, the kernel is told of their entry and return, and
-//! rescheduling happens when they return. The board applies the kernel's interrupt mask
-//! ([`cw_core::os::InterruptControl`]) after every kernel call that can change it other
-//! than an ISR's own entry and return, whose masking the interrupt controller does by
-//! itself: here, `StartOS` and `ShutdownOS` (the ECU's tasks take no interrupt lock and
-//! no resource shared with an ISR).
+//! Execution model: the kernel decides who runs; the port (`cw_bsp::port::Port`) carries
+//! it out. On a microcontroller the port switches stacks (PendSV) and interrupts arrive
+//! at any instruction; in the host simulation a preempting task runs as a nested call
+//! ([`Ecu::dispatch`]) and interrupts come between jobs. The task bodies and ISRs below
+//! are the same for both.
+//!
+//! Because tasks and ISRs preempt each other, the ECU's state is split by who uses it:
+//!
+//! | state | guarded by | used by |
+//! |---|---|---|
+//! | kernel | kernel lock (one service call) | everyone |
+//! | [`ComStack`]: EcuM, BswM, CanSM, Com, PduR, CanIf, CAN controller | OSEK resource `RES_COM` (ceiling: `CanIsr`) | startup, BSW, obstacle and Com tasks, `CanIsr` |
+//! | [`Rte`] buffers | `RES_RTE` (ceiling: `OsLEDTask`) | LED, BSW, obstacle, Com and sonar tasks |
+//! | [`Leds`] | `RES_LEDS` (ceiling: `OsLEDTask`) | LED task, BSW task (safe state at shutdown) |
+//! | UltraSonic, the sensor's pins | `OsSonarTask` alone | |
+//! | ObstacleDetection | `OsObstacleDetectionTask` alone | |
 //!
 //! Hooks ([`EcuHooks`]): `ErrorHook` counts every error a kernel service returned (none is
 //! expected); `ShutdownHook` records the status `ShutdownOS` was given. EcuM's shutdown
 //! calls `ShutdownOS`: from then on no task, ISR or alarm runs.
 
+use cw_bsp::port::{Port, Resource, TaskLocal};
 use cw_core::canif::{CanIf, RxDropped, TxPduId};
-use cw_core::cansm::{self, Actions, CanSm};
+use cw_core::cansm::{self, CanSm};
 use cw_core::com::ipdu::Com;
 use cw_core::com::signal::SignalValue;
 use cw_core::ecum::{bswm_execute, BswMRequest, EcuM};
-use cw_core::os::{
-    Hooks, InterruptControl, IsrId, OsError, ServiceId, StatusType, TaskId, E_OK, OSDEFAULTAPPMODE,
-};
+use cw_core::os::{Hooks, IsrId, OsError, ServiceId, StatusType, TaskId, E_OK, OSDEFAULTAPPMODE};
 use cw_core::rte::RteError;
 use cw_core::sonar::SonarConfig;
 use cw_core::warning::{Measurement, WarningLevel};
 
-use crate::board::Board;
+use crate::board::{Board, BoardParts, CanEvents, CanInterrupt, Leds, PortDriver, SonarIo};
 use crate::config::{self, Kernel};
 use crate::iohwab;
 use crate::rte::Rte;
 use crate::swc::{can_translate, LedActuator, LedColor, ObstacleDetection, UltraSonic};
-
-/// A CAN controller event, delivered by the board's CAN interrupt.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum CanInterrupt {
-    /// The frame of this CanIf PDU handle was sent.
-    TxConfirmation(u16),
-    /// A frame arrived in this receive mailbox.
-    Received(cw_core::can::Hrh, cw_core::can::CanFrame),
-    /// The controller went bus-off.
-    BusOff,
-}
 
 /// The ECU's hook routines and their data (the OS configuration enables `ErrorHook` and
 /// `ShutdownHook`).
@@ -58,6 +50,9 @@ pub struct EcuHooks {
     pub last_error: Option<(ServiceId, OsError)>,
     /// The status `ShutdownOS` was given, once it ran.
     pub shutdown: Option<StatusType>,
+    /// ISR entries or returns the kernel refused (the port took an interrupt the mask
+    /// held, or returned from one not active): these calls have no `ErrorHook`.
+    pub port_errors: u32,
 }
 
 impl Hooks<Kernel> for EcuHooks {
@@ -91,362 +86,85 @@ pub struct EcuStats {
     pub mode_requests_refused: u32,
 }
 
-/// The whole ECU except the board.
-pub struct Ecu {
-    os: Kernel,
-    ecum: EcuM,
-    canif: config::EcuCanIf,
-    cansm: CanSm,
-    com: config::EcuCom,
-    rte: Rte,
-    ultrasonic: UltraSonic,
-    obstacle: ObstacleDetection,
-    red: LedActuator,
-    yellow: LedActuator,
-    /// The last threshold pair received from the PC and applied (raw), to apply each once.
-    applied_thresholds: (u64, u64),
-    last_measurement: Measurement,
-    stats: EcuStats,
-    /// ISR entries or returns the kernel refused (the board took an interrupt the mask
-    /// held, or returned from one not active).
-    port_errors: u32,
+/// The Com stack and the CAN controller it drives (`RES_COM`).
+pub struct ComStack<C> {
+    /// EcuM (BswM's rules act on it).
+    pub ecum: EcuM,
+    /// CanIf.
+    pub canif: config::EcuCanIf,
+    /// CanSM.
+    pub cansm: CanSm,
+    /// Com.
+    pub com: config::EcuCom,
+    /// The CAN controller.
+    pub can: C,
+    frames_requested: u32,
+    frames_refused: u32,
+    rx_dropped: u32,
+    mode_requests_refused: u32,
 }
 
-impl Ecu {
-    /// The ECU before power-on.
-    ///
-    /// # Errors
-    /// [`cw_core::os::ConfigError`] if the kernel's queue capacity does not match the
-    /// configuration (a build-configuration mistake, reported rather than panicking).
-    pub fn new(sensor: SonarConfig) -> Result<Self, cw_core::os::ConfigError> {
-        Ok(Self {
-            os: Kernel::new(config::OsTables)?,
+impl<C: cw_core::can::CanDriver + CanEvents> ComStack<C> {
+    fn new(can: C) -> Self {
+        Self {
             ecum: EcuM::new(),
             canif: CanIf::new(config::CanIfTables),
             cansm: CanSm::new(config::CANSM),
             com: Com::new(config::ComTables),
-            rte: Rte::new(),
-            ultrasonic: UltraSonic::new(sensor),
-            obstacle: ObstacleDetection::new(),
-            red: LedActuator::new(LedColor::Red),
-            yellow: LedActuator::new(LedColor::Yellow),
-            applied_thresholds: (1000, 2000),
-            last_measurement: Measurement::Invalid,
-            stats: EcuStats::default(),
-            port_errors: 0,
-        })
-    }
-
-    /// The kernel (for inspection).
-    pub const fn os(&self) -> &Kernel {
-        &self.os
-    }
-
-    /// The CanIf state (drop counters, modes).
-    pub const fn canif(&self) -> &config::EcuCanIf {
-        &self.canif
-    }
-
-    /// The CanSM state (bus-off counters).
-    pub const fn cansm(&self) -> &CanSm {
-        &self.cansm
-    }
-
-    /// The EcuM state.
-    pub const fn ecum(&self) -> &EcuM {
-        &self.ecum
-    }
-
-    /// The newest measurement UltraSonic published.
-    pub const fn measurement(&self) -> Measurement {
-        self.last_measurement
-    }
-
-    /// The level ObstacleDetection decided last.
-    pub fn level(&self) -> WarningLevel {
-        self.rte.led_request.read()
-    }
-
-    /// The warning thresholds in use.
-    pub const fn thresholds(&self) -> cw_core::warning::Thresholds {
-        self.obstacle.thresholds()
-    }
-
-    /// Run counters.
-    pub fn stats(&self) -> EcuStats {
-        EcuStats {
-            os_errors: self.os.hooks().errors.saturating_add(self.port_errors),
-            ..self.stats
+            can,
+            frames_requested: 0,
+            frames_refused: 0,
+            rx_dropped: 0,
+            mode_requests_refused: 0,
         }
-    }
-
-    /// A kernel call the board makes as the port (ISR entry and return, `StartOS`): these
-    /// have no `ErrorHook`, so their refusals are counted here.
-    fn port_result(&mut self, result: Result<(), OsError>) {
-        if result.is_err() {
-            self.port_errors = self.port_errors.saturating_add(1);
-        }
-    }
-
-    /// A mode request to BswM (from the mode-management SWC: ignition off, or a
-    /// communication control), carried out by BswM's main function in the next
-    /// `OsBswServiceTask`.
-    ///
-    /// # Errors
-    /// [`RteError::Limit`] when four requests are already waiting; this one is not stored.
-    pub fn request_mode(&mut self, request: BswMRequest) -> Result<(), RteError> {
-        self.rte.mode_requests.send(request).map(|_| ())
-    }
-
-    /// Whether the ECU has shut down (`ShutdownOS` ran: it no longer runs).
-    pub fn is_off(&self) -> bool {
-        self.os.is_shut_down()
-    }
-
-    /// The hooks' record (errors, shutdown status).
-    pub fn hooks(&self) -> &EcuHooks {
-        self.os.hooks()
-    }
-
-    /// Power-on: `EcuM_Init` (start-up one), then `StartOS`, which runs `OsStartupTask`.
-    pub fn start<B: Board>(&mut self, board: &mut B) {
-        if self.ecum.init().is_err() {
-            return;
-        }
-        // Start-up one: Mcu, Port (every pin to its direction, outputs low), Dio, Gpt.
-        board.port_init();
-        let started = self.os.start_os(OSDEFAULTAPPMODE);
-        self.port_result(started);
-        board.irq().apply_mask(self.os.interrupt_mask());
-        self.dispatch(board);
-    }
-
-    /// Runs an ISR as the port does: the kernel is told of its entry, `body` runs, the
-    /// kernel is told of its return (a rescheduling point), and the tasks it made ready run.
-    fn isr<B: Board>(&mut self, board: &mut B, isr: IsrId, body: impl FnOnce(&mut Self, &mut B)) {
-        if self.is_off() {
-            return;
-        }
-        let entered = self.os.enter_isr(isr);
-        self.port_result(entered);
-        if entered.is_err() {
-            return;
-        }
-        body(self, board);
-        if self.is_off() {
-            return;
-        }
-        let left = self.os.exit_isr();
-        self.port_result(left);
-        self.dispatch(board);
-    }
-
-    /// `SysTickIsr`, every 1 ms: the system counter advances and due alarms activate tasks,
-    /// which then run. An alarm that cannot activate its task (a period overrun, which the
-    /// paper's Table 1 would show as a missed period) reaches `ErrorHook`.
-    pub fn tick<B: Board>(&mut self, board: &mut B) {
-        self.isr(board, config::SYSTICK_ISR, |ecu, _| {
-            let _ = ecu.os.increment_counter(config::SYSTEM_COUNTER);
-        });
-    }
-
-    /// `CanIsr`: the CAN controller's pending events, in order, into CanIf and upwards.
-    pub fn can_isr<B: Board>(
-        &mut self,
-        board: &mut B,
-        events: impl IntoIterator<Item = CanInterrupt>,
-    ) {
-        self.isr(board, config::CAN_ISR, |ecu, board| {
-            for event in events {
-                ecu.can_event(board, event);
-            }
-        });
-    }
-
-    /// One controller event, inside `CanIsr`.
-    fn can_event<B: Board>(&mut self, board: &mut B, event: CanInterrupt) {
-        match event {
-            CanInterrupt::TxConfirmation(pdu) => {
-                if let Some(TxPduId(p)) = self.canif.tx_confirmation(board.can(), pdu) {
-                    let _ = config::PDUR.canif_tx_confirmation(TxPduId(p));
-                }
-            }
-            CanInterrupt::Received(hrh, frame) => match self.canif.rx_indication(hrh, &frame) {
-                Ok(pdu) => {
-                    config::PDUR.canif_rx_indication(&mut self.com, pdu, frame.bytes());
-                }
-                Err(
-                    RxDropped::Offline
-                    | RxDropped::UnknownId
-                    | RxDropped::WrongHrh
-                    | RxDropped::WrongDlc,
-                ) => {
-                    self.stats.rx_dropped = self.stats.rx_dropped.saturating_add(1);
-                }
-            },
-            CanInterrupt::BusOff => {
-                self.canif.controller_bus_off();
-                let actions = self.cansm.controller_bus_off();
-                self.apply(board, actions);
-            }
-        }
-    }
-
-    /// Runs tasks while the kernel has one to run that is not already on the stack.
-    fn dispatch<B: Board>(&mut self, board: &mut B) {
-        while let Some(task) = self.os.running() {
-            if self.is_off() {
-                return;
-            }
-            self.run_task(board, task);
-        }
-    }
-
-    /// Runs the task the kernel just chose until the current one (`me`) is chosen again:
-    /// the nested execution of a preempting task.
-    fn run_preempting<B: Board>(&mut self, board: &mut B, me: TaskId) {
-        while let Some(task) = self.os.running() {
-            if task == me || self.is_off() {
-                return;
-            }
-            self.run_task(board, task);
-        }
-    }
-
-    fn run_task<B: Board>(&mut self, board: &mut B, task: TaskId) {
-        board.task_started(task);
-        match task {
-            config::STARTUP_TASK => self.startup_task(board),
-            config::LED_TASK => self.led_task(board),
-            config::BSW_TASK => self.bsw_task(board),
-            config::OBSTACLE_TASK => self.obstacle_task(),
-            config::COM_TASK => self.com_task(board),
-            config::SONAR_TASK => self.sonar_task(board),
-            _ => {}
-        }
-        if self.is_off() {
-            // The ECU shut down inside this task: the OS is gone, nothing terminates.
-            return;
-        }
-        // An error here reaches ErrorHook, which counts it.
-        let _ = self.os.terminate_task();
-    }
-
-    /// `OsStartupTask`: `EcuM_StartupTwo`, then the ModeManagerInit runnable asks BswM for
-    /// the run mode.
-    fn startup_task<B: Board>(&mut self, board: &mut B) {
-        // Start-up two: Can, CanIf, CanSM, PduR, Com, ComM, BswM, IoHwAb. Each is already in
-        // its initial state (constructed in `new`); the order is EcuM's to keep.
-        if self.ecum.startup_two().is_err() {
-            return;
-        }
-        self.bswm(board, BswMRequest::EcuRun);
-    }
-
-    /// EcuM's main function: in post-run, the outputs go to their safe state (LEDs off)
-    /// and the ECU shuts down (`ShutdownOS(E_OK)`: no more ticks, tasks or interrupts).
-    fn ecum_main_function<B: Board>(&mut self, board: &mut B) {
-        if !self.ecum.main_function() {
-            return;
-        }
-        for color in [LedColor::Red, LedColor::Yellow] {
-            if iohwab::set_led(board, color, false).is_err() {
-                self.stats.pin_faults = self.stats.pin_faults.saturating_add(1);
-            }
-        }
-        let _ = self.os.shutdown_os(E_OK);
-        board.irq().apply_mask(self.os.interrupt_mask());
     }
 
     /// BswM's main function for one request; a request whose rule does not hold now (e.g.
     /// communication on during post-run) is refused and counted.
-    fn bswm<B: Board>(&mut self, board: &mut B, request: BswMRequest) {
+    fn bswm(&mut self, request: BswMRequest) {
         let done = bswm_execute(
             request,
             &mut self.ecum,
             &mut self.cansm,
             &mut self.canif,
-            board.can(),
+            &mut self.can,
         );
         if done.is_err() {
-            self.stats.mode_requests_refused = self.stats.mode_requests_refused.saturating_add(1);
+            self.mode_requests_refused = self.mode_requests_refused.saturating_add(1);
         }
     }
 
-    /// Carries out CanSM's decisions on CanIf and the controller.
-    fn apply<B: Board>(&mut self, board: &mut B, actions: Actions) {
-        cansm::apply(&mut self.cansm, &mut self.canif, board.can(), actions);
-    }
-
-    /// `OsLEDTask`: LEDActuator, prototypes RedLED and YellowLED.
-    fn led_task<B: Board>(&mut self, board: &mut B) {
-        let level = self.rte.led_request.read();
-        let now_ms = board.now_ms();
-        for (swc, color) in [(self.red, LedColor::Red), (self.yellow, LedColor::Yellow)] {
-            if iohwab::set_led(board, color, swc.run(level, now_ms)).is_err() {
-                self.stats.pin_faults = self.stats.pin_faults.saturating_add(1);
-            }
+    fn count_frame(frames: &mut (u32, u32), sent: bool) {
+        if sent {
+            frames.0 = frames.0.saturating_add(1);
+        } else {
+            frames.1 = frames.1.saturating_add(1);
         }
     }
 
-    /// `OsBswServiceTask`: the BSW main functions.
-    fn bsw_task<B: Board>(&mut self, board: &mut B) {
-        while let Ok(request) = self.rte.mode_requests.receive() {
-            self.bswm(board, request);
-        }
+    /// The BSW main functions of `OsBswServiceTask`; whether EcuM asks to shut down.
+    fn main_functions(&mut self) -> bool {
         self.com.main_function_rx(|_timed_out| {});
-        let (canif, stats) = (&mut self.canif, &mut self.stats);
+        let mut frames = (self.frames_requested, self.frames_refused);
+        let (canif, can) = (&mut self.canif, &mut self.can);
         self.com.main_function_tx(|ipdu, sdu| {
-            let sent = config::PDUR
-                .com_transmit(canif, board.can(), ipdu, sdu)
-                .is_ok();
-            count_frame(stats, sent);
+            let sent = config::PDUR.com_transmit(canif, can, ipdu, sdu).is_ok();
+            Self::count_frame(&mut frames, sent);
             sent
         });
+        (self.frames_requested, self.frames_refused) = frames;
         let actions = self.cansm.main_function();
-        self.apply(board, actions);
-        self.ecum_main_function(board);
+        cansm::apply(&mut self.cansm, &mut self.canif, &mut self.can, actions);
+        self.ecum.main_function()
     }
 
-    /// `OsObstacleDetectionTask`: ObstacleDetection (and the thresholds from the PC).
-    fn obstacle_task(&mut self) {
-        let red = self.com.receive_signal(config::SIG_RED_BELOW);
-        let yellow = self.com.receive_signal(config::SIG_YELLOW_BELOW);
-        if let (Ok(SignalValue::Unsigned(r)), Ok(SignalValue::Unsigned(y))) = (red, yellow) {
-            if (r, y) != self.applied_thresholds {
-                self.applied_thresholds = (r, y);
-                self.obstacle.configure(r as u32, y as u32);
-            }
-        }
-        let level = self.obstacle.run(self.rte.sonar_to_obstacle.read());
-        let _ = self.rte.led_request.write(level);
-    }
-
-    /// `OsSonarTask`: UltraSonic; its write to SonarRecv activates `OsComTask`.
-    fn sonar_task<B: Board>(&mut self, board: &mut B) {
-        let echo = iohwab::measure_echo(board, self.ultrasonic.sensor().echo_timeout_us());
-        let measurement = self.ultrasonic.run(echo);
-        self.last_measurement = measurement;
-        let _ = self.rte.sonar_to_obstacle.write(measurement);
-        if self.rte.sonar_to_can.write(measurement).0 {
-            // An error here reaches ErrorHook, which counts it.
-            let _ = self.os.activate_task(config::COM_TASK);
-            self.run_preempting(board, config::SONAR_TASK);
-        }
-    }
-
-    /// `OsComTask`: CanTranslate.
-    fn com_task<B: Board>(&mut self, board: &mut B) {
-        let Ok(measurement) = self.rte.sonar_to_can.take() else {
-            return;
-        };
-        let (distance, level) = can_translate(measurement, self.rte.led_request.read());
-        let (canif, stats) = (&mut self.canif, &mut self.stats);
+    /// CanTranslate's signals through Com, PduR and CanIf to the controller.
+    fn send(&mut self, distance: Option<u64>, level: u64) {
+        let mut frames = (self.frames_requested, self.frames_refused);
+        let (canif, can) = (&mut self.canif, &mut self.can);
         let mut transmit = |ipdu, sdu: &[u8]| {
-            let sent = config::PDUR
-                .com_transmit(canif, board.can(), ipdu, sdu)
-                .is_ok();
-            count_frame(stats, sent);
+            let sent = config::PDUR.com_transmit(canif, can, ipdu, sdu).is_ok();
+            Self::count_frame(&mut frames, sent);
             sent
         };
         let _ = self.com.send_signal(
@@ -464,13 +182,431 @@ impl Ecu {
                 .com
                 .invalidate_signal(config::SIG_DISTANCE, &mut transmit),
         };
+        (self.frames_requested, self.frames_refused) = frames;
+    }
+
+    /// One controller event, inside `CanIsr`.
+    fn can_event(&mut self, event: CanInterrupt) {
+        match event {
+            CanInterrupt::TxConfirmation(pdu) => {
+                if let Some(TxPduId(p)) = self.canif.tx_confirmation(&mut self.can, pdu) {
+                    let _ = config::PDUR.canif_tx_confirmation(TxPduId(p));
+                }
+            }
+            CanInterrupt::Received(hrh, frame) => match self.canif.rx_indication(hrh, &frame) {
+                Ok(pdu) => {
+                    config::PDUR.canif_rx_indication(&mut self.com, pdu, frame.bytes());
+                }
+                Err(
+                    RxDropped::Offline
+                    | RxDropped::UnknownId
+                    | RxDropped::WrongHrh
+                    | RxDropped::WrongDlc,
+                ) => {
+                    self.rx_dropped = self.rx_dropped.saturating_add(1);
+                }
+            },
+            CanInterrupt::BusOff => {
+                self.canif.controller_bus_off();
+                let actions = self.cansm.controller_bus_off();
+                cansm::apply(&mut self.cansm, &mut self.canif, &mut self.can, actions);
+            }
+        }
     }
 }
 
-fn count_frame(stats: &mut EcuStats, sent: bool) {
-    if sent {
-        stats.frames_requested = stats.frames_requested.saturating_add(1);
-    } else {
-        stats.frames_refused = stats.frames_refused.saturating_add(1);
+/// The LED pins and the LEDActuator prototypes that drive them (`RES_LEDS`).
+pub struct LedOutputs<B: Board> {
+    pins: Leds<B>,
+    red: LedActuator,
+    yellow: LedActuator,
+    pin_faults: u32,
+}
+
+impl<B: Board> LedOutputs<B> {
+    fn set(&mut self, color: LedColor, lit: bool) {
+        if iohwab::set_led(&mut self.pins, color, lit).is_err() {
+            self.pin_faults = self.pin_faults.saturating_add(1);
+        }
+    }
+}
+
+/// `OsSonarTask`'s own state.
+struct SonarPart<B: Board> {
+    io: SonarIo<B>,
+    swc: UltraSonic,
+    last: Measurement,
+}
+
+/// `OsObstacleDetectionTask`'s own state.
+struct ObstaclePart {
+    swc: ObstacleDetection,
+    /// The last threshold pair received from the PC and applied (raw), to apply each once.
+    applied: (u64, u64),
+}
+
+/// The whole ECU on a port `P` and a board `B`.
+pub struct Ecu<P, B: Board> {
+    port: P,
+    com: Resource<ComStack<B::Can>>,
+    rte: Resource<Rte>,
+    leds: Resource<LedOutputs<B>>,
+    sonar: TaskLocal<SonarPart<B>>,
+    obstacle: TaskLocal<ObstaclePart>,
+    /// The Port driver, until `Port_Init`.
+    port_driver: Option<B::Port>,
+}
+
+impl<P: Port<Kernel = Kernel>, B: Board> Ecu<P, B> {
+    /// The ECU before power-on, on the port `port` (which holds the kernel) and the board's
+    /// parts.
+    pub fn new(port: P, parts: BoardParts<B>, sensor: SonarConfig) -> Self {
+        Self {
+            port,
+            com: Resource::new(config::RES_COM, ComStack::new(parts.can)),
+            rte: Resource::new(config::RES_RTE, Rte::new()),
+            leds: Resource::new(
+                config::RES_LEDS,
+                LedOutputs {
+                    pins: parts.leds,
+                    red: LedActuator::new(LedColor::Red),
+                    yellow: LedActuator::new(LedColor::Yellow),
+                    pin_faults: 0,
+                },
+            ),
+            sonar: TaskLocal::new(SonarPart {
+                io: parts.sonar,
+                swc: UltraSonic::new(sensor),
+                last: Measurement::Invalid,
+            }),
+            obstacle: TaskLocal::new(ObstaclePart {
+                swc: ObstacleDetection::new(),
+                applied: (1000, 2000),
+            }),
+            port_driver: Some(parts.port),
+        }
+    }
+
+    /// The OS port (with the kernel).
+    pub const fn port(&self) -> &P {
+        &self.port
+    }
+
+    /// The Com stack, the CAN controller included (for inspection while the ECU does not
+    /// run).
+    pub fn com_stack(&mut self) -> &mut ComStack<B::Can> {
+        self.com.get_mut()
+    }
+
+    /// The CanIf state (drop counters, modes).
+    pub fn canif(&mut self) -> &config::EcuCanIf {
+        &self.com.get_mut().canif
+    }
+
+    /// The CanSM state (bus-off counters).
+    pub fn cansm(&mut self) -> &CanSm {
+        &self.com.get_mut().cansm
+    }
+
+    /// The EcuM state.
+    pub fn ecum(&mut self) -> &EcuM {
+        &self.com.get_mut().ecum
+    }
+
+    /// The newest measurement UltraSonic published.
+    pub fn measurement(&mut self) -> Measurement {
+        self.sonar.get_mut().last
+    }
+
+    /// The level ObstacleDetection decided last.
+    pub fn level(&mut self) -> WarningLevel {
+        self.rte.get_mut().led_request.read()
+    }
+
+    /// The warning thresholds in use.
+    pub fn thresholds(&mut self) -> cw_core::warning::Thresholds {
+        self.obstacle.get_mut().swc.thresholds()
+    }
+
+    /// The hooks' record (errors, shutdown status).
+    pub fn hooks(&self) -> EcuHooks {
+        self.port.inspect(|os| *os.hooks())
+    }
+
+    /// Run counters.
+    pub fn stats(&mut self) -> EcuStats {
+        let hooks = self.hooks();
+        let pin_faults = self.leds.get_mut().pin_faults;
+        let com = self.com.get_mut();
+        EcuStats {
+            frames_requested: com.frames_requested,
+            frames_refused: com.frames_refused,
+            rx_dropped: com.rx_dropped,
+            os_errors: hooks.errors.saturating_add(hooks.port_errors),
+            pin_faults,
+            mode_requests_refused: com.mode_requests_refused,
+        }
+    }
+
+    /// A mode request to BswM (from the mode-management SWC: ignition off, or a
+    /// communication control), carried out by BswM's main function in the next
+    /// `OsBswServiceTask`.
+    ///
+    /// # Errors
+    /// [`RteError::Limit`] when four requests are already waiting; this one is not stored.
+    pub fn request_mode(&mut self, request: BswMRequest) -> Result<(), RteError> {
+        self.rte.get_mut().mode_requests.send(request).map(|_| ())
+    }
+
+    /// Whether the ECU has shut down (`ShutdownOS` ran: it no longer runs).
+    pub fn is_off(&self) -> bool {
+        self.port.inspect(|os| os.is_shut_down())
+    }
+
+    /// Power-on, start-up one: `EcuM_Init`, then `Port_Init` (every pin to its direction,
+    /// outputs low). The OS starts next ([`Ecu::start_os`]).
+    pub fn init(&mut self) {
+        if self.com.get_mut().ecum.init().is_err() {
+            return;
+        }
+        if let Some(mut port) = self.port_driver.take() {
+            port.port_init();
+        }
+    }
+
+    /// `StartOS`, which activates `OsStartupTask`.
+    pub fn start_os(&self) {
+        self.port.kernel(|os| {
+            if os.start_os(OSDEFAULTAPPMODE).is_err() {
+                os.hooks_mut().port_errors = os.hooks_mut().port_errors.saturating_add(1);
+            }
+        });
+        self.dispatch();
+    }
+
+    /// A kernel call from a task or ISR body: the port carries out the kernel's choice
+    /// (host port: here, by running the preempting tasks).
+    fn os<R>(&self, f: impl FnOnce(&mut Kernel) -> R) -> R {
+        let result = self.port.kernel(f);
+        self.dispatch();
+        result
+    }
+
+    /// Where the caller runs preempting tasks itself (host port): runs every task the
+    /// kernel chooses above the job on top of the stack, until that job is chosen again.
+    fn dispatch(&self) {
+        if !P::NESTED {
+            return;
+        }
+        loop {
+            let next = self.port.inspect(|os| {
+                if os.is_shut_down() {
+                    None
+                } else {
+                    os.running()
+                }
+            });
+            match next {
+                Some(task) if Some(task) != self.port.current_job() => self.run_job(task),
+                _ => return,
+            }
+        }
+    }
+
+    /// One job of `task`: its body, then `TerminateTask`. The Cortex-M port's task entry
+    /// and the host port's dispatch call it.
+    pub fn run_job(&self, task: TaskId) {
+        self.port.job_started(task);
+        match task {
+            config::STARTUP_TASK => self.startup_task(),
+            config::LED_TASK => self.led_task(),
+            config::BSW_TASK => self.bsw_task(),
+            config::OBSTACLE_TASK => self.obstacle_task(),
+            config::COM_TASK => self.com_task(),
+            config::SONAR_TASK => self.sonar_task(),
+            _ => {}
+        }
+        // After ShutdownOS inside the body the OS is gone and nothing terminates; an
+        // error here reaches ErrorHook, which counts it.
+        let _ = self.port.end_job(|os| {
+            if os.is_shut_down() {
+                Err(OsError::State)
+            } else {
+                os.terminate_task()
+            }
+        });
+        self.port.job_finished(task);
+    }
+
+    /// Runs an ISR as the port does: the kernel is told of its entry, `body` runs, the
+    /// kernel is told of its return (a rescheduling point).
+    fn isr(&self, isr: IsrId, body: impl FnOnce(&Self)) {
+        let count = |os: &mut Kernel, result: Result<(), OsError>| {
+            if result.is_err() {
+                os.hooks_mut().port_errors = os.hooks_mut().port_errors.saturating_add(1);
+            }
+            result
+        };
+        let entered = self.port.kernel(|os| {
+            if os.is_shut_down() {
+                return Err(OsError::State);
+            }
+            let entered = os.enter_isr(isr);
+            count(os, entered)
+        });
+        if entered.is_err() {
+            return;
+        }
+        body(self);
+        let left = self.port.kernel(|os| {
+            if os.is_shut_down() {
+                return Err(OsError::State);
+            }
+            let left = os.exit_isr();
+            count(os, left)
+        });
+        if left.is_ok() {
+            self.dispatch();
+        }
+    }
+
+    /// `SysTickIsr`, every 1 ms: the system counter advances and due alarms activate tasks.
+    /// An alarm that cannot activate its task (a period overrun, which the paper's Table 1
+    /// would show as a missed period) reaches `ErrorHook`.
+    pub fn tick(&self) {
+        self.isr(config::SYSTICK_ISR, |ecu| {
+            let _ = ecu
+                .port
+                .kernel(|os| os.increment_counter(config::SYSTEM_COUNTER));
+        });
+    }
+
+    /// `CanIsr`: the CAN controller's pending events, in order, into CanIf and upwards.
+    pub fn can_isr(&self) {
+        self.isr(config::CAN_ISR, |ecu| {
+            let _ = ecu.com.lock(&ecu.port, |stack| {
+                while let Some(event) = stack.can.take_event() {
+                    stack.can_event(event);
+                }
+            });
+        });
+    }
+
+    /// `OsStartupTask`: `EcuM_StartupTwo`, then the ModeManagerInit runnable asks BswM for
+    /// the run mode.
+    fn startup_task(&self) {
+        // Start-up two: Can, CanIf, CanSM, PduR, Com, ComM, BswM, IoHwAb. Each is already in
+        // its initial state (constructed in `new`); the order is EcuM's to keep.
+        let _ = self.com.lock(&self.port, |stack| {
+            if stack.ecum.startup_two().is_ok() {
+                stack.bswm(BswMRequest::EcuRun);
+            }
+        });
+    }
+
+    /// `OsLEDTask`: LEDActuator, prototypes RedLED and YellowLED.
+    fn led_task(&self) {
+        let Ok(level) = self.rte.lock(&self.port, |rte| rte.led_request.read()) else {
+            return;
+        };
+        let now_ms = self.port.now_ms();
+        let _ = self.leds.lock(&self.port, |leds| {
+            let (red, yellow) = (leds.red.run(level, now_ms), leds.yellow.run(level, now_ms));
+            leds.set(LedColor::Red, red);
+            leds.set(LedColor::Yellow, yellow);
+        });
+    }
+
+    /// `OsBswServiceTask`: the BSW main functions; in EcuM's post-run the outputs go to
+    /// their safe state (LEDs off) and the ECU shuts down (`ShutdownOS(E_OK)`: no more
+    /// ticks, tasks or interrupts).
+    fn bsw_task(&self) {
+        let mut requests = [None; 4];
+        let _ = self.rte.lock(&self.port, |rte| {
+            for slot in &mut requests {
+                *slot = rte.mode_requests.receive().ok();
+            }
+        });
+        let shut_down = self.com.lock(&self.port, |stack| {
+            for request in requests.into_iter().flatten() {
+                stack.bswm(request);
+            }
+            stack.main_functions()
+        });
+        if shut_down != Ok(true) {
+            return;
+        }
+        let _ = self.leds.lock(&self.port, |leds| {
+            leds.set(LedColor::Red, false);
+            leds.set(LedColor::Yellow, false);
+        });
+        let _ = self.os(|os| os.shutdown_os(E_OK));
+    }
+
+    /// `OsObstacleDetectionTask`: ObstacleDetection (and the thresholds from the PC).
+    fn obstacle_task(&self) {
+        let thresholds = self.com.lock(&self.port, |stack| {
+            (
+                stack.com.receive_signal(config::SIG_RED_BELOW),
+                stack.com.receive_signal(config::SIG_YELLOW_BELOW),
+            )
+        });
+        let Ok(measurement) = self
+            .rte
+            .lock(&self.port, |rte| rte.sonar_to_obstacle.read())
+        else {
+            return;
+        };
+        let level = self.obstacle.with(|part| {
+            if let Ok((Ok(SignalValue::Unsigned(r)), Ok(SignalValue::Unsigned(y)))) = thresholds {
+                if (r, y) != part.applied {
+                    part.applied = (r, y);
+                    part.swc.configure(r as u32, y as u32);
+                }
+            }
+            part.swc.run(measurement)
+        });
+        if let Some(level) = level {
+            let _ = self
+                .rte
+                .lock(&self.port, |rte| rte.led_request.write(level));
+        }
+    }
+
+    /// `OsSonarTask`: UltraSonic; its write to SonarRecv activates `OsComTask`, which
+    /// preempts it at once.
+    fn sonar_task(&self) {
+        let Some(measurement) = self.sonar.with(|part| {
+            let echo = iohwab::measure_echo(&mut part.io, part.swc.sensor().echo_timeout_us());
+            part.last = part.swc.run(echo);
+            part.last
+        }) else {
+            return;
+        };
+        let notify = self.rte.lock(&self.port, |rte| {
+            let _ = rte.sonar_to_obstacle.write(measurement);
+            rte.sonar_to_can.write(measurement).0
+        });
+        if notify == Ok(true) {
+            // An error here reaches ErrorHook, which counts it.
+            let _ = self.os(|os| os.activate_task(config::COM_TASK));
+        }
+    }
+
+    /// `OsComTask`: CanTranslate.
+    fn com_task(&self) {
+        let input = self.rte.lock(&self.port, |rte| {
+            rte.sonar_to_can
+                .take()
+                .ok()
+                .map(|m| (m, rte.led_request.read()))
+        });
+        let Ok(Some((measurement, level))) = input else {
+            return;
+        };
+        let (distance, level) = can_translate(measurement, level);
+        let _ = self
+            .com
+            .lock(&self.port, |stack| stack.send(distance, level));
     }
 }

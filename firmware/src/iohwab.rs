@@ -6,7 +6,7 @@ use cw_core::sonar::Echo;
 use embedded_hal::delay::DelayNs;
 use embedded_hal::digital::{InputPin, OutputPin};
 
-use crate::board::{Board, DioIn, DioOut, PulseCapture};
+use crate::board::{Board, Leds, PulseCapture, SonarIo};
 use crate::swc::LedColor;
 
 /// Length of the trigger pulse, µs (HC-SR04: at least 10 µs).
@@ -20,11 +20,11 @@ pub struct PinFault;
 ///
 /// # Errors
 /// [`PinFault`] if the Dio channel refused the write.
-pub fn set_led<B: Board>(board: &mut B, color: LedColor, lit: bool) -> Result<(), PinFault> {
-    let pin = board.dio_out(match color {
-        LedColor::Red => DioOut::RedLed,
-        LedColor::Yellow => DioOut::YellowLed,
-    });
+pub fn set_led<B: Board>(leds: &mut Leds<B>, color: LedColor, lit: bool) -> Result<(), PinFault> {
+    let pin = match color {
+        LedColor::Red => &mut leds.red,
+        LedColor::Yellow => &mut leds.yellow,
+    };
     let written = if lit { pin.set_high() } else { pin.set_low() };
     written.map_err(|_| PinFault)
 }
@@ -36,18 +36,18 @@ pub fn set_led<B: Board>(board: &mut B, color: LedColor, lit: bool) -> Result<()
 /// must handle differently: the echo line stuck high (a shorted or disconnected sensor
 /// reads high on a pulled-up input), a pin the driver refuses, or no complete echo within
 /// `timeout_us`. UltraSonic then treats it as a bad sample.
-pub fn measure_echo<B: Board>(board: &mut B, timeout_us: u32) -> Echo {
-    if !matches!(board.dio_in(DioIn::SonarEcho).is_low(), Ok(true)) {
+pub fn measure_echo<B: Board>(io: &mut SonarIo<B>, timeout_us: u32) -> Echo {
+    if !matches!(io.echo.is_low(), Ok(true)) {
         return Echo::Missing;
     }
-    if board.dio_out(DioOut::SonarTrigger).set_high().is_err() {
+    if io.trigger.set_high().is_err() {
         return Echo::Missing;
     }
-    board.gpt_delay().delay_us(TRIGGER_PULSE_US);
-    if board.dio_out(DioOut::SonarTrigger).set_low().is_err() {
+    io.delay.delay_us(TRIGGER_PULSE_US);
+    if io.trigger.set_low().is_err() {
         return Echo::Missing;
     }
-    match board.gpt_capture().high_time_us(timeout_us) {
+    match io.capture.high_time_us(timeout_us) {
         Some(width_us) => Echo::Pulse { width_us },
         None => Echo::Missing,
     }

@@ -176,6 +176,9 @@ fn run(o: &Options) -> Result<(), String> {
     let mut out = std::io::stdout().lock();
     let ecu = sim.ecu();
     let stats = ecu.stats();
+    let bus_offs = ecu.cansm().bus_off_total();
+    let thresholds = ecu.thresholds();
+    let ecum_state = ecu.ecum().state();
     let simulated_s = sim.now_ms() as f64 / 1000.0;
     let ratio = simulated_s / wall.as_secs_f64().max(1e-9);
     let text = format!(
@@ -191,11 +194,11 @@ fn run(o: &Options) -> Result<(), String> {
         stats.frames_requested,
         stats.frames_refused,
         stats.rx_dropped,
-        ecu.cansm().bus_off_total(),
+        bus_offs,
         stats.os_errors,
-        ecu.thresholds().red_below_mm(),
-        ecu.thresholds().yellow_below_mm(),
-        ecu.ecum().state(),
+        thresholds.red_below_mm(),
+        thresholds.yellow_below_mm(),
+        ecum_state,
     );
     out.write_all(text.as_bytes())
         .map_err(|e| format!("cannot write to stdout: {e}"))

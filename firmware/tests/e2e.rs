@@ -186,7 +186,7 @@ fn sensor_dropout_gives_fault_blinking_and_the_invalidation_value_then_recovers(
 
 #[test]
 fn bus_off_is_recovered_by_cansm_and_frames_flow_again() {
-    let sim = run("hold 1500 3000\ncan-errors 1000 40");
+    let mut sim = run("hold 1500 3000\ncan-errors 1000 40");
     assert_eq!(sim.ecu().cansm().bus_off_total(), 1);
     let after: Vec<_> = sim
         .frames()
@@ -199,7 +199,7 @@ fn bus_off_is_recovered_by_cansm_and_frames_flow_again() {
 
 #[test]
 fn malformed_frames_are_dropped_and_counted_and_disturb_nothing() {
-    let sim = run("hold 800 3000\nframe 1000 200#E803\nframe 1100 7FF#0102030405060708\nframe 2000 200#F401E803");
+    let mut sim = run("hold 800 3000\nframe 1000 200#E803\nframe 1100 7FF#0102030405060708\nframe 2000 200#F401E803");
     assert_eq!(
         sim.ecu().stats().rx_dropped,
         2,
@@ -219,7 +219,7 @@ fn malformed_frames_are_dropped_and_counted_and_disturb_nothing() {
 
 #[test]
 fn thresholds_the_pc_sends_are_refused_when_invalid() {
-    let sim = run("hold 800 2000\nframe 500 200#D007E803");
+    let mut sim = run("hold 800 2000\nframe 500 200#D007E803");
     assert_eq!(
         sim.ecu().thresholds(),
         cw_core::warning::Thresholds::PAPER,
@@ -229,7 +229,7 @@ fn thresholds_the_pc_sends_are_refused_when_invalid() {
 
 #[test]
 fn io_stack_inits_ports_once_and_triggers_the_sensor_before_every_echo() {
-    let sim = run("hold 1500 2000");
+    let mut sim = run("hold 1500 2000");
     assert_eq!(sim.port_inits(), 1, "Port_Init runs once, in start-up one");
     // Every OsSonarTask drives one trigger pulse of at least 10 us (rising then falling
     // edge), and the capture never ran without one.
@@ -271,7 +271,7 @@ fn an_echo_line_stuck_high_is_a_sensor_fault_and_recovers_when_released() {
 
 #[test]
 fn no_communication_silences_the_bus_but_not_the_leds_then_frames_resume() {
-    let sim = run("hold 500 3000\nno-communication 1000 1000");
+    let mut sim = run("hold 500 3000\nno-communication 1000 1000");
     let distance_frames = |from_us: u64, to_us: u64| {
         sim.frames()
             .iter()
@@ -293,7 +293,7 @@ fn no_communication_silences_the_bus_but_not_the_leds_then_frames_resume() {
 
 #[test]
 fn ignition_off_goes_through_post_run_to_shutdown_with_leds_dark_and_bus_silent() {
-    let sim = run("hold 500 3000\nshutdown 1000");
+    let mut sim = run("hold 500 3000\nshutdown 1000");
     assert!(sim.ecu().is_off());
     assert_eq!(sim.ecu().ecum().state(), cw_core::ecum::EcuMState::Shutdown);
     assert_eq!(
@@ -322,7 +322,7 @@ fn communication_is_not_restarted_during_post_run() {
     // Ignition off at 1001 ms, and a communication-on request at 1005 ms (the end of a
     // no-communication window): both reach BswM at 1010 ms, in order. RUN is released
     // first, so the second is refused and counted, and the ECU shuts down silent.
-    let sim = run("hold 500 2000\nno-communication 900 105\nshutdown 1001");
+    let mut sim = run("hold 500 2000\nno-communication 900 105\nshutdown 1001");
     assert!(sim.ecu().is_off());
     assert_eq!(sim.ecu().stats().mode_requests_refused, 1);
     assert_eq!(

@@ -57,6 +57,7 @@ pub mod can;
 pub mod candump;
 pub mod clock;
 pub mod pin;
+pub mod port;
 pub mod sonar;
 
 pub use can::{
@@ -66,4 +67,5 @@ pub use can::{
 pub use candump::CandumpLog;
 pub use clock::{SimDelay, TimeWentBackwards, VirtualClock};
 pub use pin::{SimInput, SimPin};
+pub use port::HostPort;
 pub use sonar::{HcSr04, Noise, XorShift64};

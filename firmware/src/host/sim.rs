@@ -1,45 +1,69 @@
 //! The simulation loop: board, ECU and scenario in 1 ms steps of virtual time.
 
+use std::cell::{Cell, RefCell};
+use std::rc::Rc;
+
 use cw_bsp::host::{
-    BusRecord, CanEvent, HcSr04, HostCan, HostCanConfig, Noise, SimDelay, SimInput, SimPin, Tester,
-    VirtualBus, VirtualClock,
+    BusRecord, CanEvent, HcSr04, HostCan, HostCanConfig, HostPort, Noise, SimDelay, SimInput,
+    SimPin, Tester, VirtualBus, VirtualClock,
 };
 use cw_core::can::Hrh;
 use cw_core::ecum::BswMRequest;
-use cw_core::os::{InterruptControl, TaskId, VirtualInterrupts};
+use cw_core::os::TaskId;
 use cw_core::sonar::{Echo, SonarConfig};
 use cw_core::warning::{Measurement, WarningLevel};
 
 use super::scenario::{NoiseSpec, Scenario};
-use crate::board::{Board, DioIn, DioOut, PulseCapture};
-use crate::config;
-use crate::ecu::{CanInterrupt, Ecu};
+use crate::board::{
+    Board, BoardParts, CanEvents, CanInterrupt, Leds, PortDriver, PulseCapture, SonarIo,
+};
+use crate::config::{self, Kernel};
+use crate::ecu::Ecu;
 use embedded_hal::digital::OutputPin;
 
-/// The simulated board the ECU runs on.
-pub struct HostBoard {
-    clock: VirtualClock,
-    can: HostCan,
-    red: SimPin,
-    yellow: SimPin,
-    trigger: SimPin,
-    echo: SimInput,
-    delay: SimDelay,
-    sonar: HostSonar,
-    /// `Port_Init` calls so far (exactly one expected).
-    port_inits: u32,
-    /// Task starts: (task, virtual time in us).
-    task_starts: Vec<(TaskId, u64)>,
-    /// The interrupt controller: pending requests and the kernel's mask.
-    irq: VirtualInterrupts,
-    /// CAN controller events waiting for `CanIsr`.
-    can_pending: Vec<CanInterrupt>,
+/// The simulated board the ECU runs on: its drivers' types.
+pub struct HostBoard;
+
+impl Board for HostBoard {
+    type Can = HostCan;
+    type Led = SimPin;
+    type Trigger = SimPin;
+    type Echo = SimInput;
+    type Delay = SimDelay;
+    type Capture = HostSonar;
+    type Port = HostPortDriver;
 }
 
-/// The HC-SR04 on the board's Gpt capture: it answers a capture only for a trigger pulse
-/// of at least 10 µs that the firmware drove on the trigger pin since the last capture.
-pub struct HostSonar {
-    trigger: SimPin,
+/// The ECU on the host port and board.
+pub type HostEcu = Ecu<HostPort<Kernel>, HostBoard>;
+
+impl CanEvents for HostCan {
+    fn take_event(&mut self) -> Option<CanInterrupt> {
+        self.pop_event().map(|timed| match timed.event {
+            CanEvent::TxConfirmation { pdu } => CanInterrupt::TxConfirmation(pdu),
+            CanEvent::Received { hrh, frame } => CanInterrupt::Received(hrh, frame),
+            CanEvent::BusOff => CanInterrupt::BusOff,
+        })
+    }
+}
+
+/// The simulated Port driver: drives the output pins low and counts its calls.
+pub struct HostPortDriver {
+    outputs: [SimPin; 3],
+    inits: Rc<Cell<u32>>,
+}
+
+impl PortDriver for HostPortDriver {
+    fn port_init(&mut self) {
+        self.inits.set(self.inits.get() + 1);
+        for pin in &mut self.outputs {
+            let _ = pin.set_low();
+        }
+    }
+}
+
+/// The HC-SR04 as the scenario moves it.
+struct SonarState {
     sensor: HcSr04,
     /// The obstacle's true distance now (set from the scenario).
     true_distance_mm: u32,
@@ -49,86 +73,51 @@ pub struct HostSonar {
     untriggered: u32,
 }
 
+/// The HC-SR04 on the board's Gpt capture: it answers a capture only for a trigger pulse
+/// of at least 10 µs that the firmware drove on the trigger pin since the last capture.
+pub struct HostSonar {
+    trigger: SimPin,
+    state: Rc<RefCell<SonarState>>,
+}
+
 impl HostSonar {
     /// The minimum trigger pulse the sensor responds to, µs.
     const MIN_TRIGGER_US: u64 = 10;
 
     /// Whether a complete trigger pulse of at least 10 µs happened since the last capture.
-    fn take_trigger(&mut self) -> bool {
-        let new = self.trigger.changes_since(self.seen_edges);
+    fn take_trigger(&self, state: &mut SonarState) -> bool {
+        let new = self.trigger.changes_since(state.seen_edges);
         let triggered = new.windows(2).any(
             |w| matches!(w, [(rise, true), (fall, false)] if fall - rise >= Self::MIN_TRIGGER_US),
         );
-        self.seen_edges += new.len();
+        state.seen_edges += new.len();
         triggered
     }
 }
 
 impl PulseCapture for HostSonar {
     fn high_time_us(&mut self, timeout_us: u32) -> Option<u32> {
-        if !self.take_trigger() {
-            self.untriggered += 1;
+        let mut state = self.state.borrow_mut();
+        if !self.take_trigger(&mut state) {
+            state.untriggered += 1;
             return None;
         }
-        match self.sensor.measure(self.true_distance_mm) {
+        let distance = state.true_distance_mm;
+        match state.sensor.measure(distance) {
             Echo::Pulse { width_us } if width_us <= timeout_us => Some(width_us),
             _ => None,
         }
     }
 }
 
-impl Board for HostBoard {
-    type Can = HostCan;
-    type Out = SimPin;
-    type In = SimInput;
-    type Delay = SimDelay;
-    type Capture = HostSonar;
-    type Irq = VirtualInterrupts;
-
-    fn port_init(&mut self) {
-        self.port_inits += 1;
-        for pin in [&mut self.red, &mut self.yellow, &mut self.trigger] {
-            let _ = pin.set_low();
-        }
-    }
-
-    fn can(&mut self) -> &mut HostCan {
-        &mut self.can
-    }
-
-    fn dio_out(&mut self, channel: DioOut) -> &mut SimPin {
-        match channel {
-            DioOut::RedLed => &mut self.red,
-            DioOut::YellowLed => &mut self.yellow,
-            DioOut::SonarTrigger => &mut self.trigger,
-        }
-    }
-
-    fn dio_in(&mut self, channel: DioIn) -> &mut SimInput {
-        match channel {
-            DioIn::SonarEcho => &mut self.echo,
-        }
-    }
-
-    fn gpt_delay(&mut self) -> &mut SimDelay {
-        &mut self.delay
-    }
-
-    fn gpt_capture(&mut self) -> &mut HostSonar {
-        &mut self.sonar
-    }
-
-    fn irq(&mut self) -> &mut VirtualInterrupts {
-        &mut self.irq
-    }
-
-    fn now_ms(&self) -> u64 {
-        self.clock.now_ms()
-    }
-
-    fn task_started(&mut self, task: TaskId) {
-        self.task_starts.push((task, self.clock.now_us()));
-    }
+/// What the simulation keeps of the board to drive and observe it.
+struct BoardView {
+    red: SimPin,
+    yellow: SimPin,
+    trigger: SimPin,
+    echo: SimInput,
+    sonar: Rc<RefCell<SonarState>>,
+    port_inits: Rc<Cell<u32>>,
 }
 
 /// One row of the trace, every 10 ms.
@@ -192,8 +181,8 @@ pub struct Simulation {
     clock: VirtualClock,
     bus: VirtualBus,
     pc: Tester,
-    board: HostBoard,
-    ecu: Ecu,
+    board: BoardView,
+    ecu: HostEcu,
     now_ms: u64,
     trace: Vec<TraceRow>,
     frames: Vec<BusRecord>,
@@ -225,29 +214,48 @@ impl Simulation {
             .with_noise(noise)
             .with_dropout_ppm(scenario.dropout_ppm)
             .with_seed(seed);
+        let red = SimPin::new("RedLED", &clock);
+        let yellow = SimPin::new("YellowLED", &clock);
         let trigger = SimPin::new("SonarTrigger", &clock);
-        let board = HostBoard {
-            red: SimPin::new("RedLED", &clock),
-            yellow: SimPin::new("YellowLED", &clock),
-            echo: SimInput::new("SonarEcho", false),
-            delay: SimDelay::new(&clock),
-            sonar: HostSonar {
-                trigger: trigger.clone(),
-                sensor,
-                true_distance_mm: scenario.distance_at(0),
-                seen_edges: 0,
-                untriggered: 0,
+        let echo = SimInput::new("SonarEcho", false);
+        let sonar = Rc::new(RefCell::new(SonarState {
+            sensor,
+            true_distance_mm: scenario.distance_at(0),
+            seen_edges: 0,
+            untriggered: 0,
+        }));
+        let port_inits = Rc::new(Cell::new(0));
+        let parts = BoardParts::<HostBoard> {
+            port: HostPortDriver {
+                outputs: [red.clone(), yellow.clone(), trigger.clone()],
+                inits: port_inits.clone(),
             },
-            trigger,
-            clock: clock.clone(),
             can,
-            port_inits: 0,
-            task_starts: Vec::new(),
-            irq: VirtualInterrupts::new(),
-            can_pending: Vec::new(),
+            leds: Leds {
+                red: red.clone(),
+                yellow: yellow.clone(),
+            },
+            sonar: SonarIo {
+                trigger: trigger.clone(),
+                echo: echo.clone(),
+                delay: SimDelay::new(&clock),
+                capture: HostSonar {
+                    trigger: trigger.clone(),
+                    state: sonar.clone(),
+                },
+            },
         };
-        let ecu = Ecu::new(SonarConfig::HC_SR04)
-            .map_err(|e| SimulationError(e.describe().to_string()))?;
+        let board = BoardView {
+            red,
+            yellow,
+            trigger,
+            echo,
+            sonar,
+            port_inits,
+        };
+        let kernel = config::kernel().map_err(|e| SimulationError(e.describe().to_string()))?;
+        let port = HostPort::new(kernel, &clock);
+        let ecu = Ecu::new(port, parts, SonarConfig::HC_SR04);
         let mut sim = Self {
             scenario,
             clock,
@@ -260,13 +268,14 @@ impl Simulation {
             frames: Vec::new(),
             mode_requests_refused: 0,
         };
-        sim.ecu.start(&mut sim.board);
+        sim.ecu.init();
+        sim.ecu.start_os();
         Ok(sim)
     }
 
-    /// The ECU.
-    pub const fn ecu(&self) -> &Ecu {
-        &self.ecu
+    /// The ECU (for inspection between steps).
+    pub fn ecu(&mut self) -> &mut HostEcu {
+        &mut self.ecu
     }
 
     /// Virtual time, ms.
@@ -290,8 +299,8 @@ impl Simulation {
     }
 
     /// Task starts so far: (task, virtual time in us).
-    pub fn task_starts(&self) -> &[(TaskId, u64)] {
-        &self.board.task_starts
+    pub fn task_starts(&self) -> Vec<(TaskId, u64)> {
+        self.ecu.port().job_starts().clone()
     }
 
     /// The red LED pin (with its history).
@@ -315,13 +324,13 @@ impl Simulation {
     }
 
     /// `Port_Init` calls so far.
-    pub const fn port_inits(&self) -> u32 {
-        self.board.port_inits
+    pub fn port_inits(&self) -> u32 {
+        self.board.port_inits.get()
     }
 
     /// Echo captures the firmware asked for without a trigger pulse before them.
-    pub const fn untriggered_captures(&self) -> u32 {
-        self.board.sonar.untriggered
+    pub fn untriggered_captures(&self) -> u32 {
+        self.board.sonar.borrow().untriggered
     }
 
     /// Runs until virtual time `end_ms`.
@@ -353,7 +362,7 @@ impl Simulation {
         self.deliver_can_events();
         let t = self.now_ms;
         for (_, count) in self.scenario.can_errors.iter().filter(|(at, _)| *at == t) {
-            self.board.can.inject_tx_errors(*count);
+            self.ecu.com_stack().can.inject_tx_errors(*count);
         }
         for (_, frame) in self.scenario.frames.iter().filter(|(at, _)| *at == t) {
             self.pc.send(frame);
@@ -369,18 +378,18 @@ impl Simulation {
         if self.scenario.shutdown_at_ms == Some(t) {
             self.mode_request(BswMRequest::EcuPostRun);
         }
-        self.board.sonar.true_distance_mm = self.scenario.distance_at(t);
-        self.board
-            .sonar
-            .sensor
-            .set_forced_dropout(self.scenario.in_dropout(t));
-        self.board.irq.raise(config::SYSTICK_ISR);
+        {
+            let mut sonar = self.board.sonar.borrow_mut();
+            sonar.true_distance_mm = self.scenario.distance_at(t);
+            sonar.sensor.set_forced_dropout(self.scenario.in_dropout(t));
+        }
+        self.ecu.port().raise(config::SYSTICK_ISR);
         self.take_interrupts();
         self.frames.extend(self.bus.take_trace());
         if t % 10 == 0 {
             self.trace.push(TraceRow {
                 time_ms: t,
-                true_distance_mm: self.board.sonar.true_distance_mm,
+                true_distance_mm: self.board.sonar.borrow().true_distance_mm,
                 measured: self.ecu.measurement(),
                 level: self.ecu.level(),
                 red: self.board.red.is_high_now(),
@@ -403,15 +412,8 @@ impl Simulation {
 
     /// The CAN controller's new events raise its interrupt.
     fn deliver_can_events(&mut self) {
-        for timed in self.board.can.take_events() {
-            self.board.can_pending.push(match timed.event {
-                CanEvent::TxConfirmation { pdu } => CanInterrupt::TxConfirmation(pdu),
-                CanEvent::Received { hrh, frame } => CanInterrupt::Received(hrh, frame),
-                CanEvent::BusOff => CanInterrupt::BusOff,
-            });
-        }
-        if !self.board.can_pending.is_empty() {
-            self.board.irq.raise(config::CAN_ISR);
+        if self.ecu.com_stack().can.has_events() {
+            self.ecu.port().raise(config::CAN_ISR);
             self.take_interrupts();
         }
         self.frames.extend(self.bus.take_trace());
@@ -420,21 +422,12 @@ impl Simulation {
     /// The interrupt controller takes every pending request the kernel's mask admits,
     /// highest priority first, and runs its ISR.
     fn take_interrupts(&mut self) {
-        while self.board.irq.pending() != 0 {
-            let mask = self.ecu.os().interrupt_mask();
-            self.board.irq.apply_mask(mask);
-            let Some(isr) = self.board.irq.take_next(config::OS.isrs()) else {
-                return;
-            };
-            match isr {
-                config::SYSTICK_ISR => self.ecu.tick(&mut self.board),
-                config::CAN_ISR => {
-                    // Drained in place, so the buffer's allocation is kept for the next one.
-                    let mut events = std::mem::take(&mut self.board.can_pending);
-                    self.ecu.can_isr(&mut self.board, events.drain(..));
-                    self.board.can_pending = events;
-                }
-                _ => {}
+        loop {
+            let next = self.ecu.port().take_interrupt(config::OS.isrs());
+            match next {
+                Some(config::SYSTICK_ISR) => self.ecu.tick(),
+                Some(config::CAN_ISR) => self.ecu.can_isr(),
+                _ => return,
             }
         }
     }

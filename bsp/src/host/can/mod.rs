@@ -1044,6 +1044,14 @@ impl HostCan {
         }
     }
 
+    /// Whether events are queued (the controller's interrupt request).
+    pub fn has_events(&self) -> bool {
+        self.bus
+            .borrow()
+            .controller(self.node)
+            .is_some_and(|c| !c.events.is_empty())
+    }
+
     /// Takes the oldest queued event.
     pub fn pop_event(&mut self) -> Option<TimedCanEvent> {
         self.bus

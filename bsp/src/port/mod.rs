@@ -1,0 +1,264 @@
+//! The OS port: what lets the same ECU code run with real preemption on a microcontroller
+//! and with nested calls in the host simulation.
+//!
+//! The kernel (`cw_core::os::Os`) keeps the logical state: who runs, who is ready, which
+//! resources are held, which interrupts are masked. A port carries its decisions out on a
+//! board: it runs kernel services under the kernel lock, applies the kernel's interrupt
+//! mask, and switches to the task the kernel chose. Two ports implement [`Port`]:
+//!
+//! - the host port ([`crate::host::HostPort`]): tasks are nested calls on one stack, and
+//!   interrupts are taken between them;
+//! - the Cortex-M port ([`crate::cortex_m`], on `thumbv7em` targets): PendSV switches
+//!   stacks, SysTick and the peripherals' interrupts arrive at any instruction.
+//!
+//! State that several tasks and ISRs share lives in a [`Resource`]: it is reachable only
+//! while the caller holds the OSEK resource of that id (`GetResource` succeeded), whose
+//! ceiling the configuration derives from the tasks and ISRs that declare it. State that
+//! one task alone uses lives in a [`TaskLocal`].
+
+use core::cell::UnsafeCell;
+use core::sync::atomic::{AtomicBool, Ordering};
+
+use cw_core::os::{
+    Hooks, InterruptMask, IsrId, Os, OsConfig, OsError, ResourceId, TaskId, TaskState,
+};
+use cw_core::tables::Tables;
+
+/// The kernel services a port and the [`Resource`] cells rely on.
+///
+/// # Safety
+/// `get_resource` must succeed only if no other task or ISR holds `res` now, and the
+/// resource must stay held by the caller until `release_resource` succeeds: [`Resource`]
+/// hands out a `&mut` on that promise. `cw_core::os::Os` is the implementation: its
+/// `GetResource` refuses an occupied resource with `E_OS_ACCESS` in every status (the
+/// conformance suite's `rm` tests and the `ceiling` model check exercise it).
+pub unsafe trait OsKernel {
+    /// The task the kernel has chosen to run (`None`: idle).
+    fn running(&self) -> Option<TaskId>;
+    /// The state of a task.
+    fn task_state(&self, task: TaskId) -> Option<TaskState>;
+    /// The interrupts the kernel holds masked now.
+    fn interrupt_mask(&self) -> InterruptMask;
+    /// Whether `ShutdownOS` has run.
+    fn is_shut_down(&self) -> bool;
+    /// `GetResource`.
+    ///
+    /// # Errors
+    /// As the kernel's service.
+    fn get_resource(&mut self, res: ResourceId) -> Result<(), OsError>;
+    /// `ReleaseResource`.
+    ///
+    /// # Errors
+    /// As the kernel's service.
+    fn release_resource(&mut self, res: ResourceId) -> Result<(), OsError>;
+    /// The port tells the kernel an ISR was entered.
+    ///
+    /// # Errors
+    /// As the kernel's `enter_isr`.
+    fn enter_isr(&mut self, isr: IsrId) -> Result<(), OsError>;
+    /// The port tells the kernel the innermost ISR returned.
+    ///
+    /// # Errors
+    /// As the kernel's `exit_isr`.
+    fn exit_isr(&mut self) -> Result<(), OsError>;
+    /// The OS shuts itself down on a fault the port detected (a stack overflow).
+    fn shutdown_on_fault(&mut self, error: OsError);
+}
+
+// SAFETY: `Os::get_resource` records the caller as the owner and refuses an owned resource
+// (`state.owner != NONE` -> `E_OS_ACCESS`) whatever the status; only the owner's
+// `release_resource` (checked: the caller must be the owner and the resource the last one
+// it took) frees it.
+unsafe impl<
+        const T: usize,
+        const R: usize,
+        const C: usize,
+        const A: usize,
+        const I: usize,
+        const Q: usize,
+        K,
+        H,
+    > OsKernel for Os<T, R, C, A, I, Q, K, H>
+where
+    K: Tables<OsConfig<T, R, C, A, I>>,
+    H: Hooks<Self>,
+{
+    #[inline]
+    fn running(&self) -> Option<TaskId> {
+        Os::running(self)
+    }
+    #[inline]
+    fn task_state(&self, task: TaskId) -> Option<TaskState> {
+        Os::task_state(self, task)
+    }
+    #[inline]
+    fn interrupt_mask(&self) -> InterruptMask {
+        Os::interrupt_mask(self)
+    }
+    #[inline]
+    fn is_shut_down(&self) -> bool {
+        Os::is_shut_down(self)
+    }
+    #[inline]
+    fn get_resource(&mut self, res: ResourceId) -> Result<(), OsError> {
+        Os::get_resource(self, res)
+    }
+    #[inline]
+    fn release_resource(&mut self, res: ResourceId) -> Result<(), OsError> {
+        Os::release_resource(self, res)
+    }
+    #[inline]
+    fn enter_isr(&mut self, isr: IsrId) -> Result<(), OsError> {
+        Os::enter_isr(self, isr)
+    }
+    #[inline]
+    fn exit_isr(&mut self) -> Result<(), OsError> {
+        Os::exit_isr(self)
+    }
+    #[inline]
+    fn shutdown_on_fault(&mut self, error: OsError) {
+        Os::shutdown_on_fault(self, error);
+    }
+}
+
+/// How the ECU reaches the kernel on a board.
+pub trait Port {
+    /// The kernel type.
+    type Kernel: OsKernel;
+
+    /// Whether the caller carries out task switches itself, by running the chosen task as
+    /// a nested call (the host port), instead of the port switching stacks by itself (the
+    /// Cortex-M port).
+    const NESTED: bool;
+
+    /// Runs kernel services under the kernel lock. Afterwards the kernel's interrupt mask
+    /// is applied, and if the kernel chose another task the port switches to it (at once
+    /// where switching is the port's: before this call returns to a preempted caller).
+    fn kernel<R>(&self, f: impl FnOnce(&mut Self::Kernel) -> R) -> R;
+
+    /// Reads the kernel's state without calling a service (nothing to carry out after).
+    fn inspect<R>(&self, f: impl FnOnce(&Self::Kernel) -> R) -> R;
+
+    /// Ends the running task's job with `f` (`TerminateTask` or `ChainTask`); where the
+    /// port switches stacks, a successful end never returns to the caller.
+    ///
+    /// # Errors
+    /// What `f` returned (the job goes on).
+    fn end_job(
+        &self,
+        f: impl FnOnce(&mut Self::Kernel) -> Result<(), OsError>,
+    ) -> Result<(), OsError>;
+
+    /// Milliseconds since start (the OS tick).
+    fn now_ms(&self) -> u64;
+
+    /// The task a nested call runs on top of (host port), `None` when idle.
+    fn current_job(&self) -> Option<TaskId> {
+        None
+    }
+
+    /// A job of `task` starts (host port: its nested call); for traces.
+    fn job_started(&self, _task: TaskId) {}
+
+    /// The job of `task` that `job_started` announced is over (host port).
+    fn job_finished(&self, _task: TaskId) {}
+}
+
+/// Data shared by tasks and ISRs, guarded by one OSEK resource.
+///
+/// The data is reachable only inside [`Resource::lock`], while the caller holds the
+/// resource: the kernel refuses a held resource to everyone else, and the resource's
+/// ceiling (derived by the configuration from every task and ISR that declares it) keeps
+/// them from even running meanwhile. A task holding a resource an ISR shares masks that
+/// ISR.
+pub struct Resource<T> {
+    id: ResourceId,
+    data: UnsafeCell<T>,
+}
+
+// SAFETY: the data is reached only through `lock` (a `&mut` for the holder of the OSEK
+// resource, which the kernel grants to one task or ISR at a time; see `OsKernel`) or
+// `get_mut` (exclusive by `&mut self`).
+unsafe impl<T: Send> Sync for Resource<T> {}
+
+impl<T> Resource<T> {
+    /// The data, guarded by resource `id`.
+    pub const fn new(id: ResourceId, data: T) -> Self {
+        Self {
+            id,
+            data: UnsafeCell::new(data),
+        }
+    }
+
+    /// The resource's id.
+    pub const fn id(&self) -> ResourceId {
+        self.id
+    }
+
+    /// Runs `f` with the data while holding the resource (`GetResource`, `f`,
+    /// `ReleaseResource`).
+    ///
+    /// # Errors
+    /// The kernel's refusal of `GetResource` (`f` does not run): `E_OS_ACCESS` when the
+    /// resource is held already (a nested lock of the same data) or the caller may not
+    /// take it, `E_OS_CALLEVEL`, `E_OS_DISABLEDINT`.
+    #[inline]
+    pub fn lock<P: Port, R>(&self, port: &P, f: impl FnOnce(&mut T) -> R) -> Result<R, OsError> {
+        port.kernel(|os| os.get_resource(self.id))?;
+        // SAFETY: GetResource succeeded, so the kernel records this task or ISR as the
+        // owner and refuses the resource to every other one until the release below
+        // (`OsKernel`'s contract); `f` cannot keep the reference past its return.
+        let result = f(unsafe { &mut *self.data.get() });
+        // The release cannot fail: the caller owns the resource and took none after it
+        // that it still holds (`f` returned, so every lock inside it was released).
+        let _ = port.kernel(|os| os.release_resource(self.id));
+        Ok(result)
+    }
+
+    /// The data, when nothing else can reach it (the ECU is not running, or this is the
+    /// simulation between its steps).
+    pub fn get_mut(&mut self) -> &mut T {
+        self.data.get_mut()
+    }
+}
+
+/// Data one task alone uses (its SWC's state, its pins): a cell that one job at a time
+/// may borrow. The configuration makes sure only its task borrows it, so a borrow never
+/// fails; the borrow flag makes that a checked fact instead of an assumption.
+pub struct TaskLocal<T> {
+    busy: AtomicBool,
+    data: UnsafeCell<T>,
+}
+
+// SAFETY: `with` hands out the `&mut` only to the caller that flipped `busy` from false to
+// true with one atomic swap, and clears it after; `get_mut` is exclusive by `&mut self`.
+unsafe impl<T: Send> Sync for TaskLocal<T> {}
+
+impl<T> TaskLocal<T> {
+    /// The data.
+    pub const fn new(data: T) -> Self {
+        Self {
+            busy: AtomicBool::new(false),
+            data: UnsafeCell::new(data),
+        }
+    }
+
+    /// Runs `f` with the data, or returns `None` (without running it) if another job
+    /// borrows it now.
+    #[inline]
+    pub fn with<R>(&self, f: impl FnOnce(&mut T) -> R) -> Option<R> {
+        if self.busy.swap(true, Ordering::Acquire) {
+            return None;
+        }
+        // SAFETY: this caller turned `busy` on, so no other borrow exists until it turns
+        // it off below.
+        let result = f(unsafe { &mut *self.data.get() });
+        self.busy.store(false, Ordering::Release);
+        Some(result)
+    }
+
+    /// The data, when nothing else can reach it.
+    pub fn get_mut(&mut self) -> &mut T {
+        self.data.get_mut()
+    }
+}
