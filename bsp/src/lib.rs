@@ -39,3 +39,8 @@ extern crate std;
 #[cfg(feature = "host")]
 pub mod host;
 pub mod port;
+
+#[cfg(all(target_arch = "arm", target_os = "none"))]
+pub mod cortex_m;
+#[cfg(all(feature = "mps2", target_arch = "arm", target_os = "none"))]
+pub mod mps2;

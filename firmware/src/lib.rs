@@ -11,5 +11,7 @@ pub mod ecu;
 #[cfg(feature = "host")]
 pub mod host;
 pub mod iohwab;
+#[cfg(all(feature = "mps2", target_arch = "arm", target_os = "none"))]
+pub mod mps2;
 pub mod rte;
 pub mod swc;

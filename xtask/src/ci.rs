@@ -33,6 +33,7 @@ pub const STAGES: &[&str] = &[
     "miri",
     "model",
     "mutants",
+    "qemu",
     "differential",
     "interop",
     "fuzz",
@@ -48,14 +49,15 @@ const BUDGET_S: &[(&str, u32)] = &[
     ("fmt", 30),
     ("clippy", 150),
     ("test", 240),
-    ("cross", 60),
+    ("cross", 90),
     ("miri", 540),
     ("model", 60),
     ("mutants", 120),
+    ("qemu", 90),
     ("differential", 30),
     ("interop", 60),
     ("fuzz", 200),
-    ("bench", 150),
+    ("bench", 130),
 ];
 
 fn budget_s(stage: &str) -> u32 {
@@ -237,6 +239,24 @@ fn run_stage(stage: &str) -> Result {
                     .args(["build", "-p", "cw-core", "--release", "--target", target])
                     .run()?;
             }
+            // The Cortex-M port and the mps2 board pass clippy as the host code does.
+            Cmd::new("cargo")
+                .args([
+                    "clippy",
+                    "-p",
+                    "cw-firmware",
+                    "--no-default-features",
+                    "--features",
+                    "mps2",
+                    "--bins",
+                    "--release",
+                    "--target",
+                    "thumbv7em-none-eabihf",
+                    "--",
+                    "-D",
+                    "warnings",
+                ])
+                .run()?;
             // The whole ECU except the host board, for the Cortex-M4F.
             Cmd::new("cargo")
                 .args([
@@ -278,6 +298,7 @@ fn run_stage(stage: &str) -> Result {
             .args(["run", "--release", "-p", "cw-proofs"])
             .run(),
         "mutants" => crate::mutants::run(),
+        "qemu" => crate::qemu::run(&crate::qemu::Options::parse(&["--compare".to_string()])?),
         "differential" => differential::run(&differential::Options::default()),
         "interop" => interop(),
         "fuzz" => {

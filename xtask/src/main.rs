@@ -5,7 +5,9 @@
 //! - `cargo xtask differential [--cases N] [--seed S]`: the Com signal codec against
 //!   cantools on random layouts, values and PDU lengths;
 //! - `cargo xtask callgrind`: instructions per call of the codec and scheduler probes;
-//! - `cargo xtask mutants`: kernel mutants the OSEK conformance suite must catch.
+//! - `cargo xtask mutants`: kernel mutants the OSEK conformance suite must catch;
+//! - `cargo xtask qemu [--compare] [--serial tcp:PORT]`: the ECU's Cortex-M4 image on
+//!   QEMU's mps2-an386, and its comparison with the host simulation.
 //!
 //! Every command the runner starts is printed first, prefixed with `$`. Child processes get
 //! no stdin, so the runner behaves the same in a terminal and under `CI=true`.
@@ -16,6 +18,7 @@ mod differential;
 mod json;
 mod mutants;
 mod process;
+mod qemu;
 mod rng;
 mod setup;
 
@@ -32,7 +35,7 @@ usage: cargo xtask <command> [options]
 commands:
   ci [--only STAGE[,STAGE..]] [--skip STAGE[,STAGE..]] [--keep-going]
         run the checks in order; stages: setup, fmt, clippy, test, cross, miri, model,
-        mutants, differential, interop, fuzz, bench. Stops at the first failing stage
+        mutants, qemu, differential, interop, fuzz, bench. Stops at the first failing stage
         unless --keep-going. Each stage prints its time budget.
   differential [--cases N] [--seed SEED]
         compare the Com signal codec with cantools on N random cases (default 20000)
@@ -42,6 +45,10 @@ commands:
   mutants
         plant each kernel mutant in a copy of the workspace and require the OSEK
         conformance sequences named for it to fail
+  qemu [--compare] [--serial tcp:PORT]
+        build the ECU's Cortex-M4 image and run it on QEMU's mps2-an386 (Figure 7);
+        --compare: require the host simulation's CAN frames and LED transitions;
+        --serial: serve the SLCAN UART on a TCP port (python-can: slcan, socket://)
   setup
         same as `ci --only setup`: install or check every tool the checks need
   help
@@ -72,6 +79,7 @@ fn run(args: &[String]) -> Result {
         }
         "differential" => differential::run(&differential::Options::parse(rest)?),
         "callgrind" => callgrind::run(&callgrind::Options::parse(rest)?),
+        "qemu" => qemu::run(&qemu::Options::parse(rest)?),
         "mutants" => {
             no_options(rest)?;
             mutants::run()

@@ -47,6 +47,7 @@ pub fn run() -> Result {
     rustup_nightly()?;
     cargo_bolero()?;
     valgrind()?;
+    qemu()?;
     python_venv()?;
     Ok(())
 }
@@ -179,37 +180,47 @@ fn cargo_bolero() -> Result {
 }
 
 fn valgrind() -> Result {
-    let probe = Cmd::new("valgrind").arg("--version").capture();
+    debian_tool("valgrind", &["--version"], "valgrind")
+}
+
+fn qemu() -> Result {
+    debian_tool("qemu-system-arm", &["--version"], "qemu-system-arm")
+}
+
+/// Checks that `program` runs (`program probe..` exits 0); if not, installs the Debian
+/// `package` with apt-get when running as root, and fails loudly otherwise.
+fn debian_tool(program: &str, probe_args: &[&str], package: &str) -> Result {
+    let probe = Cmd::new(program).args(probe_args).capture();
     if let Ok(out) = &probe {
         if out.success {
-            println!("ok: {}", out.stdout.trim());
+            println!("ok: {}", out.stdout.lines().next().unwrap_or("").trim());
             return Ok(());
         }
     }
     let why = match probe {
-        Ok(out) => format!("`valgrind --version` failed: {}", out.stderr.trim()),
+        Ok(out) => format!("`{program}` failed: {}", out.stderr.trim()),
         Err(e) => e,
     };
     let uid = Cmd::new("id").arg("-u").read().unwrap_or_default();
     if uid.trim() != "0" {
         return Err(format!(
-            "valgrind is missing ({why}); not running as root, so it cannot be installed here: \
-             install it (Debian/Ubuntu: `sudo apt-get install valgrind`) and run again"
+            "{program} is missing ({why}); not running as root, so it cannot be installed \
+             here: install it (Debian/Ubuntu: `sudo apt-get install {package}`) and run again"
         ));
     }
-    println!("valgrind missing ({why}); installing it with apt-get");
+    println!("{program} missing ({why}); installing {package} with apt-get");
     Cmd::new("apt-get")
         .env("DEBIAN_FRONTEND", "noninteractive")
         .arg("update")
         .run()
-        .map_err(|e| format!("installing valgrind: {e}"))?;
+        .map_err(|e| format!("installing {package}: {e}"))?;
     Cmd::new("apt-get")
         .env("DEBIAN_FRONTEND", "noninteractive")
-        .args(["install", "-y", "valgrind"])
+        .args(["install", "-y", package])
         .run()
-        .map_err(|e| format!("installing valgrind: {e}"))?;
-    let version = Cmd::new("valgrind").arg("--version").read()?;
-    println!("ok: {}", version.trim());
+        .map_err(|e| format!("installing {package}: {e}"))?;
+    let version = Cmd::new(program).args(probe_args).read()?;
+    println!("ok: {}", version.lines().next().unwrap_or("").trim());
     Ok(())
 }
 

@@ -262,3 +262,42 @@ impl<T> TaskLocal<T> {
         self.data.get_mut()
     }
 }
+
+/// A place for one value of `T` that lives for the whole run (the ECU on a board), filled
+/// once at start-up.
+pub struct Slot<T> {
+    taken: AtomicBool,
+    data: UnsafeCell<core::mem::MaybeUninit<T>>,
+}
+
+// SAFETY: `init` hands out the only reference to the data, once (the swap of `taken`
+// decides which caller); the data is never reached otherwise.
+unsafe impl<T: Send + Sync> Sync for Slot<T> {}
+
+impl<T> Slot<T> {
+    /// An empty slot.
+    pub const fn new() -> Self {
+        Self {
+            taken: AtomicBool::new(false),
+            data: UnsafeCell::new(core::mem::MaybeUninit::uninit()),
+        }
+    }
+
+    /// Stores `value` and returns the one reference to it; `None` (and `value` dropped) if
+    /// the slot was filled before.
+    // The one `&mut` is handed out once, to the caller that wins the swap.
+    #[allow(clippy::mut_from_ref)]
+    pub fn init(&'static self, value: T) -> Option<&'static mut T> {
+        if self.taken.swap(true, Ordering::AcqRel) {
+            return None;
+        }
+        // SAFETY: this caller won the swap: no other reference to the data exists or will.
+        Some(unsafe { (*self.data.get()).write(value) })
+    }
+}
+
+impl<T> Default for Slot<T> {
+    fn default() -> Self {
+        Self::new()
+    }
+}

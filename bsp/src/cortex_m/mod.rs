@@ -1,0 +1,465 @@
+//! The Cortex-M OS port (ARMv7-M: Cortex-M4 on QEMU's mps2-an386, later the S32K144).
+//!
+//! # Mechanism: PendSV context switching, one stack for the basic tasks
+//!
+//! The kernel decides; this port carries the decision out:
+//!
+//! - **Kernel lock.** Every kernel service runs with PRIMASK set ([`CortexMPort::kernel`]),
+//!   so no ISR can observe the kernel half-updated; a few instructions long.
+//! - **Task switch.** After a service, if the kernel's running task changed, the port pends
+//!   PendSV, the exception of lowest priority: it runs as soon as no ISR is active and the
+//!   kernel's interrupt mask allows, saves r4-r11 (and s16-s31 when the task used the FPU)
+//!   on the outgoing task's stack and restores the incoming one's. A higher-priority task
+//!   activated by a task therefore starts the moment the service returns; one activated
+//!   by an ISR starts when the last nested ISR returns (tail-chained).
+//! - **Stacks.** OSEK basic tasks run to completion and preempt each other in LIFO order,
+//!   so they share one stack: a new job's first frame is built just below the deepest
+//!   preempted job. The idle loop is the stack's bottom. ISRs run on the main stack (MSP).
+//! - **Interrupt masking.** The kernel's interrupt mask ([`cw_core::os::InterruptMask`])
+//!   becomes BASEPRI (`UpTo(p)`: every ISR of OSEK priority up to `p`, and PendSV, held)
+//!   or PRIMASK (`All`) after every kernel call: resources shared with ISRs and
+//!   `SuspendOSInterrupts` raise BASEPRI, `DisableAllInterrupts` sets PRIMASK.
+//!
+//! Why not one NVIC priority level per task, as RTIC does? That scheme lets the NVIC make
+//! the scheduling decision again, in hardware, and needs every task to be an interrupt
+//! handler: it cannot run OSEK's extended tasks (`WaitEvent` blocks with the task's
+//! context kept), and the verified kernel's decision would be duplicated by a second
+//! scheduler that must be shown to agree with it. Here the kernel is the only scheduler,
+//! and the cost is a software context switch (its instructions are counted in the README).
+//!
+//! NVIC priorities (3 priority bits are assumed, the fewest a Cortex-M4 implements): an
+//! OSEK category-2 ISR of priority `p` gets `0xE0 - 0x20 * p`; PendSV gets `0xE0`, the
+//! lowest.
+
+use core::cell::UnsafeCell;
+
+use cortex_m::peripheral::scb::SystemHandler;
+use cortex_m::peripheral::{NVIC, SCB};
+use cortex_m::register::basepri;
+use cw_core::os::{InterruptMask, OsError, TaskId};
+
+use crate::port::{OsKernel, Port};
+
+/// The most tasks the port can switch between.
+pub const MAX_TASKS: usize = 16;
+/// The slot of the idle loop.
+const IDLE: u8 = MAX_TASKS as u8;
+/// Words of the shared stack of the basic tasks (and the idle loop): 2 KiB.
+pub const BASIC_STACK_WORDS: usize = 512;
+/// The value painted into unused stack, to measure the deepest use.
+pub const STACK_PAINT: u32 = 0xDEAD_BEEF;
+
+/// The NVIC priority byte of an OSEK category-2 ISR priority (1 to 6).
+pub const fn nvic_priority(osek_priority: u8) -> u8 {
+    let p = if osek_priority > 6 { 6 } else { osek_priority };
+    0xE0 - 0x20 * p
+}
+
+/// The BASEPRI value for a kernel interrupt mask (0: nothing masked).
+const fn basepri_for(mask: InterruptMask) -> u8 {
+    match mask {
+        InterruptMask::None => 0,
+        InterruptMask::UpTo(p) => nvic_priority(if p == 0 { 1 } else { p }),
+        // PRIMASK does it; BASEPRI holds the OS level meanwhile.
+        InterruptMask::All => nvic_priority(1),
+    }
+}
+
+/// What the port knows of the jobs on the shared stack.
+struct Sched {
+    /// The slot now executing (a task index, or `IDLE`).
+    current: u8,
+    /// The slot the kernel chose last.
+    next: u8,
+    /// The current job ended (`TerminateTask`/`ChainTask` succeeded): its stack is free.
+    ended: bool,
+    /// Saved stack pointers of preempted jobs and of the idle loop.
+    sp: [u32; MAX_TASKS + 1],
+    /// Bit `t`: task `t` has a job under way (a context to resume).
+    started: u32,
+    /// The shared stack's top when each job started (restored when it ends).
+    job_base: [u32; MAX_TASKS],
+    /// Where the next new job's first frame goes.
+    basic_top: u32,
+    /// A kernel call is under way (a nested one would alias the kernel).
+    in_kernel: bool,
+}
+
+struct SchedCell(UnsafeCell<Sched>);
+
+// SAFETY: `Sched` is touched only with PRIMASK set (in `CortexMPort::kernel`, `end_job`,
+// and `cw_port_switch`, which PendSV calls between `cpsid i` and `cpsie i`), on a single
+// core: no two accesses overlap.
+unsafe impl Sync for SchedCell {}
+
+static SCHED: SchedCell = SchedCell(UnsafeCell::new(Sched {
+    current: IDLE,
+    next: IDLE,
+    ended: false,
+    sp: [0; MAX_TASKS + 1],
+    started: 0,
+    job_base: [0; MAX_TASKS],
+    basic_top: 0,
+    in_kernel: false,
+}));
+
+/// The shared stack of the basic tasks.
+#[repr(C, align(8))]
+struct Stack(UnsafeCell<[u32; BASIC_STACK_WORDS]>);
+
+// SAFETY: the stack's memory is used only as the process stack (PSP) once the OS starts,
+// and read by `basic_stack_use` for the painted-stack measurement.
+unsafe impl Sync for Stack {}
+
+#[link_section = ".uninit.cw_basic_stack"]
+static BASIC_STACK: Stack = Stack(UnsafeCell::new([0; BASIC_STACK_WORDS]));
+
+/// The application the port runs: the ECU's entry points.
+pub trait App: Sync {
+    /// `StartOS` (from the idle loop's context, once).
+    fn start_os(&self);
+    /// One job of `task`, from its first line to `TerminateTask`.
+    fn run_job(&self, task: TaskId);
+    /// The idle loop's work, between interrupts (returns to wait for the next one).
+    fn idle(&self);
+    /// The OS tick (SysTick's handler).
+    fn tick(&self);
+    /// External interrupt line `line` of the board.
+    fn irq(&self, line: u16);
+}
+
+struct AppCell(UnsafeCell<Option<&'static dyn App>>);
+
+// SAFETY: written once by `start`, before any interrupt or task can read it.
+unsafe impl Sync for AppCell {}
+
+static APP: AppCell = AppCell(UnsafeCell::new(None));
+
+pub(crate) fn app() -> Option<&'static dyn App> {
+    // SAFETY: `APP` is written only in `start`, before the task switch that makes any
+    // reader run; afterwards it is only read.
+    unsafe { *APP.0.get() }
+}
+
+/// Where the kernel lives on this port.
+pub struct CortexMPort<K> {
+    kernel: UnsafeCell<K>,
+    /// Milliseconds since start, advanced by the tick ISR.
+    ms: core::sync::atomic::AtomicU32,
+}
+
+// SAFETY: the kernel is reached only in `kernel`/`inspect`/`end_job`, with PRIMASK set
+// and a re-entrance check, on a single core.
+unsafe impl<K: Send> Sync for CortexMPort<K> {}
+
+impl<K: OsKernel> CortexMPort<K> {
+    /// The port of `kernel`.
+    pub const fn new(kernel: K) -> Self {
+        Self {
+            kernel: UnsafeCell::new(kernel),
+            ms: core::sync::atomic::AtomicU32::new(0),
+        }
+    }
+
+    /// The tick ISR advances the millisecond time base.
+    pub fn advance_ms(&self) {
+        self.ms.fetch_add(1, core::sync::atomic::Ordering::Relaxed);
+    }
+
+    /// Runs `f` on the kernel with PRIMASK set; then applies the kernel's interrupt mask
+    /// and pends PendSV if the kernel chose another task (or the job ended).
+    #[inline(always)]
+    fn locked<R>(&self, f: impl FnOnce(&mut K, &mut Sched) -> R) -> R {
+        cortex_m::interrupt::disable();
+        // SAFETY: PRIMASK is set, so nothing else runs until it is cleared below; the
+        // `in_kernel` flag refuses a nested call, which would alias the kernel.
+        let (kernel, sched) = unsafe { (&mut *self.kernel.get(), &mut *SCHED.0.get()) };
+        if sched.in_kernel {
+            fatal("kernel lock taken twice");
+        }
+        sched.in_kernel = true;
+        let result = f(kernel, sched);
+        sched.in_kernel = false;
+        let next = kernel.running().map_or(IDLE, |t| t.0);
+        sched.next = next;
+        if next != sched.current || sched.ended {
+            SCB::set_pendsv();
+        }
+        let mask = kernel.interrupt_mask();
+        // SAFETY: BASEPRI only holds interrupts back; the value is the kernel's mask.
+        unsafe { basepri::write(basepri_for(mask)) };
+        if mask != InterruptMask::All {
+            // SAFETY: the kernel lock ends here; the kernel's mask admits interrupts.
+            unsafe { cortex_m::interrupt::enable() };
+        }
+        result
+    }
+}
+
+impl<K: OsKernel> Port for CortexMPort<K> {
+    type Kernel = K;
+    const NESTED: bool = false;
+
+    #[inline]
+    fn kernel<R>(&self, f: impl FnOnce(&mut K) -> R) -> R {
+        self.locked(|kernel, _| f(kernel))
+    }
+
+    #[inline]
+    fn inspect<R>(&self, f: impl FnOnce(&K) -> R) -> R {
+        self.locked(|kernel, _| f(kernel))
+    }
+
+    fn end_job(&self, f: impl FnOnce(&mut K) -> Result<(), OsError>) -> Result<(), OsError> {
+        self.locked(|kernel, sched| {
+            let result = f(kernel);
+            if result.is_ok() {
+                sched.ended = true;
+            }
+            result
+        })?;
+        // PendSV is pending and taken as soon as the mask allows: this job is over.
+        loop {
+            cortex_m::asm::wfi();
+        }
+    }
+
+    fn now_ms(&self) -> u64 {
+        u64::from(self.ms.load(core::sync::atomic::Ordering::Relaxed))
+    }
+}
+
+/// Fatal port error: the LEDs' safe state is the board's; here the OS cannot go on.
+fn fatal(what: &str) -> ! {
+    cortex_m::interrupt::disable();
+    crate::cortex_m::report_fatal(what);
+}
+
+/// What a board does on a fatal error (set by the board at start).
+static FATAL: FatalCell = FatalCell(UnsafeCell::new(None));
+
+struct FatalCell(UnsafeCell<Option<fn(&str) -> !>>);
+
+// SAFETY: written once by `start` before interrupts are enabled; read-only afterwards.
+unsafe impl Sync for FatalCell {}
+
+/// Puts the board in its safe state and reports `what`; never returns.
+pub fn report_fatal(what: &str) -> ! {
+    // SAFETY: read-only after `start`.
+    if let Some(handler) = unsafe { *FATAL.0.get() } {
+        handler(what);
+    }
+    loop {
+        cortex_m::asm::wfi();
+    }
+}
+
+/// The deepest use of the shared task stack so far, in bytes (the painted words that
+/// were overwritten).
+pub fn basic_stack_use() -> usize {
+    let base = BASIC_STACK.0.get().cast::<u32>();
+    let mut untouched = 0;
+    while untouched < BASIC_STACK_WORDS {
+        // SAFETY: the index is within the stack array; a volatile read of memory the
+        // tasks may use concurrently is a plain word read on this core.
+        let word = unsafe { base.add(untouched).read_volatile() };
+        if word != STACK_PAINT {
+            break;
+        }
+        untouched += 1;
+    }
+    (BASIC_STACK_WORDS - untouched) * 4
+}
+
+/// Starts the OS on this port and becomes the idle loop: paints the task stack, sets
+/// PendSV to the lowest priority, moves thread mode to the task stack, calls
+/// `app.start_os()` and then `app.idle()` between interrupts forever.
+///
+/// `on_fatal` puts the board's outputs in their safe state and reports a fatal port error.
+pub fn start(app: &'static dyn App, on_fatal: fn(&str) -> !) -> ! {
+    cortex_m::interrupt::disable();
+    // SAFETY: interrupts are off and the OS has not started: nothing else reads these.
+    unsafe {
+        *APP.0.get() = Some(app);
+        *FATAL.0.get() = Some(on_fatal);
+    }
+    let base = BASIC_STACK.0.get().cast::<u32>();
+    for i in 0..BASIC_STACK_WORDS {
+        // SAFETY: within the array, which nothing uses yet.
+        unsafe { base.add(i).write_volatile(STACK_PAINT) };
+    }
+    // SAFETY: one past the end of the stack array: the initial process stack pointer.
+    let top = unsafe { base.add(BASIC_STACK_WORDS) } as u32;
+    // SAFETY: the core peripherals are taken once, here, before the OS runs.
+    let mut cp = unsafe { cortex_m::Peripherals::steal() };
+    // SAFETY: setting exception priorities before interrupts are enabled.
+    unsafe {
+        cp.SCB.set_priority(SystemHandler::PendSV, 0xE0);
+    }
+    // SAFETY: `top` is the 8-byte-aligned end of a static array reserved for this stack;
+    // `switch_to_task_stack` moves thread mode onto it and never returns.
+    unsafe { switch_to_task_stack(top) }
+}
+
+/// Sets the NVIC priority of an external interrupt for an OSEK category-2 ISR priority
+/// and enables it.
+pub fn enable_irq<I: cortex_m::interrupt::InterruptNumber>(irq: I, osek_priority: u8) {
+    // SAFETY: the core peripherals are shared by the port alone; priorities are set
+    // before the interrupt is unmasked.
+    let mut cp = unsafe { cortex_m::Peripherals::steal() };
+    unsafe {
+        cp.NVIC.set_priority(irq, nvic_priority(osek_priority));
+        NVIC::unmask(irq);
+    }
+}
+
+/// Sets SysTick's priority for an OSEK category-2 ISR priority and starts it with
+/// `reload + 1` core clocks per tick.
+pub fn start_systick(reload: u32, osek_priority: u8) {
+    // SAFETY: as `enable_irq`.
+    let mut cp = unsafe { cortex_m::Peripherals::steal() };
+    unsafe {
+        cp.SCB
+            .set_priority(SystemHandler::SysTick, nvic_priority(osek_priority));
+    }
+    cp.SYST
+        .set_clock_source(cortex_m::peripheral::syst::SystClkSource::Core);
+    cp.SYST.set_reload(reload);
+    cp.SYST.clear_current();
+    cp.SYST.enable_interrupt();
+    cp.SYST.enable_counter();
+}
+
+extern "C" {
+    fn cw_port_enter_idle(top: u32) -> !;
+}
+
+/// Moves thread mode onto the task stack and enters the idle loop.
+///
+/// # Safety
+/// `top` must be the end of memory reserved for the task stack.
+unsafe fn switch_to_task_stack(top: u32) -> ! {
+    // SAFETY: the caller's contract.
+    unsafe { cw_port_enter_idle(top) }
+}
+
+/// The idle loop, on the task stack (called once by `cw_port_enter_idle`).
+#[no_mangle]
+extern "C" fn cw_port_idle() -> ! {
+    // SAFETY: the OS starts now, from thread mode on the task stack.
+    unsafe { cortex_m::interrupt::enable() };
+    if let Some(app) = app() {
+        app.start_os();
+        loop {
+            app.idle();
+            cortex_m::asm::wfi();
+        }
+    }
+    fatal("no application");
+}
+
+/// A job's first frame: r0 is its task index, pc the job entry.
+#[no_mangle]
+extern "C" fn cw_port_job(task: u32) -> ! {
+    if let Some(app) = app() {
+        app.run_job(TaskId(task as u8));
+    }
+    // The job could not end (the OS shut down, or `TerminateTask` was refused): the
+    // task's context stays; nothing more runs on it.
+    loop {
+        cortex_m::asm::wfi();
+    }
+}
+
+/// PendSV's decision: saves the outgoing context's stack pointer, returns the incoming
+/// one's (building a new job's first frame on the shared stack). Called with PRIMASK set.
+#[no_mangle]
+extern "C" fn cw_port_switch(sp: u32) -> u32 {
+    // SAFETY: PendSV calls this between `cpsid i` and `cpsie i`.
+    let s = unsafe { &mut *SCHED.0.get() };
+    let current = s.current as usize;
+    if s.ended && current < MAX_TASKS {
+        s.started &= !(1 << current);
+        s.basic_top = s.job_base[current];
+        s.ended = false;
+    } else if let Some(slot) = s.sp.get_mut(current) {
+        *slot = sp;
+        s.basic_top = sp;
+    }
+    let next = s.next as usize;
+    let new_sp = if next >= MAX_TASKS || s.started & (1 << next) != 0 {
+        s.sp.get(next).copied().unwrap_or(sp)
+    } else {
+        s.job_base[next] = s.basic_top;
+        s.started |= 1 << next;
+        let frame_top = s.basic_top & !7;
+        let frame = frame_top - 17 * 4;
+        let words: [u32; 17] = [
+            // r4-r11
+            0,
+            0,
+            0,
+            0,
+            0,
+            0,
+            0,
+            0,
+            // EXC_RETURN: thread mode, process stack, no FPU state
+            0xFFFF_FFFD,
+            // r0 (the task index), r1-r3, r12
+            next as u32,
+            0,
+            0,
+            0,
+            0,
+            // lr: a job never returns (it ends through the kernel)
+            0xFFFF_FFFF,
+            // pc: the job entry, Thumb bit cleared as the exception frame wants it
+            (cw_port_job as *const () as usize as u32) & !1,
+            // xPSR: Thumb state
+            0x0100_0000,
+        ];
+        for (i, w) in words.iter().enumerate() {
+            // SAFETY: `frame..frame_top` lies within the shared task stack, below every
+            // preempted job's context (`basic_top` is the lowest of them).
+            unsafe { (frame as *mut u32).add(i).write_volatile(*w) };
+        }
+        frame
+    };
+    s.current = next as u8;
+    new_sp
+}
+
+core::arch::global_asm!(
+    ".section .text.cw_port_enter_idle,\"ax\",%progbits",
+    ".global cw_port_enter_idle",
+    ".type cw_port_enter_idle,%function",
+    ".thumb_func",
+    "cw_port_enter_idle:",
+    "    msr psp, r0",
+    "    movs r1, #2",
+    "    msr control, r1",
+    "    isb",
+    "    bl cw_port_idle",
+    "    b .",
+    ".fpu fpv4-sp-d16",
+    ".section .text.PendSV,\"ax\",%progbits",
+    ".global PendSV",
+    ".type PendSV,%function",
+    ".thumb_func",
+    "PendSV:",
+    "    mrs r0, psp",
+    "    tst lr, #0x10",
+    "    it eq",
+    "    vstmdbeq r0!, {{s16-s31}}",
+    "    stmdb r0!, {{r4-r11, lr}}",
+    "    cpsid i",
+    "    bl cw_port_switch",
+    "    cpsie i",
+    "    ldmia r0!, {{r4-r11, lr}}",
+    "    tst lr, #0x10",
+    "    it eq",
+    "    vldmiaeq r0!, {{s16-s31}}",
+    "    msr psp, r0",
+    "    bx lr",
+);

@@ -1,0 +1,457 @@
+//! QEMU's `mps2-an386` board (Arm MPS2 with the AN386 FPGA image: a Cortex-M4 at 25 MHz),
+//! as QEMU 7.2 models it.
+//!
+//! | part | here | registers |
+//! |---|---|---|
+//! | warning LEDs | [`Led`]: FPGAIO LED bits 0 (red) and 1 (yellow) | FPGAIO `LED0` at `0x4002_8000` |
+//! | CAN | [`SlcanCan`]: frames as SLCAN (Lawicel) text on UART0 | CMSDK APB UART0 at `0x4000_4000`, IRQ 0 (RX), 1 (TX) |
+//! | OS tick | SysTick, 25 000 core clocks per ms | SCS |
+//! | log, exit | semihosting (`-semihosting-config enable=on,target=native`) | |
+//!
+//! QEMU models no FlexCAN, so the CAN controller here is a UART speaking SLCAN: what the
+//! ECU sends is visible outside the emulator (QEMU's `-serial tcp:...` and python-can's
+//! `slcan` interface). One transmit mailbox: a frame occupies it until its last character
+//! has left the UART, then the driver reports the transmit confirmation.
+
+use core::convert::Infallible;
+use core::sync::atomic::{AtomicU32, Ordering};
+
+use cw_core::can::{CanBusy, CanDriver, CanFrame, ControllerMode, Hth, ModeRefused};
+use embedded_hal::delay::DelayNs;
+use embedded_hal::digital::{ErrorType, InputPin, OutputPin};
+
+use crate::cortex_m::{app, report_fatal};
+
+/// The core clock, Hz (SysTick counts it).
+pub const SYSCLK_HZ: u32 = 25_000_000;
+/// FPGAIO's LED register.
+const FPGAIO_LED: *mut u32 = 0x4002_8000 as *mut u32;
+/// CMSDK APB UART0.
+const UART0: usize = 0x4000_4000;
+
+/// A warning LED: one bit of the FPGAIO LED register. The LED pins are the ECU's
+/// `RES_LEDS`, so the register's read-modify-write never races another writer.
+pub struct Led {
+    bit: u32,
+}
+
+impl Led {
+    /// The red LED (LED0 bit 0).
+    pub const RED: Self = Self { bit: 0 };
+    /// The yellow LED (LED0 bit 1).
+    pub const YELLOW: Self = Self { bit: 1 };
+
+    fn write(&self, lit: bool) {
+        // SAFETY: FPGAIO's LED register exists on this board; a word access.
+        unsafe {
+            let now = FPGAIO_LED.read_volatile();
+            let new = if lit {
+                now | (1 << self.bit)
+            } else {
+                now & !(1 << self.bit)
+            };
+            FPGAIO_LED.write_volatile(new);
+        }
+    }
+}
+
+/// Both LEDs dark: the outputs' safe state, for fatal errors.
+pub fn leds_safe() {
+    // SAFETY: as `Led::write`.
+    unsafe { FPGAIO_LED.write_volatile(0) };
+}
+
+impl ErrorType for Led {
+    type Error = Infallible;
+}
+
+impl OutputPin for Led {
+    fn set_low(&mut self) -> Result<(), Infallible> {
+        self.write(false);
+        Ok(())
+    }
+    fn set_high(&mut self) -> Result<(), Infallible> {
+        self.write(true);
+        Ok(())
+    }
+}
+
+/// A line the board does not have (the HC-SR04's trigger and echo: the emulated sensor
+/// needs no pulse): writes go nowhere, reads are low.
+pub struct Unconnected;
+
+impl ErrorType for Unconnected {
+    type Error = Infallible;
+}
+
+impl OutputPin for Unconnected {
+    fn set_low(&mut self) -> Result<(), Infallible> {
+        Ok(())
+    }
+    fn set_high(&mut self) -> Result<(), Infallible> {
+        Ok(())
+    }
+}
+
+impl InputPin for Unconnected {
+    fn is_high(&mut self) -> Result<bool, Infallible> {
+        Ok(false)
+    }
+    fn is_low(&mut self) -> Result<bool, Infallible> {
+        Ok(true)
+    }
+}
+
+/// Busy-wait delays on the core clock.
+pub struct CoreDelay;
+
+impl DelayNs for CoreDelay {
+    fn delay_ns(&mut self, ns: u32) {
+        // 25 cycles per µs; at least one.
+        cortex_m::asm::delay((ns / 40).max(1));
+    }
+}
+
+/// Milliseconds since the OS started, counted by [`SysTick`].
+static MS: AtomicU32 = AtomicU32::new(0);
+
+/// Milliseconds since the OS started.
+pub fn now_ms() -> u32 {
+    MS.load(Ordering::Relaxed)
+}
+
+/// Starts SysTick: one interrupt per millisecond, at OSEK ISR priority `osek_priority`.
+pub fn start_tick(osek_priority: u8) {
+    crate::cortex_m::start_systick(SYSCLK_HZ / 1000 - 1, osek_priority);
+}
+
+/// The UART registers.
+struct Uart {
+    base: usize,
+}
+
+impl Uart {
+    const DATA: usize = 0x00;
+    const STATE: usize = 0x04;
+    const CTRL: usize = 0x08;
+    const INTSTATUS: usize = 0x0C;
+    const BAUDDIV: usize = 0x10;
+    const STATE_TX_FULL: u32 = 1 << 0;
+    const STATE_RX_FULL: u32 = 1 << 1;
+    const CTRL_TX_EN: u32 = 1 << 0;
+    const CTRL_RX_EN: u32 = 1 << 1;
+    const CTRL_TX_INT: u32 = 1 << 2;
+    const INT_TX: u32 = 1 << 0;
+    const INT_RX: u32 = 1 << 1;
+
+    fn reg(&self, offset: usize) -> *mut u32 {
+        (self.base + offset) as *mut u32
+    }
+
+    fn read(&self, offset: usize) -> u32 {
+        // SAFETY: a CMSDK APB UART register of this board; word access.
+        unsafe { self.reg(offset).read_volatile() }
+    }
+
+    fn write(&self, offset: usize, value: u32) {
+        // SAFETY: as `read`.
+        unsafe { self.reg(offset).write_volatile(value) }
+    }
+
+    /// 115 200 baud, transmitter and receiver on, the transmit interrupt enabled.
+    fn init(&self) {
+        self.write(Self::BAUDDIV, SYSCLK_HZ / 115_200);
+        self.write(
+            Self::CTRL,
+            Self::CTRL_TX_EN | Self::CTRL_RX_EN | Self::CTRL_TX_INT,
+        );
+    }
+
+    fn tx_ready(&self) -> bool {
+        self.read(Self::STATE) & Self::STATE_TX_FULL == 0
+    }
+
+    fn rx_byte(&self) -> Option<u8> {
+        (self.read(Self::STATE) & Self::STATE_RX_FULL != 0).then(|| self.read(Self::DATA) as u8)
+    }
+
+    fn clear_interrupts(&self) {
+        self.write(Self::INTSTATUS, Self::INT_TX | Self::INT_RX);
+    }
+}
+
+/// A CAN controller event of [`SlcanCan`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum SlcanEvent {
+    /// The frame of this PDU has left the UART.
+    TxConfirmation(u16),
+}
+
+/// The longest SLCAN transmit line: `T`, 8 id digits, the DLC, 16 data digits, `\r`.
+const MAX_LINE: usize = 27;
+
+/// A CAN controller on a UART: frames go out as SLCAN text (`t` + 3 hex id digits, or
+/// `T` + 8 for an extended id, the DLC, the data in hex, `\r`).
+pub struct SlcanCan {
+    uart: Uart,
+    mode: ControllerMode,
+    /// The mailbox: the line being sent and how far.
+    line: [u8; MAX_LINE],
+    len: usize,
+    sent: usize,
+    pdu: Option<u16>,
+    /// A confirmation waiting for `CanIsr`.
+    confirmed: Option<u16>,
+    /// Characters received and dropped (this driver does not parse reception yet).
+    pub rx_dropped: u32,
+}
+
+impl SlcanCan {
+    /// The driver on UART0 (QEMU's first `-serial`).
+    pub fn uart0() -> Self {
+        let uart = Uart { base: UART0 };
+        uart.init();
+        Self {
+            uart,
+            mode: ControllerMode::Stopped,
+            line: [0; MAX_LINE],
+            len: 0,
+            sent: 0,
+            pdu: None,
+            confirmed: None,
+            rx_dropped: 0,
+        }
+    }
+
+    /// Enables the UART's interrupts in the NVIC at OSEK ISR priority `osek_priority`.
+    pub fn enable_interrupts(osek_priority: u8) {
+        crate::cortex_m::enable_irq(Irq(0), osek_priority);
+        crate::cortex_m::enable_irq(Irq(1), osek_priority);
+    }
+
+    /// Moves characters: the mailbox's line into the UART while it takes them, received
+    /// characters out. Then the next event, if any.
+    pub fn take_event(&mut self) -> Option<SlcanEvent> {
+        self.uart.clear_interrupts();
+        while self.uart.rx_byte().is_some() {
+            self.rx_dropped = self.rx_dropped.saturating_add(1);
+        }
+        while self.sent < self.len && self.uart.tx_ready() {
+            let byte = self.line.get(self.sent).copied().unwrap_or(b'\r');
+            self.uart.write(Uart::DATA, u32::from(byte));
+            self.sent += 1;
+        }
+        if self.sent == self.len {
+            if let Some(pdu) = self.pdu.take() {
+                self.confirmed = Some(pdu);
+            }
+        }
+        self.confirmed.take().map(SlcanEvent::TxConfirmation)
+    }
+}
+
+fn hex(nibble: u32) -> u8 {
+    b"0123456789ABCDEF"
+        .get((nibble & 0xF) as usize)
+        .copied()
+        .unwrap_or(b'0')
+}
+
+impl CanDriver for SlcanCan {
+    fn write(&mut self, _hth: Hth, pdu: u16, frame: &CanFrame) -> Result<(), CanBusy> {
+        if self.mode != ControllerMode::Started || self.pdu.is_some() || self.confirmed.is_some() {
+            return Err(CanBusy);
+        }
+        let id = frame.can_id();
+        let mut n = 0;
+        let mut put = |b: u8, line: &mut [u8; MAX_LINE]| {
+            if let Some(slot) = line.get_mut(n) {
+                *slot = b;
+                n += 1;
+            }
+        };
+        let digits = if id.is_extended() {
+            put(b'T', &mut self.line);
+            8
+        } else {
+            put(b't', &mut self.line);
+            3
+        };
+        for i in (0..digits).rev() {
+            put(hex(id.raw() >> (4 * i)), &mut self.line);
+        }
+        put(hex(u32::from(frame.len())), &mut self.line);
+        for b in frame.bytes() {
+            put(hex(u32::from(*b) >> 4), &mut self.line);
+            put(hex(u32::from(*b)), &mut self.line);
+        }
+        put(b'\r', &mut self.line);
+        self.len = n;
+        self.sent = 0;
+        self.pdu = Some(pdu);
+        // Start the transmission; the TX interrupt carries it on.
+        let _ = self.take_event().map(|e| {
+            let SlcanEvent::TxConfirmation(p) = e;
+            self.confirmed = Some(p);
+            cortex_m::peripheral::NVIC::pend(Irq(1));
+        });
+        Ok(())
+    }
+
+    fn set_controller_mode(&mut self, mode: ControllerMode) -> Result<(), ModeRefused> {
+        if self.mode == ControllerMode::Sleep && mode == ControllerMode::Started {
+            return Err(ModeRefused);
+        }
+        if mode != ControllerMode::Started {
+            self.len = 0;
+            self.sent = 0;
+            self.pdu = None;
+        }
+        self.mode = mode;
+        Ok(())
+    }
+}
+
+/// An external interrupt line of this board.
+#[derive(Debug, Clone, Copy)]
+pub struct Irq(pub u16);
+
+// SAFETY: the numbers are the board's external interrupt lines (QEMU's mps2 wiring).
+unsafe impl cortex_m::interrupt::InterruptNumber for Irq {
+    fn number(self) -> u16 {
+        self.0
+    }
+}
+
+/// Writes to the host's standard output over semihosting.
+pub fn log(text: &str) {
+    let _ = cortex_m_semihosting::hio::hstdout().map(|mut out| out.write_all(text.as_bytes()));
+}
+
+/// Formats to the host's standard output over semihosting.
+#[macro_export]
+macro_rules! mps2_log {
+    ($($arg:tt)*) => {{
+        let mut line = $crate::mps2::LogLine::new();
+        let _ = core::fmt::Write::write_fmt(&mut line, format_args!($($arg)*));
+        line.flush();
+    }};
+}
+
+/// A line buffer for [`mps2_log!`].
+pub struct LogLine {
+    buf: [u8; 160],
+    len: usize,
+}
+
+impl LogLine {
+    /// An empty line.
+    pub const fn new() -> Self {
+        Self {
+            buf: [0; 160],
+            len: 0,
+        }
+    }
+    /// Writes the line out.
+    pub fn flush(&mut self) {
+        if let Some(bytes) = self.buf.get(..self.len) {
+            if let Ok(text) = core::str::from_utf8(bytes) {
+                log(text);
+            }
+        }
+        self.len = 0;
+    }
+}
+
+impl Default for LogLine {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl core::fmt::Write for LogLine {
+    fn write_str(&mut self, s: &str) -> core::fmt::Result {
+        for b in s.bytes() {
+            if self.len == self.buf.len() {
+                self.flush();
+            }
+            if let Some(slot) = self.buf.get_mut(self.len) {
+                *slot = b;
+                self.len += 1;
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Ends the QEMU run (semihosting `SYS_EXIT`), successfully or not.
+pub fn exit(success: bool) -> ! {
+    let code = if success {
+        cortex_m_semihosting::debug::EXIT_SUCCESS
+    } else {
+        cortex_m_semihosting::debug::EXIT_FAILURE
+    };
+    cortex_m_semihosting::debug::exit(code);
+    loop {
+        cortex_m::asm::wfi();
+    }
+}
+
+/// A fatal error: LEDs to their safe state, the reason on the log, the run ends failed.
+pub fn fatal(what: &str) -> ! {
+    leds_safe();
+    mps2_log!("FATAL: {what}\n");
+    exit(false)
+}
+
+#[cortex_m_rt::exception]
+fn SysTick() {
+    MS.fetch_add(1, Ordering::Relaxed);
+    if let Some(app) = app() {
+        app.tick();
+    }
+}
+
+#[cortex_m_rt::exception]
+unsafe fn HardFault(frame: &cortex_m_rt::ExceptionFrame) -> ! {
+    leds_safe();
+    mps2_log!("FATAL: HardFault at pc {:#010x}\n", frame.pc());
+    exit(false)
+}
+
+#[panic_handler]
+fn panic(info: &core::panic::PanicInfo) -> ! {
+    leds_safe();
+    if let Some(location) = info.location() {
+        mps2_log!("FATAL: panic at {}:{}\n", location.file(), location.line());
+    }
+    report_fatal("panic")
+}
+
+extern "C" fn uart0_rx() {
+    if let Some(app) = app() {
+        app.irq(0);
+    }
+}
+
+extern "C" fn uart0_tx() {
+    if let Some(app) = app() {
+        app.irq(1);
+    }
+}
+
+extern "C" fn unused_irq() {
+    fatal("an interrupt without a handler");
+}
+
+/// The external interrupt vector: UART0's receive and transmit lines are the CAN
+/// controller's; no other line is enabled.
+#[link_section = ".vector_table.interrupts"]
+#[no_mangle]
+#[used]
+static __INTERRUPTS: [extern "C" fn(); 32] = {
+    let mut v: [extern "C" fn(); 32] = [unused_irq; 32];
+    v[0] = uart0_rx;
+    v[1] = uart0_tx;
+    v
+};
