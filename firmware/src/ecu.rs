@@ -98,8 +98,7 @@ pub struct ComStack<C> {
     pub com: config::EcuCom,
     /// The CAN controller.
     pub can: C,
-    frames_requested: u32,
-    frames_refused: u32,
+    frames: FrameCounts,
     rx_dropped: u32,
     mode_requests_refused: u32,
 }
@@ -112,8 +111,7 @@ impl<C: cw_core::can::CanDriver + CanEvents> ComStack<C> {
             cansm: CanSm::new(config::CANSM),
             com: Com::new(config::ComTables),
             can,
-            frames_requested: 0,
-            frames_refused: 0,
+            frames: FrameCounts::default(),
             rx_dropped: 0,
             mode_requests_refused: 0,
         }
@@ -134,25 +132,12 @@ impl<C: cw_core::can::CanDriver + CanEvents> ComStack<C> {
         }
     }
 
-    fn count_frame(frames: &mut (u32, u32), sent: bool) {
-        if sent {
-            frames.0 = frames.0.saturating_add(1);
-        } else {
-            frames.1 = frames.1.saturating_add(1);
-        }
-    }
-
     /// The BSW main functions of `OsBswServiceTask`; whether EcuM asks to shut down.
     fn main_functions(&mut self) -> bool {
         self.com.main_function_rx(|_timed_out| {});
-        let mut frames = (self.frames_requested, self.frames_refused);
-        let (canif, can) = (&mut self.canif, &mut self.can);
-        self.com.main_function_tx(|ipdu, sdu| {
-            let sent = config::PDUR.com_transmit(canif, can, ipdu, sdu).is_ok();
-            Self::count_frame(&mut frames, sent);
-            sent
-        });
-        (self.frames_requested, self.frames_refused) = frames;
+        let (canif, can, frames) = (&mut self.canif, &mut self.can, &mut self.frames);
+        self.com
+            .main_function_tx(|ipdu, sdu| frames.transmit(canif, can, ipdu, sdu));
         let actions = self.cansm.main_function();
         cansm::apply(&mut self.cansm, &mut self.canif, &mut self.can, actions);
         self.ecum.main_function()
@@ -160,13 +145,8 @@ impl<C: cw_core::can::CanDriver + CanEvents> ComStack<C> {
 
     /// CanTranslate's signals through Com, PduR and CanIf to the controller.
     fn send(&mut self, distance: Option<u64>, level: u64) {
-        let mut frames = (self.frames_requested, self.frames_refused);
-        let (canif, can) = (&mut self.canif, &mut self.can);
-        let mut transmit = |ipdu, sdu: &[u8]| {
-            let sent = config::PDUR.com_transmit(canif, can, ipdu, sdu).is_ok();
-            Self::count_frame(&mut frames, sent);
-            sent
-        };
+        let (canif, can, frames) = (&mut self.canif, &mut self.can, &mut self.frames);
+        let mut transmit = |ipdu, sdu: &[u8]| frames.transmit(canif, can, ipdu, sdu);
         let _ = self.com.send_signal(
             config::SIG_WARNING_LEVEL,
             SignalValue::Unsigned(level),
@@ -182,7 +162,6 @@ impl<C: cw_core::can::CanDriver + CanEvents> ComStack<C> {
                 .com
                 .invalidate_signal(config::SIG_DISTANCE, &mut transmit),
         };
-        (self.frames_requested, self.frames_refused) = frames;
     }
 
     /// One controller event, inside `CanIsr`.
@@ -212,6 +191,32 @@ impl<C: cw_core::can::CanDriver + CanEvents> ComStack<C> {
                 cansm::apply(&mut self.cansm, &mut self.canif, &mut self.can, actions);
             }
         }
+    }
+}
+
+/// Distance frames handed to CanIf and refused by it.
+#[derive(Default)]
+struct FrameCounts {
+    requested: u32,
+    refused: u32,
+}
+
+impl FrameCounts {
+    /// Com's transmit request through PduR to CanIf and the controller, counted.
+    fn transmit<C: cw_core::can::CanDriver>(
+        &mut self,
+        canif: &mut config::EcuCanIf,
+        can: &mut C,
+        ipdu: cw_core::com::ipdu::TxIpduId,
+        sdu: &[u8],
+    ) -> bool {
+        let sent = config::PDUR.com_transmit(canif, can, ipdu, sdu).is_ok();
+        if sent {
+            self.requested = self.requested.saturating_add(1);
+        } else {
+            self.refused = self.refused.saturating_add(1);
+        }
+        sent
     }
 }
 
@@ -339,8 +344,8 @@ impl<P: Port<Kernel = Kernel>, B: Board> Ecu<P, B> {
         let pin_faults = self.leds.get_mut().pin_faults;
         let com = self.com.get_mut();
         EcuStats {
-            frames_requested: com.frames_requested,
-            frames_refused: com.frames_refused,
+            frames_requested: com.frames.requested,
+            frames_refused: com.frames.refused,
             rx_dropped: com.rx_dropped,
             os_errors: hooks.errors.saturating_add(hooks.port_errors),
             pin_faults,

@@ -229,9 +229,10 @@ impl SlcanCan {
         crate::cortex_m::enable_irq(Irq(1), osek_priority);
     }
 
-    /// Moves characters: the mailbox's line into the UART while it takes them, received
-    /// characters out. Then the next event, if any.
-    pub fn take_event(&mut self) -> Option<SlcanEvent> {
+    /// Moves characters: received ones out (counted and dropped), the mailbox's line into
+    /// the UART while it takes them; a line sent completely frees the mailbox and leaves
+    /// its confirmation for `CanIsr`.
+    fn pump(&mut self) {
         self.uart.clear_interrupts();
         while self.uart.rx_byte().is_some() {
             self.rx_dropped = self.rx_dropped.saturating_add(1);
@@ -246,6 +247,11 @@ impl SlcanCan {
                 self.confirmed = Some(pdu);
             }
         }
+    }
+
+    /// The UART's interrupt work, then the next event, if any.
+    pub fn take_event(&mut self) -> Option<SlcanEvent> {
+        self.pump();
         self.confirmed.take().map(SlcanEvent::TxConfirmation)
     }
 }
@@ -289,12 +295,12 @@ impl CanDriver for SlcanCan {
         self.len = n;
         self.sent = 0;
         self.pdu = Some(pdu);
-        // Start the transmission; the TX interrupt carries it on.
-        let _ = self.take_event().map(|e| {
-            let SlcanEvent::TxConfirmation(p) = e;
-            self.confirmed = Some(p);
+        // Start the transmission; the TX interrupt carries it on. A line the UART took at
+        // once is confirmed from the TX interrupt all the same.
+        self.pump();
+        if self.confirmed.is_some() {
             cortex_m::peripheral::NVIC::pend(Irq(1));
-        });
+        }
         Ok(())
     }
 
