@@ -431,6 +431,9 @@ impl<P: Port<Kernel = Kernel>, B: Board> Ecu<P, B> {
             config::SONAR_TASK => self.sonar_task(),
             _ => {}
         }
+        // The job's last line: where the port switches stacks, a successful
+        // TerminateTask never returns here.
+        self.port.job_finished(task);
         // After ShutdownOS inside the body the OS is gone and nothing terminates; an
         // error here reaches ErrorHook, which counts it.
         let _ = self.port.end_job(|os| {
@@ -440,7 +443,6 @@ impl<P: Port<Kernel = Kernel>, B: Board> Ecu<P, B> {
                 os.terminate_task()
             }
         });
-        self.port.job_finished(task);
     }
 
     /// Runs an ISR as the port does: the kernel is told of its entry, `body` runs, the
@@ -462,6 +464,7 @@ impl<P: Port<Kernel = Kernel>, B: Board> Ecu<P, B> {
         if entered.is_err() {
             return;
         }
+        self.port.isr_entered(isr);
         body(self);
         let left = self.port.kernel(|os| {
             if os.is_shut_down() {

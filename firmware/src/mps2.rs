@@ -8,6 +8,7 @@
 
 use cw_bsp::cortex_m::{App, CortexMPort};
 use cw_bsp::mps2::{self, CoreDelay, Led, SlcanCan, SlcanEvent, Unconnected};
+use cw_core::can::Hrh;
 use cw_core::os::TaskId;
 use cw_core::sonar::SonarConfig;
 
@@ -35,6 +36,8 @@ impl CanEvents for SlcanCan {
     fn take_event(&mut self) -> Option<CanInterrupt> {
         SlcanCan::take_event(self).map(|event| match event {
             SlcanEvent::TxConfirmation(pdu) => CanInterrupt::TxConfirmation(pdu),
+            // The UART is one receive mailbox; CanIf filters by id.
+            SlcanEvent::Received(frame) => CanInterrupt::Received(Hrh(0), frame),
         })
     }
 }
@@ -129,6 +132,16 @@ impl App for Mps2App {
             return;
         }
         let hooks = self.ecu.hooks();
+        let schedule_ok = report_trace();
+        let link = mps2::slcan_stats();
+        cw_bsp::mps2_log!(
+            "cw-qemu: slcan received {} frames, {} commands, {} malformed lines; {} overruns, {} replies dropped\n",
+            link.rx_frames,
+            link.rx_commands,
+            link.rx_malformed,
+            link.rx_overruns,
+            link.replies_dropped
+        );
         cw_bsp::mps2_log!(
             "cw-qemu: end at {} ms; kernel errors {}, port errors {}; task stack used {} of {} bytes\n",
             mps2::now_ms(),
@@ -137,7 +150,7 @@ impl App for Mps2App {
             cw_bsp::cortex_m::basic_stack_use(),
             cw_bsp::cortex_m::BASIC_STACK_WORDS * 4
         );
-        mps2::exit(hooks.errors == 0 && hooks.port_errors == 0);
+        mps2::exit(schedule_ok && hooks.errors == 0 && hooks.port_errors == 0);
     }
 
     fn tick(&self) {
@@ -148,4 +161,94 @@ impl App for Mps2App {
     fn irq(&self, _line: u16) {
         self.ecu.can_isr();
     }
+}
+
+/// The name of task `t` in the configuration.
+fn task_name(t: usize) -> &'static str {
+    config::OS.tasks().get(t).map_or("?", |c| c.name)
+}
+
+/// Prints the LED changes and the task trace (`cw_bsp::cortex_m::trace`) over
+/// semihosting, one fact per line, for `cargo xtask qemu --compare` and for reading:
+///
+/// - `led MS RED YELLOW`: the LED register changed at MS ms;
+/// - `task NAME jobs N preempted P max-span US`: per task;
+/// - `preempt BY OVER N`: jobs of BY that started on top of a job of OVER;
+/// - `isr NAME OVER N`: entries of an ISR while OVER ran (`idle`: the idle loop);
+/// - `event US start|end|isr NAME`: the first events of the run, in order (ISR entries
+///   only when they interrupt a task);
+/// - `schedule ...`: the check that every preemption was by a task of higher priority
+///   and every periodic task's longest job ended within its period (`false` if not).
+fn report_trace() -> bool {
+    use cw_bsp::cortex_m::trace::{self, EventKind, IDLE_ROW};
+    let dropped = mps2::led_changes(|at, bits| {
+        cw_bsp::mps2_log!("cw-qemu: led {} {} {}\n", at, bits & 1, (bits >> 1) & 1);
+    });
+    if dropped > 0 {
+        cw_bsp::mps2_log!("cw-qemu: led changes not logged {}\n", dropped);
+    }
+    let isr_name = |i: usize| config::OS.isrs().get(i).map_or("?", |c| c.name);
+    trace::read(|t| {
+        for (i, r) in t.tasks.iter().enumerate().take(config::OS.tasks().len()) {
+            cw_bsp::mps2_log!(
+                "cw-qemu: task {} jobs {} preempted {} max-span {}\n",
+                task_name(i),
+                r.jobs,
+                r.preempted,
+                r.max_span_us
+            );
+        }
+        for (by, row) in t.preemptions.iter().enumerate() {
+            for (over, &n) in row.iter().enumerate().filter(|(_, &n)| n > 0) {
+                cw_bsp::mps2_log!(
+                    "cw-qemu: preempt {} {} {}\n",
+                    task_name(by),
+                    task_name(over),
+                    n
+                );
+            }
+        }
+        for (isr, row) in t.isr_over.iter().enumerate() {
+            for (over, &n) in row.iter().enumerate().filter(|(_, &n)| n > 0) {
+                let over = if over == IDLE_ROW {
+                    "idle"
+                } else {
+                    task_name(over)
+                };
+                cw_bsp::mps2_log!("cw-qemu: isr {} {} {}\n", isr_name(isr), over, n);
+            }
+        }
+        let mut preemptions = 0u32;
+        let mut wrong = 0u32;
+        for (by, row) in t.preemptions.iter().enumerate() {
+            for (over, &n) in row.iter().enumerate().filter(|(_, &n)| n > 0) {
+                preemptions = preemptions.saturating_add(u32::from(n));
+                let priority = |i: usize| config::OS.tasks().get(i).map_or(0, |c| c.priority);
+                if priority(by) <= priority(over) {
+                    wrong = wrong.saturating_add(u32::from(n));
+                }
+            }
+        }
+        let late = t
+            .tasks
+            .iter()
+            .zip(config::PERIOD_MS)
+            .filter(|(r, period)| *period > 0 && r.max_span_us >= period.saturating_mul(1000))
+            .count();
+        cw_bsp::mps2_log!(
+            "cw-qemu: schedule {} preemptions, {} not by a higher priority; {} periodic tasks with a job longer than the period\n",
+            preemptions,
+            wrong,
+            late
+        );
+        for e in t.events.iter().take(t.events_len) {
+            let (what, name) = match e.kind {
+                EventKind::JobStart(task) => ("start", task_name(usize::from(task))),
+                EventKind::JobEnd(task) => ("end", task_name(usize::from(task))),
+                EventKind::Isr(isr) => ("isr", isr_name(usize::from(isr))),
+            };
+            cw_bsp::mps2_log!("cw-qemu: event {} {} {}\n", e.at_us, what, name);
+        }
+        wrong == 0 && late == 0
+    })
 }

@@ -71,6 +71,7 @@ pub fn decode_service(op: u8, a: u8, b: u8, c: u8) -> Service {
 #[cfg(test)]
 mod targets {
     use super::decode_service;
+    use cw_core::can::{slcan, CanFrame, CanId};
     use cw_core::com::signal::{spec, ByteOrder, SignalLayout, Signedness};
     use cw_core::os::spec::call_and_check;
     use cw_core::os::OSDEFAULTAPPMODE;
@@ -167,6 +168,29 @@ mod targets {
                 0 => run_services::<6, 2, 1, 4, 2, 6>(&configs::PAPER, calls),
                 1 => run_services::<3, 1, 1, 2, 1, 4>(&configs::EVENTS, calls),
                 _ => run_services::<3, 1, 0, 0, 3, 3>(&configs::INTERRUPTS, calls),
+            });
+    }
+
+    /// Any bytes arriving on an SLCAN link, then a good frame's line: the decoder accepts
+    /// only canonical frame lines, gives at most one verdict per line end, never panics,
+    /// and the good frame after the garbage comes out intact
+    /// (`cw_core::can::slcan::spec::stream_contract`).
+    #[test]
+    fn slcan_stream() {
+        bolero::check!()
+            .with_type::<(Vec<u8>, u32, bool, u8, [u8; 8])>()
+            .for_each(|(garbage, raw, extended, len, data)| {
+                let id = if *extended {
+                    CanId::extended(raw & 0x1FFF_FFFF)
+                } else {
+                    CanId::standard((raw & 0x7FF) as u16)
+                };
+                let Some(frame) =
+                    id.and_then(|id| CanFrame::from_parts(id, &data[..usize::from(len % 9)]))
+                else {
+                    panic!("masked id refused");
+                };
+                assert!(slcan::spec::stream_contract(garbage, &frame));
             });
     }
 }

@@ -10,7 +10,11 @@ use std::time::Instant;
 /// selects the test with `cargo test <name> -- --exact`, so each name is the test's full
 /// libtest path (`codec_roundtrip` for a test at the root of an integration-test file,
 /// `tests::codec_roundtrip` for one in `mod tests` of the library).
-pub const FUZZ_TARGETS: &[&str] = &["targets::codec_roundtrip", "targets::scheduler_api"];
+pub const FUZZ_TARGETS: &[&str] = &[
+    "targets::codec_roundtrip",
+    "targets::scheduler_api",
+    "targets::slcan_stream",
+];
 
 /// How long the `fuzz` stage runs each target (cargo-bolero `-T`).
 const FUZZ_TIME: &str = "10s";
@@ -298,7 +302,7 @@ fn run_stage(stage: &str) -> Result {
             .args(["run", "--release", "-p", "cw-proofs"])
             .run(),
         "mutants" => crate::mutants::run(),
-        "qemu" => crate::qemu::run(&crate::qemu::Options::parse(&["--compare".to_string()])?),
+        "qemu" => crate::qemu::run(&crate::qemu::Options::ci()),
         "differential" => differential::run(&differential::Options::default()),
         "interop" => interop(),
         "fuzz" => {

@@ -7,12 +7,19 @@
 //! The run uses `-icount shift=0`: one instruction per nanosecond, so SysTick's
 //! milliseconds are the image's own, independent of the host's speed.
 //!
+//! `--live` runs the image in real time (no `-icount`) with UART0 on a TCP port and
+//! `tests/slcan_live.py` against it: python-can's `slcan` interface receives the distance
+//! frames and sends malformed lines and a `ThresholdConfig` frame that the ECU must apply;
+//! the image's count of malformed lines and received frames must equal what was sent.
+//!
 //! `--compare` runs the host simulation on the same scenario (Figure 7) and requires the
 //! same CAN frames (id and payload, in order) and the same transitions of each LED, in
 //! order. The image runs one frame further: its last sample's frame leaves the UART at
 //! once, while the simulated bus is still transmitting it when the simulation ends.
 
 use std::path::{Path, PathBuf};
+
+use cw_core::can::slcan;
 
 use crate::process::{root, target_dir, Cmd};
 use crate::Result;
@@ -24,17 +31,28 @@ const SCENARIO: &str = "scenarios/figure7.txt";
 #[derive(Default)]
 pub struct Options {
     compare: bool,
+    live: bool,
     serial: Option<String>,
 }
 
 impl Options {
-    /// Parses `[--compare] [--serial tcp:PORT]`.
+    /// The options of the check command's `qemu` stage: the comparison, then the live test.
+    pub fn ci() -> Self {
+        Self {
+            compare: true,
+            live: true,
+            serial: None,
+        }
+    }
+
+    /// Parses `[--compare] [--live] [--serial tcp:PORT]`.
     pub fn parse(args: &[String]) -> Result<Self> {
         let mut options = Self::default();
         let mut it = args.iter();
         while let Some(arg) = it.next() {
             match arg.as_str() {
                 "--compare" => options.compare = true,
+                "--live" => options.live = true,
                 "--serial" => {
                     let Some(port) = it.next().and_then(|a| a.strip_prefix("tcp:")) else {
                         return Err("qemu: --serial takes tcp:PORT".into());
@@ -71,7 +89,8 @@ pub fn build() -> Result<PathBuf> {
     Ok(target_dir().join(TARGET).join("release").join("cw-qemu"))
 }
 
-/// Runs the image on QEMU; the SLCAN output and the LED trace go to `out`.
+/// Runs the image on QEMU; the SLCAN output and the LED trace go to `out`, the image's
+/// semihosting report to `out/image.txt` (and the terminal).
 fn run_image(image: &Path, out: &Path, serial: Option<&str>) -> Result {
     std::fs::create_dir_all(out).map_err(|e| format!("creating {}: {e}", out.display()))?;
     let slcan = out.join("slcan.txt");
@@ -80,7 +99,7 @@ fn run_image(image: &Path, out: &Path, serial: Option<&str>) -> Result {
         let _ = std::fs::remove_file(f);
     }
     let serial = serial.map_or_else(|| format!("file:{}", slcan.display()), str::to_string);
-    Cmd::new("qemu-system-arm")
+    let report = Cmd::new("qemu-system-arm")
         .args(["-machine", "mps2-an386", "-nographic", "-monitor", "none"])
         .args(["-semihosting-config", "enable=on,target=native"])
         .args(["-icount", "shift=0,sleep=off"])
@@ -89,98 +108,282 @@ fn run_image(image: &Path, out: &Path, serial: Option<&str>) -> Result {
         .arg(&leds)
         .arg("-kernel")
         .arg(image)
-        .run()
+        .read()?;
+    print!(
+        "{}",
+        report
+            .lines()
+            .filter(|l| !l.starts_with("cw-qemu: event "))
+            .map(|l| format!("{l}\n"))
+            .collect::<String>()
+    );
+    let path = out.join("image.txt");
+    std::fs::write(&path, report).map_err(|e| format!("writing {}: {e}", path.display()))
 }
 
 /// Runs `cargo xtask qemu`.
 pub fn run(options: &Options) -> Result {
     let image = build()?;
     let out = target_dir().join("qemu");
-    run_image(&image, &out, options.serial.as_deref())?;
+    if options.compare || !options.live {
+        run_image(&image, &out, options.serial.as_deref())?;
+    }
     if options.compare {
         compare(&out)?;
+    }
+    if options.live {
+        live(&image, &out)?;
     }
     Ok(())
 }
 
-/// Frames as `ID#HEX` from the image's SLCAN lines (`tIIILDD..`).
-fn slcan_frames(text: &str) -> Result<Vec<String>> {
-    text.split('\r')
-        .filter(|l| !l.is_empty())
+/// A free TCP port on the loopback interface (the OS picks it; QEMU binds it next).
+fn free_port() -> Result<u16> {
+    std::net::TcpListener::bind("127.0.0.1:0")
+        .and_then(|l| l.local_addr())
+        .map(|a| a.port())
+        .map_err(|e| format!("qemu: no free TCP port: {e}"))
+}
+
+/// The image in real time with UART0 on a TCP port, `tests/slcan_live.py` against it.
+fn live(image: &Path, out: &Path) -> Result {
+    use std::io::Read;
+    use std::process::{Command, Stdio};
+    std::fs::create_dir_all(out).map_err(|e| format!("creating {}: {e}", out.display()))?;
+    let port = free_port()?;
+    let serial = format!("tcp:127.0.0.1:{port},server=on,wait=on");
+    let leds = out.join("fpgaio-live.log");
+    println!(
+        "$ qemu-system-arm -machine mps2-an386 (real time) -serial {serial} -kernel {}",
+        image.display()
+    );
+    let mut qemu = Command::new("qemu-system-arm")
+        .args(["-machine", "mps2-an386", "-nographic", "-monitor", "none"])
+        .args(["-semihosting-config", "enable=on,target=native"])
+        .args(["-serial", &serial])
+        .args(["-d", "trace:mps2_fpgaio_write", "-D"])
+        .arg(&leds)
+        .arg("-kernel")
+        .arg(image)
+        .stdout(Stdio::piped())
+        .spawn()
+        .map_err(|e| format!("qemu-system-arm: {e}"))?;
+    let test = Cmd::new(crate::setup::venv_python())
+        .arg(root().join("tests").join("slcan_live.py"))
+        .arg(port.to_string())
+        .arg(root().join("firmware").join("ecu.dbc"))
+        .read();
+    let test = match test {
+        Ok(output) => output,
+        Err(e) => {
+            let _ = qemu.kill();
+            let _ = qemu.wait();
+            return Err(e);
+        }
+    };
+    print!("{test}");
+    let mut image_out = String::new();
+    if let Some(mut stdout) = qemu.stdout.take() {
+        stdout
+            .read_to_string(&mut image_out)
+            .map_err(|e| format!("reading QEMU's output: {e}"))?;
+    }
+    let status = qemu.wait().map_err(|e| format!("qemu-system-arm: {e}"))?;
+    print!("{image_out}");
+    if !status.success() {
+        return Err(format!("qemu: the live image ended with {status}"));
+    }
+    let sent = counts_after(
+        &test,
+        "slcan-live: sent ",
+        &[" malformed lines and ", " frames"],
+    )?;
+    let got = counts_after(
+        &image_out,
+        "cw-qemu: slcan received ",
+        &[" frames, ", " commands, ", " malformed lines"],
+    )?;
+    let (sent_malformed, sent_frames) = (sent[0], sent[1]);
+    let (got_frames, got_malformed) = (got[0], got[2]);
+    if (got_malformed, got_frames) != (sent_malformed, sent_frames) {
+        return Err(format!(
+            "qemu: python-can sent {sent_malformed} malformed lines and {sent_frames} frames; \
+             the image counted {got_malformed} malformed lines and received {got_frames} frames"
+        ));
+    }
+    println!(
+        "qemu: live SLCAN both ways: the image counted the {got_malformed} malformed lines python-can \
+         sent and received its {got_frames} frame"
+    );
+    Ok(())
+}
+
+/// The numbers in the line of `text` that starts with `prefix`, each followed by the
+/// next separator (`12 malformed lines and 1 frames` with separators ` malformed lines
+/// and `, ` frames`).
+fn counts_after(text: &str, prefix: &str, separators: &[&str]) -> Result<Vec<u32>> {
+    let line = text
+        .lines()
+        .find_map(|l| l.strip_prefix(prefix))
+        .ok_or_else(|| format!("qemu: no line starting `{prefix}` in:\n{text}"))?;
+    let mut rest = line;
+    let mut numbers = Vec::new();
+    for sep in separators {
+        let (number, tail) = rest
+            .split_once(sep)
+            .ok_or_else(|| format!("qemu: `{line}` lacks `{sep}`"))?;
+        numbers.push(
+            number
+                .trim()
+                .parse()
+                .map_err(|_| format!("qemu: `{number}` in `{line}` is not a count"))?,
+        );
+        rest = tail;
+    }
+    Ok(numbers)
+}
+
+/// A frame as `ID#HEX` and when it went out, ms.
+type Timed = (f64, String);
+
+/// The image's frames from its SLCAN lines (`tIIILDD..SSSS`: Lawicel time stamps, ms
+/// modulo 60 000, unwrapped here: the image sends at least one frame a minute).
+fn slcan_frames(text: &str) -> Result<Vec<Timed>> {
+    let mut frames = Vec::new();
+    let mut minutes = 0u32;
+    let mut last = 0u32;
+    for (i, line) in text.split('\r').filter(|l| !l.is_empty()).enumerate() {
+        let (frame, stamp) = slcan::parse_adapter_line(line.as_bytes())
+            .map_err(|e| format!("SLCAN line {}: `{line}`: {e:?}", i + 1))?;
+        let stamp =
+            stamp.ok_or_else(|| format!("SLCAN line {}: `{line}` has no time stamp", i + 1))?;
+        let stamp = u32::from(stamp);
+        if stamp < last {
+            minutes += 1;
+        }
+        last = stamp;
+        let id = frame.can_id();
+        let id = if id.is_extended() {
+            format!("{:08X}", id.raw())
+        } else {
+            format!("{:03X}", id.raw())
+        };
+        let data: String = frame.bytes().iter().map(|b| format!("{b:02X}")).collect();
+        let ms = minutes * slcan::TIMESTAMP_MODULUS + stamp;
+        frames.push((f64::from(ms), format!("{id}#{data}")));
+    }
+    Ok(frames)
+}
+
+/// Frames from a candump log (`(SECONDS) can0 ID#HEX`), times in ms from the log's epoch
+/// (the simulation's logs start at 1 700 000 000 s).
+fn candump_frames(text: &str) -> Result<Vec<Timed>> {
+    text.lines()
         .enumerate()
         .map(|(i, line)| {
             let bad = || {
                 format!(
-                    "SLCAN line {}: `{line}` is not a standard data frame",
+                    "candump line {}: `{line}` is not `(SECONDS) IFACE ID#DATA`",
                     i + 1
                 )
             };
-            let rest = line.strip_prefix('t').ok_or_else(bad)?;
-            let id = rest.get(..3).ok_or_else(bad)?;
-            let data = rest.get(4..).ok_or_else(bad)?;
-            Ok(format!("{id}#{data}"))
+            let mut fields = line.split_whitespace();
+            let stamp = fields
+                .next()
+                .and_then(|t| t.strip_prefix('(')?.strip_suffix(')'))
+                .ok_or_else(bad)?;
+            // Whole seconds and microseconds as integers: no rounding on the way.
+            let (whole, micros) = stamp.split_once('.').ok_or_else(bad)?;
+            let whole: i64 = whole.parse().map_err(|_| bad())?;
+            let micros: i64 = format!("{micros:0<6}")
+                .get(..6)
+                .and_then(|m| m.parse().ok())
+                .ok_or_else(bad)?;
+            let us = (whole - 1_700_000_000) * 1_000_000 + micros;
+            let frame = fields.nth(1).ok_or_else(bad)?;
+            Ok((us as f64 / 1000.0, frame.to_string()))
         })
         .collect()
 }
 
-/// Frames as `ID#HEX` from a candump log.
-fn candump_frames(text: &str) -> Result<Vec<String>> {
-    text.lines()
-        .enumerate()
-        .map(|(i, line)| {
-            line.split_whitespace()
-                .nth(2)
-                .map(str::to_string)
-                .ok_or_else(|| format!("candump line {}: `{line}` has no frame", i + 1))
-        })
-        .collect()
-}
+/// One LED's levels in order, each with the time it was taken, ms.
+type Levels = Vec<(f64, bool)>;
 
-/// The levels each LED (red, yellow) took, in order, from the FPGAIO trace.
-fn fpgaio_transitions(text: &str) -> Result<[Vec<bool>; 2]> {
-    let mut seq: [Vec<bool>; 2] = [Vec::new(), Vec::new()];
-    for (i, line) in text.lines().enumerate() {
-        if !line.contains("mps2_fpgaio_write") || !line.contains("offset 0x0 ") {
+/// The levels each LED (red, yellow) took, from the image's `led MS RED YELLOW` lines.
+fn image_transitions(report: &str) -> Result<[Levels; 2]> {
+    let mut seq: [Levels; 2] = [vec![(0.0, false)], vec![(0.0, false)]];
+    for line in report.lines() {
+        let Some(rest) = line.strip_prefix("cw-qemu: led ") else {
             continue;
-        }
-        let value = line
-            .split("data ")
-            .nth(1)
-            .and_then(|r| r.split_whitespace().next())
-            .and_then(|v| u32::from_str_radix(v.trim_start_matches("0x"), 16).ok())
-            .ok_or_else(|| format!("LED trace line {}: `{line}` has no data", i + 1))?;
-        for (bit, s) in seq.iter_mut().enumerate() {
-            push_level(s, value & (1 << bit) != 0);
-        }
+        };
+        let fields: Vec<u32> = rest
+            .split_whitespace()
+            .map(str::parse)
+            .collect::<std::result::Result<_, _>>()
+            .map_err(|_| format!("image report: `{line}` is not `led MS RED YELLOW`"))?;
+        let [at, red, yellow] = fields[..] else {
+            return Err(format!("image report: `{line}` is not `led MS RED YELLOW`"));
+        };
+        push_level(&mut seq[0], f64::from(at), red == 1);
+        push_level(&mut seq[1], f64::from(at), yellow == 1);
+    }
+    if report.contains("cw-qemu: led changes not logged") {
+        return Err("image report: the LED log overflowed".into());
     }
     Ok(seq)
 }
 
-/// The levels each LED took, in order, from the simulation's trace CSV (every 10 ms, after
-/// that millisecond's tasks: the LED task's 10 ms period).
-fn csv_transitions(text: &str) -> Result<[Vec<bool>; 2]> {
-    let mut seq: [Vec<bool>; 2] = [Vec::new(), Vec::new()];
+/// The levels each LED took, from the simulation's trace CSV (every 10 ms, after that
+/// millisecond's tasks: the LED task's 10 ms period).
+fn csv_transitions(text: &str) -> Result<[Levels; 2]> {
     // The LEDs are dark from Port_Init on.
-    push_level(&mut seq[0], false);
-    push_level(&mut seq[1], false);
+    let mut seq: [Levels; 2] = [vec![(0.0, false)], vec![(0.0, false)]];
     for (i, line) in text.lines().enumerate().skip(1) {
         let cols: Vec<&str> = line.split(',').collect();
-        let (Some(red), Some(yellow)) = (cols.get(4), cols.get(5)) else {
-            return Err(format!(
-                "trace line {}: `{line}` has too few columns",
+        let bad = || {
+            format!(
+                "trace line {}: `{line}` is not `time_ms,..,red,yellow,..`",
                 i + 1
-            ));
+            )
         };
-        push_level(&mut seq[0], *red == "1");
-        push_level(&mut seq[1], *yellow == "1");
+        let (Some(at), Some(red), Some(yellow)) = (cols.first(), cols.get(4), cols.get(5)) else {
+            return Err(bad());
+        };
+        let at: f64 = at.parse().map_err(|_| bad())?;
+        push_level(&mut seq[0], at, *red == "1");
+        push_level(&mut seq[1], at, *yellow == "1");
     }
     Ok(seq)
 }
 
-fn push_level(seq: &mut Vec<bool>, level: bool) {
-    if seq.last() != Some(&level) {
-        seq.push(level);
+fn push_level(seq: &mut Levels, at: f64, level: bool) {
+    if seq.last().map(|l| l.1) != Some(level) {
+        seq.push((at, level));
     }
+}
+
+/// The largest time difference between paired events, ms; an error naming the first pair
+/// that differs in content.
+fn max_skew<T: PartialEq + std::fmt::Debug>(
+    what: &str,
+    image: &[(f64, T)],
+    host: &[(f64, T)],
+) -> Result<f64> {
+    let mut skew = 0f64;
+    for (i, (a, b)) in image.iter().zip(host).enumerate() {
+        if a.1 != b.1 {
+            return Err(format!(
+                "qemu: {what} {} differs: image {:?} at {} ms, simulation {:?} at {} ms",
+                i + 1,
+                a.1,
+                a.0,
+                b.1,
+                b.0
+            ));
+        }
+        skew = skew.max((a.0 - b.0).abs());
+    }
+    Ok(skew)
 }
 
 fn read(path: &Path) -> Result<String> {
@@ -208,31 +411,45 @@ fn compare(out: &Path) -> Result {
             host.len()
         ));
     }
-    if let Some(i) = image.iter().zip(&host).position(|(a, b)| a != b) {
-        return Err(format!(
-            "qemu: frame {} differs: image {}, simulation {}",
-            i + 1,
-            image.get(i).map_or("", String::as_str),
-            host.get(i).map_or("", String::as_str)
-        ));
-    }
-    let image_leds = fpgaio_transitions(&read(&out.join("fpgaio.log"))?)?;
+    // The image stamps a frame at Can_Write (whole ms); the simulation logs it when its
+    // last bit has crossed the simulated 500 kbit/s bus, a fraction of a ms later.
+    let frame_skew = max_skew("frame", &image, &host)?;
+    let report = read(&out.join("image.txt"))?;
+    let image_leds = image_transitions(&report)?;
     let host_leds = csv_transitions(&read(&trace)?)?;
+    let mut led_skew = 0f64;
     for (name, (a, b)) in ["red", "yellow"]
         .iter()
         .zip(image_leds.iter().zip(&host_leds))
     {
-        if a != b {
+        if a.len() != b.len() {
             return Err(format!(
-                "qemu: the {name} LED's transitions differ: image {} levels, simulation {}",
+                "qemu: the {name} LED took {} levels on the image, {} in the simulation",
                 a.len(),
                 b.len()
             ));
         }
+        led_skew = led_skew.max(max_skew(&format!("{name} LED level"), a, b)?);
+    }
+    if frame_skew >= OS_TICK_MS || led_skew >= OS_TICK_MS {
+        return Err(format!(
+            "qemu: times differ by more than one OS tick: frames by up to {frame_skew:.3} ms, \
+             LED changes by up to {led_skew:.3} ms"
+        ));
+    }
+    let schedule = report
+        .lines()
+        .find_map(|l| l.strip_prefix("cw-qemu: schedule "))
+        .ok_or("qemu: the image reported no schedule check")?;
+    if !schedule.contains(" 0 not by a higher priority; 0 periodic tasks") {
+        return Err(format!(
+            "qemu: the image's schedule check failed: {schedule}"
+        ));
     }
     println!(
         "qemu: same ECU on {SCENARIO}: {} CAN frames compared (id and payload, in order; the \
-         image sent {} more), {} red and {} yellow LED levels compared in order",
+         image sent {} more), times within {frame_skew:.3} ms; {} red and {} yellow LED levels \
+         compared in order, times within {led_skew:.3} ms; schedule: {schedule}",
         host.len(),
         image.len() - host.len(),
         host_leds[0].len(),
@@ -241,6 +458,9 @@ fn compare(out: &Path) -> Result {
     Ok(())
 }
 
+/// One OS tick, ms: the tolerance on times compared.
+const OS_TICK_MS: f64 = 1.0;
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -248,19 +468,38 @@ mod tests {
     #[test]
     fn parsers_read_their_formats_and_refuse_garbage() {
         assert_eq!(
-            slcan_frames("t1008F401000003000000\rt2001AA\r").unwrap(),
-            ["100#F401000003000000", "200#AA"]
+            slcan_frames("t1008F4010000030000000028\rt2001AA0030\rt2001AA0001\r").unwrap(),
+            [
+                (40.0, "100#F401000003000000".to_string()),
+                (48.0, "200#AA".to_string()),
+                (60_001.0, "200#AA".to_string())
+            ]
         );
         assert!(slcan_frames("x123\r").is_err());
-        assert_eq!(candump_frames("(1.0) can0 100#AA\n").unwrap(), ["100#AA"]);
-        let leds = fpgaio_transitions(
-            "mps2_fpgaio_write MPS2 FPGAIO write: offset 0x0 data 0x0 size 4\n\
-             mps2_fpgaio_write MPS2 FPGAIO write: offset 0x0 data 0x1 size 4\n\
-             mps2_fpgaio_write MPS2 FPGAIO write: offset 0x0 data 0x3 size 4\n",
-        )
-        .unwrap();
-        assert_eq!(leds, [vec![false, true], vec![false, true]]);
+        assert!(
+            slcan_frames("t2001AA\r").is_err(),
+            "a line without a time stamp"
+        );
+        assert_eq!(
+            candump_frames("(1700000000.040250) can0 100#AA\n").unwrap(),
+            [(40.25, "100#AA".to_string())]
+        );
+        assert!(candump_frames("garbage\n").is_err());
+        let leds =
+            image_transitions("cw-qemu: led 10 1 0\ncw-qemu: led 10 1 1\ncw-qemu: led 70 0 1\n")
+                .unwrap();
+        assert_eq!(leds[0], [(0.0, false), (10.0, true), (70.0, false)]);
+        assert_eq!(leds[1], [(0.0, false), (10.0, true)]);
+        assert!(image_transitions("cw-qemu: led 10 x\n").is_err());
         let csv = csv_transitions("h\n10,1,1,Red,1,0,d\n20,1,1,Red,1,1,d\n").unwrap();
-        assert_eq!(csv, [vec![false, true], vec![false, true]]);
+        assert_eq!(
+            csv,
+            [
+                vec![(0.0, false), (10.0, true)],
+                vec![(0.0, false), (20.0, true)]
+            ]
+        );
+        assert!(max_skew("frame", &[(1.0, 1)], &[(1.5, 2)]).is_err());
+        assert_eq!(max_skew("frame", &[(1.0, 1)], &[(1.5, 1)]).unwrap(), 0.5);
     }
 }

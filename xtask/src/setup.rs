@@ -235,7 +235,7 @@ fn python_venv() -> Result {
     if up_to_date {
         // The stamp says pip installed exactly these pins; make sure they still import.
         let check = Cmd::new(&python)
-            .args(["-c", "import cantools, can; print('cantools', cantools.__version__, '/ python-can', can.__version__)"])
+            .args(["-c", "import cantools, can, serial; print('cantools', cantools.__version__, '/ python-can', can.__version__, '/ pyserial', serial.__version__)"])
             .capture()?;
         if check.success {
             println!("ok: .venv has {}", check.stdout.trim());
@@ -267,7 +267,7 @@ fn python_venv() -> Result {
         .arg(&requirements_path)
         .run()?;
     Cmd::new(&python)
-        .args(["-c", "import cantools, can; print('cantools', cantools.__version__, '/ python-can', can.__version__)"])
+        .args(["-c", "import cantools, can, serial; print('cantools', cantools.__version__, '/ python-can', can.__version__, '/ pyserial', serial.__version__)"])
         .run()?;
     std::fs::write(&stamp, requirements).map_err(|e| format!("writing {}: {e}", stamp.display()))
 }

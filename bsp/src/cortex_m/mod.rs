@@ -36,9 +36,11 @@ use core::cell::UnsafeCell;
 use cortex_m::peripheral::scb::SystemHandler;
 use cortex_m::peripheral::{NVIC, SCB};
 use cortex_m::register::basepri;
-use cw_core::os::{InterruptMask, OsError, TaskId};
+use cw_core::os::{InterruptMask, IsrId, OsError, TaskId};
 
 use crate::port::{OsKernel, Port};
+
+pub mod trace;
 
 /// The most tasks the port can switch between.
 pub const MAX_TASKS: usize = 16;
@@ -161,6 +163,11 @@ impl<K: OsKernel> CortexMPort<K> {
         }
     }
 
+    /// Microseconds since the OS started.
+    pub fn now_us(&self) -> u32 {
+        trace::now_us(self.ms.load(core::sync::atomic::Ordering::Relaxed))
+    }
+
     /// The tick ISR advances the millisecond time base.
     pub fn advance_ms(&self) {
         self.ms.fetch_add(1, core::sync::atomic::Ordering::Relaxed);
@@ -226,6 +233,18 @@ impl<K: OsKernel> Port for CortexMPort<K> {
 
     fn now_ms(&self) -> u64 {
         u64::from(self.ms.load(core::sync::atomic::Ordering::Relaxed))
+    }
+
+    fn job_started(&self, task: TaskId) {
+        trace::job_started(task.0, self.now_us());
+    }
+
+    fn job_finished(&self, task: TaskId) {
+        trace::job_finished(task.0, self.now_us());
+    }
+
+    fn isr_entered(&self, isr: IsrId) {
+        trace::isr_entered(isr.0, self.now_us());
     }
 }
 

@@ -16,7 +16,7 @@
 use core::convert::Infallible;
 use core::sync::atomic::{AtomicU32, Ordering};
 
-use cw_core::can::{CanBusy, CanDriver, CanFrame, ControllerMode, Hth, ModeRefused};
+use cw_core::can::{slcan, CanBusy, CanDriver, CanFrame, ControllerMode, Hth, ModeRefused};
 use embedded_hal::delay::DelayNs;
 use embedded_hal::digital::{ErrorType, InputPin, OutputPin};
 
@@ -51,8 +51,60 @@ impl Led {
                 now & !(1 << self.bit)
             };
             FPGAIO_LED.write_volatile(new);
+            if new != now {
+                led_changed(new);
+            }
         }
     }
+}
+
+/// LED register values logged with their time, from the start of the run.
+pub const LED_LOG: usize = 48;
+
+struct LedLog {
+    entries: [(u32, u8); LED_LOG],
+    len: usize,
+    dropped: u32,
+}
+
+struct LedLogCell(core::cell::UnsafeCell<LedLog>);
+
+// SAFETY: reached only inside `cortex_m::interrupt::free`, on a single core.
+unsafe impl Sync for LedLogCell {}
+
+static LEDS_LOGGED: LedLogCell = LedLogCell(core::cell::UnsafeCell::new(LedLog {
+    entries: [(0, 0); LED_LOG],
+    len: 0,
+    dropped: 0,
+}));
+
+fn led_changed(value: u32) {
+    let at_ms = now_ms();
+    cortex_m::interrupt::free(|_| {
+        // SAFETY: interrupts are off; the only reference to the log.
+        let log = unsafe { &mut *LEDS_LOGGED.0.get() };
+        match log.entries.get_mut(log.len) {
+            Some(slot) => {
+                *slot = (at_ms, value as u8);
+                log.len += 1;
+            }
+            None => log.dropped = log.dropped.saturating_add(1),
+        }
+    });
+}
+
+/// Calls `f` with each logged change of the LED register in order (ms since the OS
+/// started, the register's bits: 0 red, 1 yellow); returns how many changes came after
+/// the log was full.
+pub fn led_changes(mut f: impl FnMut(u32, u8)) -> u32 {
+    cortex_m::interrupt::free(|_| {
+        // SAFETY: as in `led_changed`; `f` does not write LEDs.
+        let log = unsafe { &*LEDS_LOGGED.0.get() };
+        for &(at, value) in log.entries.iter().take(log.len) {
+            f(at, value);
+        }
+        log.dropped
+    })
 }
 
 /// Both LEDs dark: the outputs' safe state, for fatal errors.
@@ -141,6 +193,7 @@ impl Uart {
     const CTRL_TX_EN: u32 = 1 << 0;
     const CTRL_RX_EN: u32 = 1 << 1;
     const CTRL_TX_INT: u32 = 1 << 2;
+    const CTRL_RX_INT: u32 = 1 << 3;
     const INT_TX: u32 = 1 << 0;
     const INT_RX: u32 = 1 << 1;
 
@@ -158,12 +211,12 @@ impl Uart {
         unsafe { self.reg(offset).write_volatile(value) }
     }
 
-    /// 115 200 baud, transmitter and receiver on, the transmit interrupt enabled.
+    /// 115 200 baud, transmitter and receiver on, both interrupts enabled.
     fn init(&self) {
         self.write(Self::BAUDDIV, SYSCLK_HZ / 115_200);
         self.write(
             Self::CTRL,
-            Self::CTRL_TX_EN | Self::CTRL_RX_EN | Self::CTRL_TX_INT,
+            Self::CTRL_TX_EN | Self::CTRL_RX_EN | Self::CTRL_TX_INT | Self::CTRL_RX_INT,
         );
     }
 
@@ -185,25 +238,98 @@ impl Uart {
 pub enum SlcanEvent {
     /// The frame of this PDU has left the UART.
     TxConfirmation(u16),
+    /// A frame arrived (an SLCAN `t`/`T` line from the other end).
+    Received(CanFrame),
 }
 
-/// The longest SLCAN transmit line: `T`, 8 id digits, the DLC, 16 data digits, `\r`.
-const MAX_LINE: usize = 27;
+/// What the SLCAN link has counted since start-up.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct SlcanStats {
+    /// Frames received and handed to `CanIsr`.
+    pub rx_frames: u32,
+    /// Commands (`O`, `C`, `Sn`, `V`, ...) answered.
+    pub rx_commands: u32,
+    /// Lines refused (malformed or unsupported), each answered with BEL.
+    pub rx_malformed: u32,
+    /// Frames dropped because `CanIsr` had not yet taken the earlier ones.
+    pub rx_overruns: u32,
+    /// Replies not sent because the reply queue was full.
+    pub replies_dropped: u32,
+}
 
-/// A CAN controller on a UART: frames go out as SLCAN text (`t` + 3 hex id digits, or
-/// `T` + 8 for an extended id, the DLC, the data in hex, `\r`).
+/// The counters of UART0's SLCAN link, readable from anywhere (the end-of-run report in
+/// the idle loop): each is written by the driver alone, under `RES_COM` or in `CanIsr`.
+struct SlcanCounters {
+    rx_frames: AtomicU32,
+    rx_commands: AtomicU32,
+    rx_malformed: AtomicU32,
+    rx_overruns: AtomicU32,
+    replies_dropped: AtomicU32,
+}
+
+static SLCAN_COUNTERS: SlcanCounters = SlcanCounters {
+    rx_frames: AtomicU32::new(0),
+    rx_commands: AtomicU32::new(0),
+    rx_malformed: AtomicU32::new(0),
+    rx_overruns: AtomicU32::new(0),
+    replies_dropped: AtomicU32::new(0),
+};
+
+fn count(counter: &AtomicU32) {
+    counter.fetch_add(1, Ordering::Relaxed);
+}
+
+/// What UART0's SLCAN link has counted since start-up.
+pub fn slcan_stats() -> SlcanStats {
+    let c = &SLCAN_COUNTERS;
+    SlcanStats {
+        rx_frames: c.rx_frames.load(Ordering::Relaxed),
+        rx_commands: c.rx_commands.load(Ordering::Relaxed),
+        rx_malformed: c.rx_malformed.load(Ordering::Relaxed),
+        rx_overruns: c.rx_overruns.load(Ordering::Relaxed),
+        replies_dropped: c.replies_dropped.load(Ordering::Relaxed),
+    }
+}
+
+/// Received frames waiting for `CanIsr`.
+const RX_QUEUE: usize = 4;
+/// Reply bytes waiting for the UART.
+const REPLY_QUEUE: usize = 32;
+
+/// Where the transmitter takes its next character from: it finishes one line before
+/// starting another, so a reply never lands inside a frame's line.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum TxSource {
+    Idle,
+    Frame,
+    Reply,
+}
+
+/// A CAN controller on a UART speaking SLCAN (`cw_core::can::slcan`): transmitted
+/// frames go out as `t`/`T` lines, time-stamped with the OS time of `Can_Write` in ms
+/// (Lawicel `Z1`, on from reset; `Z0` turns it off); received lines are decoded, frames queued for
+/// `CanIsr`, commands answered as a Lawicel adapter answers them, malformed lines
+/// counted and answered with BEL. The channel commands (`O`, `C`, `Sn`) are acknowledged
+/// but change nothing: the UART is the bus itself, always open.
 pub struct SlcanCan {
     uart: Uart,
     mode: ControllerMode,
     /// The mailbox: the line being sent and how far.
-    line: [u8; MAX_LINE],
+    line: [u8; slcan::FRAME_LINE_MAX],
     len: usize,
     sent: usize,
     pdu: Option<u16>,
     /// A confirmation waiting for `CanIsr`.
     confirmed: Option<u16>,
-    /// Characters received and dropped (this driver does not parse reception yet).
-    pub rx_dropped: u32,
+    source: TxSource,
+    /// Frame lines carry the time stamp (Lawicel `Z1`, on from reset here).
+    timestamps: bool,
+    decoder: slcan::Decoder,
+    rx: [Option<CanFrame>; RX_QUEUE],
+    rx_head: usize,
+    replies: [u8; REPLY_QUEUE],
+    reply_head: usize,
+    reply_len: usize,
 }
 
 impl SlcanCan {
@@ -214,12 +340,19 @@ impl SlcanCan {
         Self {
             uart,
             mode: ControllerMode::Stopped,
-            line: [0; MAX_LINE],
+            line: [0; slcan::FRAME_LINE_MAX],
             len: 0,
             sent: 0,
             pdu: None,
             confirmed: None,
-            rx_dropped: 0,
+            source: TxSource::Idle,
+            timestamps: true,
+            decoder: slcan::Decoder::new(),
+            rx: [None; RX_QUEUE],
+            rx_head: 0,
+            replies: [0; REPLY_QUEUE],
+            reply_head: 0,
+            reply_len: 0,
         }
     }
 
@@ -229,70 +362,128 @@ impl SlcanCan {
         crate::cortex_m::enable_irq(Irq(1), osek_priority);
     }
 
-    /// Moves characters: received ones out (counted and dropped), the mailbox's line into
-    /// the UART while it takes them; a line sent completely frees the mailbox and leaves
-    /// its confirmation for `CanIsr`.
-    fn pump(&mut self) {
-        self.uart.clear_interrupts();
-        while self.uart.rx_byte().is_some() {
-            self.rx_dropped = self.rx_dropped.saturating_add(1);
+    fn queue_reply(&mut self, reply: &[u8]) {
+        if REPLY_QUEUE - self.reply_len < reply.len() {
+            count(&SLCAN_COUNTERS.replies_dropped);
+            return;
         }
-        while self.sent < self.len && self.uart.tx_ready() {
-            let byte = self.line.get(self.sent).copied().unwrap_or(b'\r');
-            self.uart.write(Uart::DATA, u32::from(byte));
-            self.sent += 1;
+        for &b in reply {
+            if let Some(slot) = self
+                .replies
+                .get_mut((self.reply_head + self.reply_len) % REPLY_QUEUE)
+            {
+                *slot = b;
+            }
+            self.reply_len += 1;
         }
-        if self.sent == self.len {
-            if let Some(pdu) = self.pdu.take() {
-                self.confirmed = Some(pdu);
+    }
+
+    fn queue_frame(&mut self, frame: CanFrame) {
+        let free = (0..RX_QUEUE)
+            .map(|i| (self.rx_head + i) % RX_QUEUE)
+            .find(|&i| self.rx.get(i).is_some_and(Option::is_none));
+        match free.and_then(|i| self.rx.get_mut(i)) {
+            Some(slot) => {
+                *slot = Some(frame);
+                count(&SLCAN_COUNTERS.rx_frames);
+            }
+            None => count(&SLCAN_COUNTERS.rx_overruns),
+        }
+    }
+
+    fn receive(&mut self, byte: u8) {
+        match self.decoder.push(byte) {
+            None => {}
+            Some(Ok(command)) => {
+                self.queue_reply(command.reply());
+                match command {
+                    slcan::Command::Frame(frame) => self.queue_frame(frame),
+                    slcan::Command::Timestamps(on) => {
+                        self.timestamps = on;
+                        count(&SLCAN_COUNTERS.rx_commands);
+                    }
+                    _ => count(&SLCAN_COUNTERS.rx_commands),
+                }
+            }
+            Some(Err(_)) => {
+                count(&SLCAN_COUNTERS.rx_malformed);
+                self.queue_reply(slcan::ERROR_REPLY);
             }
         }
     }
 
-    /// The UART's interrupt work, then the next event, if any.
+    /// The next character to send, if any, finishing the current line first.
+    fn next_tx_byte(&mut self) -> Option<u8> {
+        if self.source == TxSource::Idle {
+            self.source = if self.reply_len > 0 {
+                TxSource::Reply
+            } else if self.sent < self.len {
+                TxSource::Frame
+            } else {
+                return None;
+            };
+        }
+        let byte = if self.source == TxSource::Frame {
+            let byte = self.line.get(self.sent).copied().unwrap_or(b'\r');
+            self.sent += 1;
+            if self.sent >= self.len {
+                self.source = TxSource::Idle;
+                if let Some(pdu) = self.pdu.take() {
+                    self.confirmed = Some(pdu);
+                }
+            }
+            byte
+        } else {
+            let byte = self.replies.get(self.reply_head).copied().unwrap_or(b'\r');
+            self.reply_head = (self.reply_head + 1) % REPLY_QUEUE;
+            self.reply_len = self.reply_len.saturating_sub(1);
+            if byte == b'\r' || byte == slcan::ERROR_REPLY[0] || self.reply_len == 0 {
+                self.source = TxSource::Idle;
+            }
+            byte
+        };
+        Some(byte)
+    }
+
+    /// Moves characters: received ones into the decoder, queued lines into the UART while
+    /// it takes them. A frame line sent completely frees the mailbox and leaves its
+    /// confirmation for `CanIsr`.
+    fn pump(&mut self) {
+        self.uart.clear_interrupts();
+        while let Some(byte) = self.uart.rx_byte() {
+            self.receive(byte);
+        }
+        while self.uart.tx_ready() {
+            let Some(byte) = self.next_tx_byte() else {
+                break;
+            };
+            self.uart.write(Uart::DATA, u32::from(byte));
+        }
+    }
+
+    /// The UART's interrupt work, then the next event, if any: a transmit confirmation
+    /// first, then the oldest received frame.
     pub fn take_event(&mut self) -> Option<SlcanEvent> {
         self.pump();
-        self.confirmed.take().map(SlcanEvent::TxConfirmation)
+        if let Some(pdu) = self.confirmed.take() {
+            return Some(SlcanEvent::TxConfirmation(pdu));
+        }
+        let frame = self.rx.get_mut(self.rx_head).and_then(Option::take)?;
+        self.rx_head = (self.rx_head + 1) % RX_QUEUE;
+        Some(SlcanEvent::Received(frame))
     }
-}
-
-fn hex(nibble: u32) -> u8 {
-    b"0123456789ABCDEF"
-        .get((nibble & 0xF) as usize)
-        .copied()
-        .unwrap_or(b'0')
 }
 
 impl CanDriver for SlcanCan {
     fn write(&mut self, _hth: Hth, pdu: u16, frame: &CanFrame) -> Result<(), CanBusy> {
-        if self.mode != ControllerMode::Started || self.pdu.is_some() || self.confirmed.is_some() {
+        // Busy while a line is waiting or on its way (also one a stop let finish), or its
+        // confirmation is not yet taken.
+        if self.mode != ControllerMode::Started || self.sent < self.len || self.confirmed.is_some()
+        {
             return Err(CanBusy);
         }
-        let id = frame.can_id();
-        let mut n = 0;
-        let mut put = |b: u8, line: &mut [u8; MAX_LINE]| {
-            if let Some(slot) = line.get_mut(n) {
-                *slot = b;
-                n += 1;
-            }
-        };
-        let digits = if id.is_extended() {
-            put(b'T', &mut self.line);
-            8
-        } else {
-            put(b't', &mut self.line);
-            3
-        };
-        for i in (0..digits).rev() {
-            put(hex(id.raw() >> (4 * i)), &mut self.line);
-        }
-        put(hex(u32::from(frame.len())), &mut self.line);
-        for b in frame.bytes() {
-            put(hex(u32::from(*b) >> 4), &mut self.line);
-            put(hex(u32::from(*b)), &mut self.line);
-        }
-        put(b'\r', &mut self.line);
-        self.len = n;
+        let at_ms = self.timestamps.then(now_ms);
+        self.len = slcan::encode_frame_at(frame, at_ms, &mut self.line);
         self.sent = 0;
         self.pdu = Some(pdu);
         // Start the transmission; the TX interrupt carries it on. A line the UART took at
@@ -309,9 +500,13 @@ impl CanDriver for SlcanCan {
             return Err(ModeRefused);
         }
         if mode != ControllerMode::Started {
-            self.len = 0;
-            self.sent = 0;
+            // The pending transmission is cancelled: no confirmation. A line already on
+            // the wire is finished, so the other end never sees half a line.
             self.pdu = None;
+            if self.source != TxSource::Frame {
+                self.len = 0;
+                self.sent = 0;
+            }
         }
         self.mode = mode;
         Ok(())

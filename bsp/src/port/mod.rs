@@ -160,8 +160,11 @@ pub trait Port {
     /// A job of `task` starts (host port: its nested call); for traces.
     fn job_started(&self, _task: TaskId) {}
 
-    /// The job of `task` that `job_started` announced is over (host port).
+    /// The job of `task` that `job_started` announced is over; for traces.
     fn job_finished(&self, _task: TaskId) {}
+
+    /// Category-2 ISR `isr` was entered (the kernel accepted its entry); for traces.
+    fn isr_entered(&self, _isr: IsrId) {}
 }
 
 /// Data shared by tasks and ISRs, guarded by one OSEK resource.

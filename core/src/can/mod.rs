@@ -7,6 +7,8 @@
 //! identifier for static configuration tables; it converts to and from
 //! [`embedded_can::Id`].
 
+pub mod slcan;
+
 use embedded_can::{ExtendedId, Id, StandardId};
 
 /// A CAN identifier usable in `const` tables: 11-bit standard or 29-bit extended.

@@ -1,0 +1,219 @@
+//! The task trace of the Cortex-M port: every job's start and end and every category-2
+//! ISR's entry, time-stamped in microseconds, kept in RAM and read by the board at the
+//! end of a run.
+//!
+//! Three records, each updated inside a short interrupt lock:
+//!
+//! - per task: jobs run, how often a job of it was preempted, the longest span of one job
+//!   from its first to its last line (preemptions included);
+//! - per pair: how often a job of one task started on top of a running job of another
+//!   (preemption), and how often an ISR interrupted each task or the idle loop;
+//! - the first [`EVENTS`] events in order, for reading the schedule itself (an ISR entry
+//!   is listed when it interrupts a task; entries in the idle loop are only counted).
+//!
+//! Times come from the OS tick count and SysTick's current value, so they need no
+//! peripheral beyond the core's own (DWT's cycle counter reads 0 in QEMU).
+
+use core::cell::UnsafeCell;
+
+use cortex_m::peripheral::{SCB, SYST};
+
+use super::MAX_TASKS;
+
+/// Events kept in order from the start of the run.
+pub const EVENTS: usize = 64;
+/// ISRs traced (by `IsrId`).
+pub const MAX_ISRS: usize = 4;
+/// The row and column of the idle loop in [`Trace::isr_over`].
+pub const IDLE_ROW: usize = MAX_TASKS;
+
+/// What happened.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum EventKind {
+    /// A job of this task started.
+    JobStart(u8),
+    /// The job of this task ended.
+    JobEnd(u8),
+    /// This ISR was entered.
+    Isr(u8),
+}
+
+/// One event and its time, µs since the OS started.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Event {
+    /// Microseconds since the OS started.
+    pub at_us: u32,
+    /// What happened.
+    pub kind: EventKind,
+}
+
+/// What a task's jobs did.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct TaskRecord {
+    /// Jobs started.
+    pub jobs: u32,
+    /// Jobs of this task that another task's job preempted (counted once per preemption).
+    pub preempted: u32,
+    /// The longest time from a job's first line to its last, µs.
+    pub max_span_us: u32,
+}
+
+/// The whole trace.
+#[derive(Debug)]
+pub struct Trace {
+    /// Per task.
+    pub tasks: [TaskRecord; MAX_TASKS],
+    /// `preemptions[by][over]`: jobs of task `by` that started on top of a job of `over`.
+    pub preemptions: [[u16; MAX_TASKS]; MAX_TASKS],
+    /// `isr_over[isr][task]`: entries of `isr` while `task` ran (`IDLE_ROW`: idle).
+    pub isr_over: [[u32; MAX_TASKS + 1]; MAX_ISRS],
+    /// The first events, in order.
+    pub events: [Event; EVENTS],
+    /// How many of `events` are filled.
+    pub events_len: usize,
+    /// Events after the first `EVENTS` (counted, not kept).
+    pub events_dropped: u32,
+    /// The jobs in progress, innermost last (basic tasks nest in LIFO order), and their
+    /// start times.
+    stack: [(u8, u32); MAX_TASKS],
+    depth: usize,
+}
+
+const NO_EVENT: Event = Event {
+    at_us: 0,
+    kind: EventKind::JobEnd(0),
+};
+
+impl Trace {
+    const fn new() -> Self {
+        Self {
+            tasks: [TaskRecord {
+                jobs: 0,
+                preempted: 0,
+                max_span_us: 0,
+            }; MAX_TASKS],
+            preemptions: [[0; MAX_TASKS]; MAX_TASKS],
+            isr_over: [[0; MAX_TASKS + 1]; MAX_ISRS],
+            events: [NO_EVENT; EVENTS],
+            events_len: 0,
+            events_dropped: 0,
+            stack: [(0, 0); MAX_TASKS],
+            depth: 0,
+        }
+    }
+
+    fn log(&mut self, at_us: u32, kind: EventKind) {
+        match self.events.get_mut(self.events_len) {
+            Some(slot) => {
+                *slot = Event { at_us, kind };
+                self.events_len += 1;
+            }
+            None => self.events_dropped = self.events_dropped.saturating_add(1),
+        }
+    }
+
+    /// The job running now (innermost), if any.
+    fn running(&self) -> Option<u8> {
+        self.depth
+            .checked_sub(1)
+            .and_then(|i| self.stack.get(i))
+            .map(|&(t, _)| t)
+    }
+
+    fn job_started(&mut self, task: u8, at_us: u32) {
+        let t = usize::from(task);
+        if let Some(over) = self.running() {
+            let over = usize::from(over);
+            if let Some(cell) = self.preemptions.get_mut(t).and_then(|r| r.get_mut(over)) {
+                *cell = cell.saturating_add(1);
+            }
+            if let Some(r) = self.tasks.get_mut(over) {
+                r.preempted = r.preempted.saturating_add(1);
+            }
+        }
+        if let Some(r) = self.tasks.get_mut(t) {
+            r.jobs = r.jobs.saturating_add(1);
+        }
+        if let Some(slot) = self.stack.get_mut(self.depth) {
+            *slot = (task, at_us);
+            self.depth += 1;
+        }
+        self.log(at_us, EventKind::JobStart(task));
+    }
+
+    fn job_finished(&mut self, task: u8, at_us: u32) {
+        if self.running() == Some(task) {
+            self.depth -= 1;
+            let start = self.stack.get(self.depth).map_or(at_us, |&(_, s)| s);
+            if let Some(r) = self.tasks.get_mut(usize::from(task)) {
+                r.max_span_us = r.max_span_us.max(at_us.wrapping_sub(start));
+            }
+        }
+        self.log(at_us, EventKind::JobEnd(task));
+    }
+
+    fn isr_entered(&mut self, isr: u8, at_us: u32) {
+        let over = self.running().map_or(IDLE_ROW, usize::from);
+        if let Some(cell) = self
+            .isr_over
+            .get_mut(usize::from(isr))
+            .and_then(|r| r.get_mut(over))
+        {
+            *cell = cell.saturating_add(1);
+        }
+        // The event list keeps the schedule's shape: ISR entries in idle are counted only.
+        if over != IDLE_ROW {
+            self.log(at_us, EventKind::Isr(isr));
+        }
+    }
+}
+
+struct TraceCell(UnsafeCell<Trace>);
+
+// SAFETY: reached only inside `with`, under an interrupt lock, on a single core.
+unsafe impl Sync for TraceCell {}
+
+static TRACE: TraceCell = TraceCell(UnsafeCell::new(Trace::new()));
+
+fn with<R>(f: impl FnOnce(&mut Trace) -> R) -> R {
+    cortex_m::interrupt::free(|_| {
+        // SAFETY: interrupts are off for the closure, and `with` is never called from
+        // inside `f`, so this is the only reference to the trace.
+        f(unsafe { &mut *TRACE.0.get() })
+    })
+}
+
+/// Microseconds since the OS started: `ms` whole ticks, plus how far SysTick has counted
+/// into the current one (a tick that is due but not yet handled counts).
+pub fn now_us(ms: u32) -> u32 {
+    cortex_m::interrupt::free(|_| {
+        let reload = SYST::get_reload();
+        let current = SYST::get_current();
+        let due = SCB::is_pendst_pending();
+        let into = u64::from(reload - current.min(reload)) * 1000 / u64::from(reload + 1);
+        // A wrap not yet counted: the SysTick interrupt is pending (held by the lock).
+        let whole = if due { ms.wrapping_add(1) } else { ms };
+        whole.wrapping_mul(1000).wrapping_add(into as u32)
+    })
+}
+
+/// A job of `task` starts, at `at_us`.
+pub(crate) fn job_started(task: u8, at_us: u32) {
+    with(|t| t.job_started(task, at_us));
+}
+
+/// The job of `task` ends, at `at_us`.
+pub(crate) fn job_finished(task: u8, at_us: u32) {
+    with(|t| t.job_finished(task, at_us));
+}
+
+/// Category-2 ISR `isr` was entered, at `at_us`.
+pub fn isr_entered(isr: u8, at_us: u32) {
+    with(|t| t.isr_entered(isr, at_us));
+}
+
+/// Reads the trace (under the interrupt lock: keep `f` short of anything slow, or call
+/// it once the run is over).
+pub fn read<R>(f: impl FnOnce(&Trace) -> R) -> R {
+    with(|t| f(t))
+}
