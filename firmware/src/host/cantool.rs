@@ -67,8 +67,12 @@ pub fn parse_frame(text: &str) -> Result<CanFrame, String> {
     let (id_text, data_text) = text
         .split_once('#')
         .ok_or_else(|| format!("`{text}` is not a frame (expected ID#HEXDATA)"))?;
-    let raw =
-        u32::from_str_radix(id_text, 16).map_err(|_| format!("`{id_text}` is not a hex CAN id"))?;
+    let raw = id_text
+        .bytes()
+        .all(|c| c.is_ascii_hexdigit())
+        .then(|| u32::from_str_radix(id_text, 16).ok())
+        .flatten()
+        .ok_or_else(|| format!("`{id_text}` is not a hex CAN id"))?;
     let id = if id_text.len() > 3 {
         CanId::extended(raw)
     } else {
@@ -78,11 +82,19 @@ pub fn parse_frame(text: &str) -> Result<CanFrame, String> {
     if data_text.len() % 2 != 0 {
         return Err(format!("`{data_text}` has an odd number of hex digits"));
     }
-    let bytes = (0..data_text.len())
-        .step_by(2)
-        .map(|i| u8::from_str_radix(&data_text[i..i + 2], 16))
-        .collect::<Result<Vec<u8>, _>>()
-        .map_err(|_| format!("`{data_text}` is not hex data"))?;
+    // Byte pairs, not string slices: a non-ASCII character is refused, never split.
+    let bytes = data_text
+        .as_bytes()
+        .chunks(2)
+        .map(|pair| {
+            pair.iter()
+                .all(u8::is_ascii_hexdigit)
+                .then(|| std::str::from_utf8(pair).ok())
+                .flatten()
+                .and_then(|p| u8::from_str_radix(p, 16).ok())
+        })
+        .collect::<Option<Vec<u8>>>()
+        .ok_or_else(|| format!("`{data_text}` is not hex data"))?;
     CanFrame::from_parts(id, &bytes)
         .ok_or_else(|| format!("{} data bytes; a CAN frame holds at most 8", bytes.len()))
 }
@@ -264,5 +276,15 @@ mod tests {
         );
         assert!(parse_log_line("garbage").is_err());
         assert!(parse_log_line("(x) can0 100#00").is_err());
+        // Non-ASCII data is refused, not sliced through a character; signs are no digits.
+        assert!(parse_frame("100#0é0").is_err());
+        assert!(parse_frame("100#é").is_err());
+        assert!(parse_frame("100#+F").is_err());
+        assert!(parse_frame("+10#00").is_err());
+        assert!(parse_frame("100#0").is_err());
+        assert_eq!(
+            parse_frame("100#0aFF").map(|f| format_frame(&f)),
+            Ok("100#0AFF".into())
+        );
     }
 }
