@@ -8,8 +8,9 @@
 
 use cw_bsp::cortex_m::{App, CortexMPort};
 use cw_bsp::mps2::{self, CoreDelay, Led, SlcanCan, SlcanEvent, Unconnected};
+use cw_bsp::port::Port;
 use cw_core::can::Hrh;
-use cw_core::os::TaskId;
+use cw_core::os::{OsError, TaskId};
 use cw_core::sonar::SonarConfig;
 
 use crate::board::{Board, CanEvents, CanInterrupt, PortDriver, PulseCapture};
@@ -148,7 +149,7 @@ impl App for Mps2App {
             hooks.errors,
             hooks.port_errors,
             cw_bsp::cortex_m::basic_stack_use(),
-            cw_bsp::cortex_m::BASIC_STACK_WORDS * 4
+            (cw_bsp::cortex_m::BASIC_STACK_WORDS - cw_bsp::cortex_m::GUARD_WORDS) * 4
         );
         mps2::exit(schedule_ok && hooks.errors == 0 && hooks.port_errors == 0);
     }
@@ -158,8 +159,25 @@ impl App for Mps2App {
         self.ecu.tick();
     }
 
-    fn irq(&self, _line: u16) {
-        self.ecu.can_isr();
+    fn irq(&self, line: u16) {
+        match line {
+            // UART0 RX and TX: the CAN controller.
+            0 | 1 => self.ecu.can_isr(),
+            _ => mps2::fatal("an interrupt line the ECU does not use"),
+        }
+    }
+
+    fn stack_fault(&self, task: Option<TaskId>) -> ! {
+        self.ecu
+            .port()
+            .kernel(|os| os.shutdown_on_fault(OsError::StackFault));
+        let shutdown = self.ecu.hooks().shutdown;
+        cw_bsp::mps2_log!(
+            "cw-qemu: stack overflow on the {} stack: ShutdownOS(E_OS_STACKFAULT), ShutdownHook saw {:?}\n",
+            task.map_or("shared task", |t| task_name(usize::from(t.0))),
+            shutdown
+        );
+        mps2::fatal("stack overflow")
     }
 }
 

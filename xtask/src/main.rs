@@ -6,7 +6,7 @@
 //!   cantools on random layouts, values and PDU lengths;
 //! - `cargo xtask callgrind`: instructions per call of the codec and scheduler probes;
 //! - `cargo xtask mutants`: kernel mutants the OSEK conformance suite must catch;
-//! - `cargo xtask qemu [--compare] [--live] [--serial tcp:PORT]`: the ECU's Cortex-M4 image on
+//! - `cargo xtask qemu [--compare] [--live] [--events] [--serial tcp:PORT]`: the ECU's Cortex-M4 image on
 //!   QEMU's mps2-an386, its comparison with the host simulation, and python-can against it
 //!   live.
 //!
@@ -46,10 +46,11 @@ commands:
   mutants
         plant each kernel mutant in a copy of the workspace and require the OSEK
         conformance sequences named for it to fail
-  qemu [--compare] [--live] [--serial tcp:PORT]
+  qemu [--compare] [--live] [--events] [--serial tcp:PORT]
         build the ECU's Cortex-M4 image and run it on QEMU's mps2-an386 (Figure 7);
         --compare: require the host simulation's CAN frames and LED transitions;
         --live: run it in real time on a TCP port and test it with python-can (slcan)
+        --events: run the extended-task and stack-guard demo image (cw-qemu-events)
         --serial: serve the SLCAN UART on a TCP port (python-can: slcan, socket://)
   setup
         same as `ci --only setup`: install or check every tool the checks need

@@ -32,6 +32,7 @@ const SCENARIO: &str = "scenarios/figure7.txt";
 pub struct Options {
     compare: bool,
     live: bool,
+    events: bool,
     serial: Option<String>,
 }
 
@@ -41,11 +42,12 @@ impl Options {
         Self {
             compare: true,
             live: true,
+            events: true,
             serial: None,
         }
     }
 
-    /// Parses `[--compare] [--live] [--serial tcp:PORT]`.
+    /// Parses `[--compare] [--live] [--events] [--serial tcp:PORT]`.
     pub fn parse(args: &[String]) -> Result<Self> {
         let mut options = Self::default();
         let mut it = args.iter();
@@ -53,6 +55,7 @@ impl Options {
             match arg.as_str() {
                 "--compare" => options.compare = true,
                 "--live" => options.live = true,
+                "--events" => options.events = true,
                 "--serial" => {
                     let Some(port) = it.next().and_then(|a| a.strip_prefix("tcp:")) else {
                         return Err("qemu: --serial takes tcp:PORT".into());
@@ -69,8 +72,13 @@ impl Options {
     }
 }
 
-/// Builds the image; returns its path.
+/// Builds the ECU's image; returns its path.
 pub fn build() -> Result<PathBuf> {
+    build_bin("cw-qemu")
+}
+
+/// Builds image `bin` of cw-firmware for the board; returns its path.
+fn build_bin(bin: &str) -> Result<PathBuf> {
     Cmd::new("cargo")
         .args([
             "build",
@@ -81,12 +89,12 @@ pub fn build() -> Result<PathBuf> {
             "--features",
             "mps2",
             "--bin",
-            "cw-qemu",
+            bin,
             "--target",
             TARGET,
         ])
         .run()?;
-    Ok(target_dir().join(TARGET).join("release").join("cw-qemu"))
+    Ok(target_dir().join(TARGET).join("release").join(bin))
 }
 
 /// Runs the image on QEMU; the SLCAN output and the LED trace go to `out`, the image's
@@ -123,8 +131,14 @@ fn run_image(image: &Path, out: &Path, serial: Option<&str>) -> Result {
 
 /// Runs `cargo xtask qemu`.
 pub fn run(options: &Options) -> Result {
-    let image = build()?;
     let out = target_dir().join("qemu");
+    if options.events {
+        events(&out)?;
+        if !options.compare && !options.live && options.serial.is_none() {
+            return Ok(());
+        }
+    }
+    let image = build()?;
     if options.compare || !options.live {
         run_image(&image, &out, options.serial.as_deref())?;
     }
@@ -134,6 +148,28 @@ pub fn run(options: &Options) -> Result {
     if options.live {
         live(&image, &out)?;
     }
+    Ok(())
+}
+
+/// The extended-task demo (`cw-qemu-events`): it must end with `ok` (its waiter woke on
+/// every alarm to the millisecond and on the ISR's events, then its deliberate stack
+/// overflow was caught by the MPU guard and shut the OS down with `E_OS_STACKFAULT`).
+fn events(out: &Path) -> Result {
+    let image = build_bin("cw-qemu-events")?;
+    std::fs::create_dir_all(out).map_err(|e| format!("creating {}: {e}", out.display()))?;
+    let report = Cmd::new("qemu-system-arm")
+        .args(["-machine", "mps2-an386", "-nographic", "-monitor", "none"])
+        .args(["-semihosting-config", "enable=on,target=native"])
+        .args(["-icount", "shift=0,sleep=off"])
+        .args(["-serial", "null"])
+        .arg("-kernel")
+        .arg(&image)
+        .read()?;
+    print!("{report}");
+    if !report.lines().any(|l| l == "cw-qemu-events: ok") {
+        return Err("qemu: the extended-task demo did not end with `ok`".into());
+    }
+    println!("qemu: extended tasks woke on alarm and ISR events; the stack overflow was caught and shut the OS down with E_OS_STACKFAULT");
     Ok(())
 }
 

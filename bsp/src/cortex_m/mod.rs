@@ -50,6 +50,13 @@ const IDLE: u8 = MAX_TASKS as u8;
 pub const BASIC_STACK_WORDS: usize = 512;
 /// The value painted into unused stack, to measure the deepest use.
 pub const STACK_PAINT: u32 = 0xDEAD_BEEF;
+/// Words at the bottom of every task stack (the shared one and each task's own): the
+/// stack guard. While a context runs, the MPU makes its stack's guard inaccessible, so the
+/// first access past the stack's end faults (MemManage) at that instruction; and a context
+/// switch that finds a guard word no longer painted, or a saved stack pointer inside the
+/// guard, reports the overflow too. Either way the application shuts the OS down with
+/// `E_OS_STACKFAULT` ([`App::stack_fault`]). 32 bytes: the MPU's smallest region.
+pub const GUARD_WORDS: usize = 8;
 
 /// The NVIC priority byte of an OSEK category-2 ISR priority (1 to 6).
 pub const fn nvic_priority(osek_priority: u8) -> u8 {
@@ -85,6 +92,8 @@ struct Sched {
     basic_top: u32,
     /// A kernel call is under way (a nested one would alias the kernel).
     in_kernel: bool,
+    /// Each task's own stack as (lowest address, top), or (0, 0): the shared stack.
+    own_stack: [(u32, u32); MAX_TASKS],
 }
 
 struct SchedCell(UnsafeCell<Sched>);
@@ -103,10 +112,81 @@ static SCHED: SchedCell = SchedCell(UnsafeCell::new(Sched {
     job_base: [0; MAX_TASKS],
     basic_top: 0,
     in_kernel: false,
+    own_stack: [(0, 0); MAX_TASKS],
 }));
 
-/// The shared stack of the basic tasks.
-#[repr(C, align(8))]
+/// A task's own stack (aligned for its MPU guard region). Extended tasks need one: `WaitEvent` keeps the task's context while
+/// tasks of lower priority run, which on the shared stack would grow into it.
+#[repr(C, align(32))]
+pub struct TaskStack<const WORDS: usize>(UnsafeCell<[u32; WORDS]>);
+
+// SAFETY: the memory is used only as its task's process stack once the OS starts (and
+// painted and read word by word for the guard and the measurement).
+unsafe impl<const WORDS: usize> Sync for TaskStack<WORDS> {}
+
+impl<const WORDS: usize> TaskStack<WORDS> {
+    /// A stack of `WORDS` words.
+    pub const fn new() -> Self {
+        Self(UnsafeCell::new([0; WORDS]))
+    }
+}
+
+impl<const WORDS: usize> Default for TaskStack<WORDS> {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+/// Gives `task` its own stack; call before [`start`]. A task given none runs on the
+/// shared stack. A fatal port error if `task` is out of range, the stack is too small
+/// for its guard and one frame, or it overlaps a stack given before.
+pub fn set_task_stack<const WORDS: usize>(task: TaskId, stack: &'static TaskStack<WORDS>) {
+    let bottom = stack.0.get() as u32;
+    let top = bottom + (WORDS * 4) as u32;
+    let fits = WORDS >= GUARD_WORDS + 64;
+    cortex_m::interrupt::free(|_| {
+        // SAFETY: interrupts are off and no kernel call is under way: the only reference.
+        let s = unsafe { &mut *SCHED.0.get() };
+        let overlaps = s
+            .own_stack
+            .iter()
+            .any(|&(b, t)| t != 0 && bottom < t && b < top);
+        match s.own_stack.get_mut(usize::from(task.0)) {
+            Some(slot) if fits && !overlaps => *slot = (bottom, top),
+            _ => fatal("task stack refused (task out of range, too small, or shared)"),
+        }
+    });
+}
+
+/// The deepest use of `task`'s own stack so far, in bytes (`None`: it has none).
+pub fn task_stack_use(task: TaskId) -> Option<usize> {
+    let (bottom, top) = cortex_m::interrupt::free(|_| {
+        // SAFETY: interrupts are off; a read of the table.
+        let s = unsafe { &*SCHED.0.get() };
+        s.own_stack.get(usize::from(task.0)).copied()
+    })?;
+    (top != 0).then(|| painted_use(bottom as *const u32, ((top - bottom) / 4) as usize))
+}
+
+/// Bytes of a painted stack of `words` words at `base` that were overwritten, above its
+/// guard (the guard is never written: the MPU forbids it, and reading it from a context
+/// whose guard it is would fault).
+fn painted_use(base: *const u32, words: usize) -> usize {
+    let mut untouched = GUARD_WORDS.min(words);
+    while untouched < words {
+        // SAFETY: the caller's stack: `words` words at `base`; a volatile read of memory
+        // the tasks may use concurrently is a plain word read on this core.
+        let word = unsafe { base.add(untouched).read_volatile() };
+        if word != STACK_PAINT {
+            break;
+        }
+        untouched += 1;
+    }
+    (words - untouched) * 4
+}
+
+/// The shared stack of the basic tasks (aligned for its MPU guard region).
+#[repr(C, align(32))]
 struct Stack(UnsafeCell<[u32; BASIC_STACK_WORDS]>);
 
 // SAFETY: the stack's memory is used only as the process stack (PSP) once the OS starts,
@@ -128,6 +208,10 @@ pub trait App: Sync {
     fn tick(&self);
     /// External interrupt line `line` of the board.
     fn irq(&self, line: u16);
+    /// A stack overflowed (`task`'s, or the shared stack's: `None`): the application
+    /// shuts the OS down with `E_OS_STACKFAULT` (its ShutdownHook sees it) and reports.
+    /// Called from PendSV with interrupts disabled; never returns.
+    fn stack_fault(&self, task: Option<TaskId>) -> !;
 }
 
 struct AppCell(UnsafeCell<Option<&'static dyn App>>);
@@ -273,21 +357,10 @@ pub fn report_fatal(what: &str) -> ! {
     }
 }
 
-/// The deepest use of the shared task stack so far, in bytes (the painted words that
-/// were overwritten).
+/// The deepest use of the shared task stack so far, in bytes (the painted words above
+/// the guard that were overwritten), of [`BASIC_STACK_WORDS`] - [`GUARD_WORDS`] words.
 pub fn basic_stack_use() -> usize {
-    let base = BASIC_STACK.0.get().cast::<u32>();
-    let mut untouched = 0;
-    while untouched < BASIC_STACK_WORDS {
-        // SAFETY: the index is within the stack array; a volatile read of memory the
-        // tasks may use concurrently is a plain word read on this core.
-        let word = unsafe { base.add(untouched).read_volatile() };
-        if word != STACK_PAINT {
-            break;
-        }
-        untouched += 1;
-    }
-    (BASIC_STACK_WORDS - untouched) * 4
+    painted_use(BASIC_STACK.0.get().cast::<u32>(), BASIC_STACK_WORDS)
 }
 
 /// Starts the OS on this port and becomes the idle loop: paints the task stack, sets
@@ -307,6 +380,16 @@ pub fn start(app: &'static dyn App, on_fatal: fn(&str) -> !) -> ! {
         // SAFETY: within the array, which nothing uses yet.
         unsafe { base.add(i).write_volatile(STACK_PAINT) };
     }
+    // SAFETY: interrupts are off: the only reference to the table.
+    let own = unsafe { (*SCHED.0.get()).own_stack };
+    for (bottom, top) in own.into_iter().filter(|r| r.1 != 0) {
+        let mut word = bottom;
+        while word < top {
+            // SAFETY: within a task stack given by `set_task_stack`, not yet in use.
+            unsafe { (word as *mut u32).write_volatile(STACK_PAINT) };
+            word += 4;
+        }
+    }
     // SAFETY: one past the end of the stack array: the initial process stack pointer.
     let top = unsafe { base.add(BASIC_STACK_WORDS) } as u32;
     // SAFETY: the core peripherals are taken once, here, before the OS runs.
@@ -315,6 +398,20 @@ pub fn start(app: &'static dyn App, on_fatal: fn(&str) -> !) -> ! {
     unsafe {
         cp.SCB.set_priority(SystemHandler::PendSV, 0xE0);
     }
+    cp.SCB
+        .enable(cortex_m::peripheral::scb::Exception::MemoryManagement);
+    // SAFETY: region 0 becomes the running context's stack guard (32 bytes, no access,
+    // never executable); the background map keeps every other address as before for
+    // privileged code, which is all code here. The idle loop's guard (the shared stack's)
+    // is the first.
+    unsafe {
+        cp.MPU.rnr.write(0);
+        cp.MPU.rbar.write(BASIC_STACK.0.get() as u32);
+        cp.MPU.rasr.write(GUARD_RASR);
+        cp.MPU.ctrl.write(MPU_ENABLE | MPU_PRIVDEFENA);
+    }
+    cortex_m::asm::dsb();
+    cortex_m::asm::isb();
     // SAFETY: `top` is the 8-byte-aligned end of a static array reserved for this stack;
     // `switch_to_task_stack` moves thread mode onto it and never returns.
     unsafe { switch_to_task_stack(top) }
@@ -394,24 +491,40 @@ extern "C" fn cw_port_job(task: u32) -> ! {
 /// one's (building a new job's first frame on the shared stack). Called with PRIMASK set.
 #[no_mangle]
 extern "C" fn cw_port_switch(sp: u32) -> u32 {
+    if let Some(task) = overflowed(sp) {
+        match app() {
+            Some(app) => app.stack_fault(task),
+            None => fatal("stack overflow"),
+        }
+    }
     // SAFETY: PendSV calls this between `cpsid i` and `cpsie i`.
     let s = unsafe { &mut *SCHED.0.get() };
     let current = s.current as usize;
+    let shared = |s: &Sched, t: usize| s.own_stack.get(t).is_none_or(|r| r.1 == 0);
     if s.ended && current < MAX_TASKS {
         s.started &= !(1 << current);
-        s.basic_top = s.job_base[current];
+        if shared(s, current) {
+            s.basic_top = s.job_base[current];
+        }
         s.ended = false;
     } else if let Some(slot) = s.sp.get_mut(current) {
         *slot = sp;
-        s.basic_top = sp;
+        if shared(s, current) {
+            s.basic_top = sp;
+        }
     }
     let next = s.next as usize;
     let new_sp = if next >= MAX_TASKS || s.started & (1 << next) != 0 {
         s.sp.get(next).copied().unwrap_or(sp)
     } else {
-        s.job_base[next] = s.basic_top;
         s.started |= 1 << next;
-        let frame_top = s.basic_top & !7;
+        let top = if shared(s, next) {
+            s.job_base[next] = s.basic_top;
+            s.basic_top
+        } else {
+            s.own_stack[next].1
+        };
+        let frame_top = top & !7;
         let frame = frame_top - 17 * 4;
         let words: [u32; 17] = [
             // r4-r11
@@ -439,14 +552,74 @@ extern "C" fn cw_port_switch(sp: u32) -> u32 {
             0x0100_0000,
         ];
         for (i, w) in words.iter().enumerate() {
-            // SAFETY: `frame..frame_top` lies within the shared task stack, below every
-            // preempted job's context (`basic_top` is the lowest of them).
+            // SAFETY: `frame..frame_top` lies within the task's own stack (unused: its
+            // job starts now), or within the shared task stack below every preempted
+            // job's context (`basic_top` is the lowest of them).
             unsafe { (frame as *mut u32).add(i).write_volatile(*w) };
         }
         frame
     };
     s.current = next as u8;
+    guard_stack_of(s, next);
     new_sp
+}
+
+/// MPU RASR of a guard: enabled, 32 bytes (SIZE = 4), no access (AP = 0), never
+/// executable (XN).
+const GUARD_RASR: u32 = 1 | (4 << 1) | (1 << 28);
+/// MPU_CTRL: the MPU on, the default memory map as background for privileged code.
+const MPU_ENABLE: u32 = 1;
+const MPU_PRIVDEFENA: u32 = 1 << 2;
+/// MPU_RBAR: the address applies to the region number given with it.
+const RBAR_VALID: u32 = 1 << 4;
+
+/// Moves the MPU's guard region to the bottom of the stack of `slot` (a task with its
+/// own stack; otherwise the shared stack).
+fn guard_stack_of(s: &Sched, slot: usize) {
+    let bottom = match s.own_stack.get(slot) {
+        Some(&(bottom, top)) if top != 0 => bottom,
+        _ => BASIC_STACK.0.get() as u32,
+    };
+    // SAFETY: only region 0's base moves, to the bottom of a 32-byte-aligned stack;
+    // PendSV runs with interrupts disabled, and the exception return that follows
+    // synchronises the change.
+    unsafe {
+        (*cortex_m::peripheral::MPU::PTR)
+            .rbar
+            .write(bottom | RBAR_VALID)
+    };
+}
+
+/// A MemManage fault (or a HardFault escalated from one): the running context touched its
+/// stack guard. Reports the overflow through the application; never returns.
+pub fn memory_fault() -> ! {
+    // SAFETY: a fault handler with the running context stopped; the table is read only.
+    let current = unsafe { (*SCHED.0.get()).current } as usize;
+    // SAFETY: as above.
+    let own = unsafe { (*SCHED.0.get()).own_stack.get(current).copied() };
+    let task = own.filter(|r| r.1 != 0).map(|_| TaskId(current as u8));
+    match app() {
+        Some(app) => app.stack_fault(task),
+        None => fatal("stack overflow"),
+    }
+}
+
+/// Whether the outgoing context overflowed its stack: its saved stack pointer lies in the
+/// guard at the stack's bottom (a context switch whose frame the MPU let through only
+/// because the hardware stacked part of it before the guard). `Some(task)` for a task's
+/// own stack, `Some(None)` for the shared one. The guard's words themselves are never
+/// read here: the MPU forbids them to this context, reads included.
+fn overflowed(sp: u32) -> Option<Option<TaskId>> {
+    // SAFETY: PendSV calls `cw_port_switch` between `cpsid i` and `cpsie i`; this borrow
+    // ends before the switch takes its own.
+    let s = unsafe { &*SCHED.0.get() };
+    let current = s.current as usize;
+    let own = s.own_stack.get(current).copied().filter(|r| r.1 != 0);
+    let (bottom, task) = match own {
+        Some((bottom, _)) => (bottom, Some(TaskId(current as u8))),
+        None => (BASIC_STACK.0.get() as u32, None),
+    };
+    (sp < bottom + (GUARD_WORDS * 4) as u32).then_some(task)
 }
 
 core::arch::global_asm!(

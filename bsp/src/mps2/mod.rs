@@ -614,7 +614,19 @@ fn SysTick() {
 }
 
 #[cortex_m_rt::exception]
+fn MemoryManagement() {
+    crate::cortex_m::memory_fault();
+}
+
+#[cortex_m_rt::exception]
 unsafe fn HardFault(frame: &cortex_m_rt::ExceptionFrame) -> ! {
+    // SAFETY: a read of the Configurable Fault Status Register.
+    let cfsr = unsafe { (*cortex_m::peripheral::SCB::PTR).cfsr.read() };
+    // A MemManage fault escalated (it came while PRIMASK was set, in a kernel call): a
+    // stack guard was hit.
+    if cfsr & 0xFF != 0 {
+        crate::cortex_m::memory_fault();
+    }
     leds_safe();
     mps2_log!("FATAL: HardFault at pc {:#010x}\n", frame.pc());
     exit(false)
@@ -641,12 +653,32 @@ extern "C" fn uart0_tx() {
     }
 }
 
+/// The external interrupt line no device of the board drives: software pends it
+/// ([`pend_software_irq`]), as a test's or a demo's interrupt source.
+pub const SOFTWARE_IRQ: u16 = 31;
+
+extern "C" fn software_irq() {
+    if let Some(app) = app() {
+        app.irq(SOFTWARE_IRQ);
+    }
+}
+
+/// Enables [`SOFTWARE_IRQ`] at OSEK ISR priority `osek_priority`.
+pub fn enable_software_irq(osek_priority: u8) {
+    crate::cortex_m::enable_irq(Irq(SOFTWARE_IRQ), osek_priority);
+}
+
+/// Requests [`SOFTWARE_IRQ`].
+pub fn pend_software_irq() {
+    cortex_m::peripheral::NVIC::pend(Irq(SOFTWARE_IRQ));
+}
+
 extern "C" fn unused_irq() {
     fatal("an interrupt without a handler");
 }
 
 /// The external interrupt vector: UART0's receive and transmit lines are the CAN
-/// controller's; no other line is enabled.
+/// controller's, line 31 is [`SOFTWARE_IRQ`]; no other line is enabled.
 #[link_section = ".vector_table.interrupts"]
 #[no_mangle]
 #[used]
@@ -654,5 +686,6 @@ static __INTERRUPTS: [extern "C" fn(); 32] = {
     let mut v: [extern "C" fn(); 32] = [unused_irq; 32];
     v[0] = uart0_rx;
     v[1] = uart0_tx;
+    v[SOFTWARE_IRQ as usize] = software_irq;
     v
 };
