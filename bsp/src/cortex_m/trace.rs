@@ -79,9 +79,10 @@ pub struct Trace {
     depth: usize,
 }
 
+/// An unused slot: all zero bits, so the trace starts in `.bss` (no flash image).
 const NO_EVENT: Event = Event {
     at_us: 0,
-    kind: EventKind::JobEnd(0),
+    kind: EventKind::JobStart(0),
 };
 
 impl Trace {
