@@ -14,7 +14,13 @@
 //!   by an ISR starts when the last nested ISR returns (tail-chained).
 //! - **Stacks.** OSEK basic tasks run to completion and preempt each other in LIFO order,
 //!   so they share one stack: a new job's first frame is built just below the deepest
-//!   preempted job. The idle loop is the stack's bottom. ISRs run on the main stack (MSP).
+//!   preempted job. The idle loop is the stack's bottom. A task given its own stack
+//!   ([`set_task_stack`]: extended tasks, whose `WaitEvent` keeps their context while
+//!   lower tasks run) starts its jobs there. ISRs run on the main stack (MSP).
+//! - **Stack guard.** The bottom 32 bytes of every task stack are a guard that MPU region
+//!   0, moved at every switch, makes inaccessible to the running context: an overflow
+//!   faults at its first access, and [`App::stack_fault`] shuts the OS down with
+//!   `E_OS_STACKFAULT`.
 //! - **Interrupt masking.** The kernel's interrupt mask ([`cw_core::os::InterruptMask`])
 //!   becomes BASEPRI (`UpTo(p)`: every ISR of OSEK priority up to `p`, and PendSV, held)
 //!   or PRIMASK (`All`) after every kernel call: resources shared with ISRs and
