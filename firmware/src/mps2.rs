@@ -144,12 +144,13 @@ impl App for Mps2App {
             link.replies_dropped
         );
         cw_bsp::mps2_log!(
-            "cw-qemu: end at {} ms; kernel errors {}, port errors {}; task stack used {} of {} bytes\n",
+            "cw-qemu: end at {} ms; kernel errors {}, port errors {}; task stack used {} of {} bytes, main stack (ISRs) {} bytes\n",
             mps2::now_ms(),
             hooks.errors,
             hooks.port_errors,
             cw_bsp::cortex_m::basic_stack_use(),
-            (cw_bsp::cortex_m::BASIC_STACK_WORDS - cw_bsp::cortex_m::GUARD_WORDS) * 4
+            (cw_bsp::cortex_m::BASIC_STACK_WORDS - cw_bsp::cortex_m::GUARD_WORDS) * 4,
+            cw_bsp::cortex_m::main_stack_use()
         );
         mps2::exit(schedule_ok && hooks.errors == 0 && hooks.port_errors == 0);
     }

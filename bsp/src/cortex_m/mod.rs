@@ -17,7 +17,7 @@
 //!   preempted job. The idle loop is the stack's bottom. A task given its own stack
 //!   ([`set_task_stack`]: extended tasks, whose `WaitEvent` keeps their context while
 //!   lower tasks run) starts its jobs there. ISRs run on the main stack (MSP).
-//! - **Stack guard.** The bottom 32 bytes of every task stack are a guard that MPU region
+//! - **Stack guard.** The bottom 256 bytes of every task stack are a guard that MPU region
 //!   0, moved at every switch, makes inaccessible to the running context: an overflow
 //!   faults at its first access, and [`App::stack_fault`] shuts the OS down with
 //!   `E_OS_STACKFAULT`.
@@ -59,10 +59,18 @@ pub const STACK_PAINT: u32 = 0xDEAD_BEEF;
 /// Words at the bottom of every task stack (the shared one and each task's own): the
 /// stack guard. While a context runs, the MPU makes its stack's guard inaccessible, so the
 /// first access past the stack's end faults (MemManage) at that instruction; and a context
-/// switch that finds a guard word no longer painted, or a saved stack pointer inside the
-/// guard, reports the overflow too. Either way the application shuts the OS down with
-/// `E_OS_STACKFAULT` ([`App::stack_fault`]). 32 bytes: the MPU's smallest region.
-pub const GUARD_WORDS: usize = 8;
+/// switch that finds a saved stack pointer inside the guard reports the overflow too.
+/// Either way the application shuts the OS down with `E_OS_STACKFAULT`
+/// ([`App::stack_fault`]).
+///
+/// 256 bytes. A function's frame can move the stack pointer past the stack's end before
+/// it touches memory, and the fault's own exception frame (32 bytes, 104 with the FPU's
+/// registers) is then pushed below that, lowest word first; the guard must absorb both,
+/// or the push would land in whatever the linker put below the stack. So an overflow is
+/// caught before it writes outside the stack as long as no single frame steps more than
+/// 152 bytes (224 without FPU state) past the stack's end: the usual limit of MPU guards
+/// on cores without stack-limit registers (ARMv8-M has PSPLIM).
+pub const GUARD_WORDS: usize = 64;
 
 /// The NVIC priority byte of an OSEK category-2 ISR priority (1 to 6).
 pub const fn nvic_priority(osek_priority: u8) -> u8 {
@@ -123,7 +131,7 @@ static SCHED: SchedCell = SchedCell(UnsafeCell::new(Sched {
 
 /// A task's own stack (aligned for its MPU guard region). Extended tasks need one: `WaitEvent` keeps the task's context while
 /// tasks of lower priority run, which on the shared stack would grow into it.
-#[repr(C, align(32))]
+#[repr(C, align(256))]
 pub struct TaskStack<const WORDS: usize>(UnsafeCell<[u32; WORDS]>);
 
 // SAFETY: the memory is used only as its task's process stack once the OS starts (and
@@ -192,7 +200,7 @@ fn painted_use(base: *const u32, words: usize) -> usize {
 }
 
 /// The shared stack of the basic tasks (aligned for its MPU guard region).
-#[repr(C, align(32))]
+#[repr(C, align(256))]
 struct Stack(UnsafeCell<[u32; BASIC_STACK_WORDS]>);
 
 // SAFETY: the stack's memory is used only as the process stack (PSP) once the OS starts,
@@ -363,6 +371,37 @@ pub fn report_fatal(what: &str) -> ! {
     }
 }
 
+/// Bytes of the main stack (ISRs, exceptions) painted when the OS starts, below the main
+/// stack pointer that every exception then starts from, for [`main_stack_use`].
+pub const MAIN_STACK_PAINTED: usize = 2048;
+
+/// Where the painted main stack region ends (its top), set once by `start`.
+static MAIN_PAINT_TOP: core::sync::atomic::AtomicU32 = core::sync::atomic::AtomicU32::new(0);
+
+/// The deepest use of the main stack since the OS started, in bytes (ISRs, PendSV and
+/// the fault handlers run there; the exception frames go on the interrupted task's
+/// stack); at most [`MAIN_STACK_PAINTED`].
+pub fn main_stack_use() -> usize {
+    let top = MAIN_PAINT_TOP.load(core::sync::atomic::Ordering::Relaxed);
+    if top == 0 {
+        return 0;
+    }
+    let words = MAIN_STACK_PAINTED / 4;
+    // Counted from the region's bottom; no guard words here.
+    let base = (top as usize - MAIN_STACK_PAINTED) as *const u32;
+    let mut untouched = 0;
+    while untouched < words {
+        // SAFETY: within the region `start` painted, below the main stack's top; a
+        // volatile word read.
+        let word = unsafe { base.add(untouched).read_volatile() };
+        if word != STACK_PAINT {
+            break;
+        }
+        untouched += 1;
+    }
+    (words - untouched) * 4
+}
+
 /// The deepest use of the shared task stack so far, in bytes (the painted words above
 /// the guard that were overwritten), of [`BASIC_STACK_WORDS`] - [`GUARD_WORDS`] words.
 pub fn basic_stack_use() -> usize {
@@ -406,7 +445,7 @@ pub fn start(app: &'static dyn App, on_fatal: fn(&str) -> !) -> ! {
     }
     cp.SCB
         .enable(cortex_m::peripheral::scb::Exception::MemoryManagement);
-    // SAFETY: region 0 becomes the running context's stack guard (32 bytes, no access,
+    // SAFETY: region 0 becomes the running context's stack guard (256 bytes, no access,
     // never executable); the background map keeps every other address as before for
     // privileged code, which is all code here. The idle loop's guard (the shared stack's)
     // is the first.
@@ -468,6 +507,17 @@ unsafe fn switch_to_task_stack(top: u32) -> ! {
 /// The idle loop, on the task stack (called once by `cw_port_enter_idle`).
 #[no_mangle]
 extern "C" fn cw_port_idle() -> ! {
+    // Thread mode runs on the task stack from here on, so the main stack pointer stays
+    // where it is until an exception uses the memory below it: paint that memory.
+    let painted_top = cortex_m::register::msp::read() & !7;
+    let mut word = painted_top - MAIN_STACK_PAINTED as u32;
+    while word < painted_top {
+        // SAFETY: below the main stack pointer, inside the RAM the linker leaves to the
+        // main stack: nothing lives there, and interrupts are still off.
+        unsafe { (word as *mut u32).write_volatile(STACK_PAINT) };
+        word += 4;
+    }
+    MAIN_PAINT_TOP.store(painted_top, core::sync::atomic::Ordering::Relaxed);
     // SAFETY: the OS starts now, from thread mode on the task stack.
     unsafe { cortex_m::interrupt::enable() };
     if let Some(app) = app() {
@@ -570,9 +620,13 @@ extern "C" fn cw_port_switch(sp: u32) -> u32 {
     new_sp
 }
 
-/// MPU RASR of a guard: enabled, 32 bytes (SIZE = 4), no access (AP = 0), never
-/// executable (XN).
-const GUARD_RASR: u32 = 1 | (4 << 1) | (1 << 28);
+/// MPU RASR of a guard: enabled, 256 bytes (SIZE = 7: 2^(7+1)), no access (AP = 0),
+/// never executable (XN).
+const GUARD_RASR: u32 = 1 | (7 << 1) | (1 << 28);
+const _: () = assert!(
+    GUARD_WORDS * 4 == 1 << (7 + 1),
+    "the guard is one MPU region"
+);
 /// MPU_CTRL: the MPU on, the default memory map as background for privileged code.
 const MPU_ENABLE: u32 = 1;
 const MPU_PRIVDEFENA: u32 = 1 << 2;
@@ -586,7 +640,7 @@ fn guard_stack_of(s: &Sched, slot: usize) {
         Some(&(bottom, top)) if top != 0 => bottom,
         _ => BASIC_STACK.0.get() as u32,
     };
-    // SAFETY: only region 0's base moves, to the bottom of a 32-byte-aligned stack;
+    // SAFETY: only region 0's base moves, to the bottom of a 256-byte-aligned stack;
     // PendSV runs with interrupts disabled, and the exception return that follows
     // synchronises the change.
     unsafe {
