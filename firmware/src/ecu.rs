@@ -68,6 +68,38 @@ impl Hooks<Kernel> for EcuHooks {
     }
 }
 
+/// The spans of the ECU's own paths that a port can measure (`Port::span`): the
+/// instruction counts of the README's Cortex-M4 figures.
+pub mod span {
+    /// From the sonar task's `ActivateTask(OsComTask)` call to `OsComTask`'s first line
+    /// (the kernel service, the port's task switch, the job's entry).
+    pub const ACTIVATE_TO_FIRST_LINE: usize = 0;
+    /// `OsComTask`'s send: `GetResource(RES_COM)`, Com_SendSignal of both signals, PduR,
+    /// CanIf, the controller's write (the SLCAN line into the mailbox and the UART's first
+    /// characters), `ReleaseResource`.
+    pub const COM_SEND: usize = 1;
+    /// `CanIsr`: from its first line through the kernel's ISR entry, the events into CanIf
+    /// (a TX confirmation, or a reception up to the signal in Com), to the ISR's return
+    /// to the kernel.
+    pub const CAN_ISR: usize = 2;
+    /// `SysTickIsr` on a tick at which no alarm expires.
+    pub const TICK_NOTHING_DUE: usize = 3;
+    /// `SysTickIsr` on a tick at which alarms expire and activate tasks.
+    pub const TICK_ALARMS_DUE: usize = 4;
+    /// Span numbers 5 and 6 are the board's (5: the CAN driver's write, inside
+    /// [`COM_SEND`]); 7 is the port's calibration of its own measuring.
+    pub const CALIBRATION: usize = 7;
+    /// The names, by number.
+    pub const NAMES: [&str; 6] = [
+        "ActivateTask(OsComTask) to its first line",
+        "OsComTask send (Com, PduR, CanIf, controller, RES_COM)",
+        "CanIsr (entry to return)",
+        "SysTickIsr, nothing due",
+        "SysTickIsr, alarms due",
+        "the CAN driver's write (inside the send)",
+    ];
+}
+
 /// Counters an engineer looks at after a run.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub struct EcuStats {
@@ -421,6 +453,9 @@ impl<P: Port<Kernel = Kernel>, B: Board> Ecu<P, B> {
     /// One job of `task`: its body, then `TerminateTask`. The Cortex-M port's task entry
     /// and the host port's dispatch call it.
     pub fn run_job(&self, task: TaskId) {
+        if task == config::COM_TASK {
+            self.port.span(span::ACTIVATE_TO_FIRST_LINE, false);
+        }
         self.port.job_started(task);
         match task {
             config::STARTUP_TASK => self.startup_task(),
@@ -447,7 +482,8 @@ impl<P: Port<Kernel = Kernel>, B: Board> Ecu<P, B> {
 
     /// Runs an ISR as the port does: the kernel is told of its entry, `body` runs, the
     /// kernel is told of its return (a rescheduling point).
-    fn isr(&self, isr: IsrId, body: impl FnOnce(&Self)) {
+    fn isr(&self, isr: IsrId, span: usize, body: impl FnOnce(&Self)) {
+        self.port.span(span, true);
         let count = |os: &mut Kernel, result: Result<(), OsError>| {
             if result.is_err() {
                 os.hooks_mut().port_errors = os.hooks_mut().port_errors.saturating_add(1);
@@ -473,6 +509,7 @@ impl<P: Port<Kernel = Kernel>, B: Board> Ecu<P, B> {
             let left = os.exit_isr();
             count(os, left)
         });
+        self.port.span(span, false);
         if left.is_ok() {
             self.dispatch();
         }
@@ -482,7 +519,17 @@ impl<P: Port<Kernel = Kernel>, B: Board> Ecu<P, B> {
     /// An alarm that cannot activate its task (a period overrun, which the paper's Table 1
     /// would show as a missed period) reaches `ErrorHook`.
     pub fn tick(&self) {
-        self.isr(config::SYSTICK_ISR, |ecu| {
+        // The alarms are cyclic from StartOS on: they expire at multiples of their periods.
+        let now = self.port.now_ms();
+        let due = config::PERIOD_MS
+            .iter()
+            .any(|&p| p > 0 && now % u64::from(p) == 0);
+        let span = if due {
+            span::TICK_ALARMS_DUE
+        } else {
+            span::TICK_NOTHING_DUE
+        };
+        self.isr(config::SYSTICK_ISR, span, |ecu| {
             let _ = ecu
                 .port
                 .kernel(|os| os.increment_counter(config::SYSTEM_COUNTER));
@@ -491,7 +538,7 @@ impl<P: Port<Kernel = Kernel>, B: Board> Ecu<P, B> {
 
     /// `CanIsr`: the CAN controller's pending events, in order, into CanIf and upwards.
     pub fn can_isr(&self) {
-        self.isr(config::CAN_ISR, |ecu| {
+        self.isr(config::CAN_ISR, span::CAN_ISR, |ecu| {
             let _ = ecu.com.lock(&ecu.port, |stack| {
                 while let Some(event) = stack.can.take_event() {
                     stack.can_event(event);
@@ -596,6 +643,7 @@ impl<P: Port<Kernel = Kernel>, B: Board> Ecu<P, B> {
             rte.sonar_to_can.write(measurement).0
         });
         if notify == Ok(true) {
+            self.port.span(span::ACTIVATE_TO_FIRST_LINE, true);
             // An error here reaches ErrorHook, which counts it.
             let _ = self.os(|os| os.activate_task(config::COM_TASK));
         }
@@ -613,8 +661,10 @@ impl<P: Port<Kernel = Kernel>, B: Board> Ecu<P, B> {
             return;
         };
         let (distance, level) = can_translate(measurement, level);
+        self.port.span(span::COM_SEND, true);
         let _ = self
             .com
             .lock(&self.port, |stack| stack.send(distance, level));
+        self.port.span(span::COM_SEND, false);
     }
 }

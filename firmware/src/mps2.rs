@@ -15,7 +15,7 @@ use cw_core::sonar::SonarConfig;
 
 use crate::board::{Board, CanEvents, CanInterrupt, PortDriver, PulseCapture};
 use crate::config::{self, Kernel};
-use crate::ecu::Ecu;
+use crate::ecu::{span, Ecu};
 
 /// The mps2-an386 board's drivers.
 pub struct Mps2Board;
@@ -120,6 +120,7 @@ pub struct Mps2App {
 impl App for Mps2App {
     fn start_os(&self) {
         mps2::start_tick(config::OS.isrs()[config::SYSTICK_ISR.0 as usize].priority);
+        calibrate(self.ecu.port());
         SlcanCan::enable_interrupts(config::OS.isrs()[config::CAN_ISR.0 as usize].priority);
         self.ecu.start_os();
     }
@@ -182,6 +183,21 @@ impl App for Mps2App {
     }
 }
 
+/// The task slot the calibration's jobs use (no task of the ECU has it).
+const CALIBRATION_SLOT: usize = cw_bsp::cortex_m::MAX_TASKS - 1;
+
+/// Measures what the measuring costs: 1,000 back-to-back span marks and job marks, before
+/// the OS starts (its tick runs already, so the SysTick counts advance).
+fn calibrate(port: &CortexMPort<Kernel>) {
+    for _ in 0..1000 {
+        port.span(span::CALIBRATION, true);
+        port.span(span::CALIBRATION, false);
+        port.job_started(TaskId(CALIBRATION_SLOT as u8));
+        port.job_finished(TaskId(CALIBRATION_SLOT as u8));
+    }
+    cw_bsp::cortex_m::trace::clear_events();
+}
+
 /// The name of task `t` in the configuration.
 fn task_name(t: usize) -> &'static str {
     config::OS.tasks().get(t).map_or("?", |c| c.name)
@@ -199,7 +215,7 @@ fn task_name(t: usize) -> &'static str {
 /// - `schedule ...`: the check that every preemption was by a task of higher priority
 ///   and every periodic task's longest job ended within its period (`false` if not).
 fn report_trace() -> bool {
-    use cw_bsp::cortex_m::trace::{self, EventKind, IDLE_ROW};
+    use cw_bsp::cortex_m::trace::{self, EventKind, SpanRecord, IDLE_ROW};
     let dropped = mps2::led_changes(|at, bits| {
         cw_bsp::mps2_log!("cw-qemu: led {} {} {}\n", at, bits & 1, (bits >> 1) & 1);
     });
@@ -208,13 +224,49 @@ fn report_trace() -> bool {
     }
     let isr_name = |i: usize| config::OS.isrs().get(i).map_or("?", |c| c.name);
     trace::read(|t| {
+        // Under `-icount shift=0`: one SysTick count is 40 instructions. The measuring's
+        // own cost (a back-to-back pair, calibrated at start) is taken off every span.
+        let span_cal = t.spans.get(span::CALIBRATION).copied().unwrap_or_default();
+        let job_cal = t
+            .tasks
+            .get(CALIBRATION_SLOT)
+            .map(|r| r.span)
+            .unwrap_or_default();
+        let instructions = |r: &SpanRecord, cal: &SpanRecord| {
+            let mean = |r: &SpanRecord| r.sum * 40 / u64::from(r.count.max(1));
+            let scale = |c: u32| (u64::from(c) * 40).saturating_sub(mean(cal));
+            (
+                mean(r).saturating_sub(mean(cal)),
+                scale(r.min),
+                scale(r.max),
+            )
+        };
+        cw_bsp::mps2_log!(
+            "cw-qemu: measuring costs {} instructions per span, {} per job (calibration, taken off below)\n",
+            instructions(&span_cal, &SpanRecord::default()).0,
+            instructions(&job_cal, &SpanRecord::default()).0
+        );
         for (i, r) in t.tasks.iter().enumerate().take(config::OS.tasks().len()) {
+            let (mean, min, max) = instructions(&r.span, &job_cal);
             cw_bsp::mps2_log!(
-                "cw-qemu: task {} jobs {} preempted {} max-span {}\n",
+                "cw-qemu: task {} jobs {} preempted {} instructions mean {} min {} max {}\n",
                 task_name(i),
                 r.jobs,
                 r.preempted,
-                r.max_span_us
+                mean,
+                min,
+                max
+            );
+        }
+        for (name, r) in span::NAMES.iter().zip(&t.spans) {
+            let (mean, min, max) = instructions(r, &span_cal);
+            cw_bsp::mps2_log!(
+                "cw-qemu: span {}: {} times, instructions mean {} min {} max {}\n",
+                name,
+                r.count,
+                mean,
+                min,
+                max
             );
         }
         for (by, row) in t.preemptions.iter().enumerate() {
@@ -252,7 +304,9 @@ fn report_trace() -> bool {
             .tasks
             .iter()
             .zip(config::PERIOD_MS)
-            .filter(|(r, period)| *period > 0 && r.max_span_us >= period.saturating_mul(1000))
+            .filter(|(r, period)| {
+                *period > 0 && r.span.max >= period.saturating_mul(t.counts_per_ms)
+            })
             .count();
         cw_bsp::mps2_log!(
             "cw-qemu: schedule {} preemptions, {} not by a higher priority; {} periodic tasks with a job longer than the period\n",
@@ -266,7 +320,8 @@ fn report_trace() -> bool {
                 EventKind::JobEnd(task) => ("end", task_name(usize::from(task))),
                 EventKind::Isr(isr) => ("isr", isr_name(usize::from(isr))),
             };
-            cw_bsp::mps2_log!("cw-qemu: event {} {} {}\n", e.at_us, what, name);
+            let at_us = u64::from(e.at) * 1000 / u64::from(t.counts_per_ms.max(1));
+            cw_bsp::mps2_log!("cw-qemu: event {} {} {}\n", at_us, what, name);
         }
         wrong == 0 && late == 0
     })

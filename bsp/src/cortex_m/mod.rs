@@ -261,9 +261,9 @@ impl<K: OsKernel> CortexMPort<K> {
         }
     }
 
-    /// Microseconds since the OS started.
-    pub fn now_us(&self) -> u32 {
-        trace::now_us(self.ms.load(core::sync::atomic::Ordering::Relaxed))
+    /// SysTick counts since the OS started (see [`trace`]).
+    pub fn now_counts(&self) -> u32 {
+        trace::now(self.ms.load(core::sync::atomic::Ordering::Relaxed))
     }
 
     /// The tick ISR advances the millisecond time base.
@@ -334,15 +334,24 @@ impl<K: OsKernel> Port for CortexMPort<K> {
     }
 
     fn job_started(&self, task: TaskId) {
-        trace::job_started(task.0, self.now_us());
+        trace::job_started(task.0, self.now_counts());
     }
 
     fn job_finished(&self, task: TaskId) {
-        trace::job_finished(task.0, self.now_us());
+        trace::job_finished(task.0, self.now_counts());
     }
 
     fn isr_entered(&self, isr: IsrId) {
-        trace::isr_entered(isr.0, self.now_us());
+        trace::isr_entered(isr.0, self.now_counts());
+    }
+
+    fn span(&self, id: usize, start: bool) {
+        let at = self.now_counts();
+        if start {
+            trace::span_start(id, at);
+        } else {
+            trace::span_end(id, at);
+        }
     }
 }
 
@@ -486,6 +495,7 @@ pub fn start_systick(reload: u32, osek_priority: u8) {
     cp.SYST
         .set_clock_source(cortex_m::peripheral::syst::SystClkSource::Core);
     cp.SYST.set_reload(reload);
+    trace::set_counts_per_ms(reload + 1);
     cp.SYST.clear_current();
     cp.SYST.enable_interrupt();
     cp.SYST.enable_counter();

@@ -11,8 +11,15 @@
 //! - the first [`EVENTS`] events in order, for reading the schedule itself (an ISR entry
 //!   is listed when it interrupts a task; entries in the idle loop are only counted).
 //!
-//! Times come from the OS tick count and SysTick's current value, so they need no
-//! peripheral beyond the core's own (DWT's cycle counter reads 0 in QEMU).
+//! - named spans the application marks ([`span_start`], [`span_end`]): count, sum,
+//!   shortest and longest, for the instruction counts of the ECU's own paths.
+//!
+//! Times are SysTick counts since the OS started (the OS tick count times the counts per
+//! tick, plus SysTick's progress into the current tick), so they need no peripheral beyond
+//! the core's own (DWT's cycle counter reads 0 in QEMU). On QEMU's mps2-an386 under
+//! `-icount shift=0` one count is exactly 40 instructions (SysTick at 25 MHz, one
+//! instruction per ns): a single span is known to 40 instructions, and the mean of many
+//! spans that start at varying phases of the counter is known far better.
 
 use core::cell::UnsafeCell;
 
@@ -38,11 +45,14 @@ pub enum EventKind {
     Isr(u8),
 }
 
-/// One event and its time, µs since the OS started.
+/// Spans the application can mark.
+pub const SPANS: usize = 8;
+
+/// One event and its time.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Event {
-    /// Microseconds since the OS started.
-    pub at_us: u32,
+    /// SysTick counts since the OS started.
+    pub at: u32,
     /// What happened.
     pub kind: EventKind,
 }
@@ -54,8 +64,41 @@ pub struct TaskRecord {
     pub jobs: u32,
     /// Jobs of this task that another task's job preempted (counted once per preemption).
     pub preempted: u32,
-    /// The longest time from a job's first line to its last, µs.
-    pub max_span_us: u32,
+    /// The time from a job's first line to its last (preemptions included), counts.
+    pub span: SpanRecord,
+}
+
+/// The lengths of one kind of span, in SysTick counts.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct SpanRecord {
+    /// Spans measured.
+    pub count: u32,
+    /// Their sum.
+    pub sum: u64,
+    /// The shortest.
+    pub min: u32,
+    /// The longest.
+    pub max: u32,
+}
+
+impl SpanRecord {
+    const EMPTY: Self = Self {
+        count: 0,
+        sum: 0,
+        min: 0,
+        max: 0,
+    };
+
+    fn add(&mut self, length: u32) {
+        self.min = if self.count == 0 {
+            length
+        } else {
+            self.min.min(length)
+        };
+        self.max = self.max.max(length);
+        self.count = self.count.saturating_add(1);
+        self.sum = self.sum.saturating_add(u64::from(length));
+    }
 }
 
 /// The whole trace.
@@ -73,6 +116,12 @@ pub struct Trace {
     pub events_len: usize,
     /// Events after the first `EVENTS` (counted, not kept).
     pub events_dropped: u32,
+    /// The application's spans.
+    pub spans: [SpanRecord; SPANS],
+    /// SysTick counts per OS tick (ms), to convert.
+    pub counts_per_ms: u32,
+    /// The start of each span under way.
+    open: [Option<u32>; SPANS],
     /// The jobs in progress, innermost last (basic tasks nest in LIFO order), and their
     /// start times.
     stack: [(u8, u32); MAX_TASKS],
@@ -81,7 +130,7 @@ pub struct Trace {
 
 /// An unused slot: all zero bits, so the trace starts in `.bss` (no flash image).
 const NO_EVENT: Event = Event {
-    at_us: 0,
+    at: 0,
     kind: EventKind::JobStart(0),
 };
 
@@ -91,22 +140,25 @@ impl Trace {
             tasks: [TaskRecord {
                 jobs: 0,
                 preempted: 0,
-                max_span_us: 0,
+                span: SpanRecord::EMPTY,
             }; MAX_TASKS],
             preemptions: [[0; MAX_TASKS]; MAX_TASKS],
             isr_over: [[0; MAX_TASKS + 1]; MAX_ISRS],
             events: [NO_EVENT; EVENTS],
             events_len: 0,
             events_dropped: 0,
+            spans: [SpanRecord::EMPTY; SPANS],
+            counts_per_ms: 0,
+            open: [None; SPANS],
             stack: [(0, 0); MAX_TASKS],
             depth: 0,
         }
     }
 
-    fn log(&mut self, at_us: u32, kind: EventKind) {
+    fn log(&mut self, at: u32, kind: EventKind) {
         match self.events.get_mut(self.events_len) {
             Some(slot) => {
-                *slot = Event { at_us, kind };
+                *slot = Event { at, kind };
                 self.events_len += 1;
             }
             None => self.events_dropped = self.events_dropped.saturating_add(1),
@@ -147,7 +199,7 @@ impl Trace {
             self.depth -= 1;
             let start = self.stack.get(self.depth).map_or(at_us, |&(_, s)| s);
             if let Some(r) = self.tasks.get_mut(usize::from(task)) {
-                r.max_span_us = r.max_span_us.max(at_us.wrapping_sub(start));
+                r.span.add(at_us.wrapping_sub(start));
             }
         }
         self.log(at_us, EventKind::JobEnd(task));
@@ -184,33 +236,67 @@ fn with<R>(f: impl FnOnce(&mut Trace) -> R) -> R {
     })
 }
 
-/// Microseconds since the OS started: `ms` whole ticks, plus how far SysTick has counted
-/// into the current one (a tick that is due but not yet handled counts).
-pub fn now_us(ms: u32) -> u32 {
+/// SysTick counts since the OS started: `ms` whole ticks, plus how far SysTick has
+/// counted into the current one (a tick that is due but not yet handled counts).
+pub fn now(ms: u32) -> u32 {
     cortex_m::interrupt::free(|_| {
         let reload = SYST::get_reload();
         let current = SYST::get_current();
         let due = SCB::is_pendst_pending();
-        let into = u64::from(reload - current.min(reload)) * 1000 / u64::from(reload + 1);
         // A wrap not yet counted: the SysTick interrupt is pending (held by the lock).
         let whole = if due { ms.wrapping_add(1) } else { ms };
-        whole.wrapping_mul(1000).wrapping_add(into as u32)
+        // The counter runs reload, .., 1, 0: reaching 0 is the tick (its interrupt), and
+        // it reloads one count later. So 0 is the start of the tick `ms` counts.
+        let into = (reload + 1 - current.min(reload)) % (reload + 1);
+        whole.wrapping_mul(reload + 1).wrapping_add(into)
     })
 }
 
-/// A job of `task` starts, at `at_us`.
-pub(crate) fn job_started(task: u8, at_us: u32) {
-    with(|t| t.job_started(task, at_us));
+/// Forgets the events logged so far (after a calibration), keeping the records.
+pub fn clear_events() {
+    with(|t| {
+        t.events_len = 0;
+        t.events_dropped = 0;
+    });
 }
 
-/// The job of `task` ends, at `at_us`.
-pub(crate) fn job_finished(task: u8, at_us: u32) {
-    with(|t| t.job_finished(task, at_us));
+/// Notes SysTick's counts per tick (at start).
+pub(crate) fn set_counts_per_ms(counts: u32) {
+    with(|t| t.counts_per_ms = counts);
 }
 
-/// Category-2 ISR `isr` was entered, at `at_us`.
-pub fn isr_entered(isr: u8, at_us: u32) {
-    with(|t| t.isr_entered(isr, at_us));
+/// Span `id` starts at `at` (a start while one is open restarts it).
+pub fn span_start(id: usize, at: u32) {
+    with(|t| {
+        if let Some(slot) = t.open.get_mut(id) {
+            *slot = Some(at);
+        }
+    });
+}
+
+/// Span `id` ends at `at` (nothing if it was not started).
+pub fn span_end(id: usize, at: u32) {
+    with(|t| {
+        let start = t.open.get_mut(id).and_then(Option::take);
+        if let (Some(start), Some(record)) = (start, t.spans.get_mut(id)) {
+            record.add(at.wrapping_sub(start));
+        }
+    });
+}
+
+/// A job of `task` starts, at `at` (counts).
+pub(crate) fn job_started(task: u8, at: u32) {
+    with(|t| t.job_started(task, at));
+}
+
+/// The job of `task` ends, at `at` (counts).
+pub(crate) fn job_finished(task: u8, at: u32) {
+    with(|t| t.job_finished(task, at));
+}
+
+/// Category-2 ISR `isr` was entered, at `at` (counts).
+pub fn isr_entered(isr: u8, at: u32) {
+    with(|t| t.isr_entered(isr, at));
 }
 
 /// Reads the trace (under the interrupt lock: keep `f` short of anything slow, or call

@@ -291,6 +291,10 @@ pub fn slcan_stats() -> SlcanStats {
     }
 }
 
+/// The trace span (`cortex_m::trace`) the driver's `Can_Write` is measured in: the SLCAN
+/// encoding and the characters the UART takes at once.
+pub const DRIVER_WRITE_SPAN: usize = 5;
+
 /// Received frames waiting for `CanIsr`.
 const RX_QUEUE: usize = 4;
 /// Reply bytes waiting for the UART.
@@ -482,6 +486,10 @@ impl CanDriver for SlcanCan {
         {
             return Err(CanBusy);
         }
+        crate::cortex_m::trace::span_start(
+            DRIVER_WRITE_SPAN,
+            crate::cortex_m::trace::now(now_ms()),
+        );
         let at_ms = self.timestamps.then(now_ms);
         self.len = slcan::encode_frame_at(frame, at_ms, &mut self.line);
         self.sent = 0;
@@ -492,6 +500,7 @@ impl CanDriver for SlcanCan {
         if self.confirmed.is_some() {
             cortex_m::peripheral::NVIC::pend(Irq(1));
         }
+        crate::cortex_m::trace::span_end(DRIVER_WRITE_SPAN, crate::cortex_m::trace::now(now_ms()));
         Ok(())
     }
 

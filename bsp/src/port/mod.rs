@@ -165,6 +165,10 @@ pub trait Port {
 
     /// Category-2 ISR `isr` was entered (the kernel accepted its entry); for traces.
     fn isr_entered(&self, _isr: IsrId) {}
+
+    /// A measured span `id` (the application numbers them) starts or ends here; for the
+    /// instruction counts of the application's own paths.
+    fn span(&self, _id: usize, _start: bool) {}
 }
 
 /// Data shared by tasks and ISRs, guarded by one OSEK resource.

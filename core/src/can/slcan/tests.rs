@@ -95,7 +95,7 @@ fn every_malformed_line_is_named_and_the_next_line_still_decodes() {
 
 #[test]
 fn an_endless_line_is_refused_once_at_its_end() {
-    let mut stream = std::vec![b'7'; 10_000];
+    let mut stream = std::vec![b'7'; 2_000];
     stream.extend_from_slice(b"\rt1000\r");
     assert_eq!(
         decode_all(&stream),
