@@ -119,6 +119,10 @@ pub struct Mps2App {
 
 impl App for Mps2App {
     fn start_os(&self) {
+        // Interrupts stay off until StartOS's own kernel call ends: an interrupt before it
+        // would be an ISR the kernel cannot accept yet (a port error), and the calibration
+        // may take longer than a tick when QEMU runs in real time.
+        cortex_m::interrupt::disable();
         mps2::start_tick(config::OS.isrs()[config::SYSTICK_ISR.0 as usize].priority);
         calibrate(self.ecu.port());
         SlcanCan::enable_interrupts(config::OS.isrs()[config::CAN_ISR.0 as usize].priority);
@@ -241,6 +245,9 @@ fn report_trace() -> bool {
                 scale(r.max),
             )
         };
+        cw_bsp::mps2_log!(
+            "cw-qemu: instructions below are SysTick counts x 40: exact under -icount shift=0 only\n"
+        );
         cw_bsp::mps2_log!(
             "cw-qemu: measuring costs {} instructions per span, {} per job (calibration, taken off below)\n",
             instructions(&span_cal, &SpanRecord::default()).0,

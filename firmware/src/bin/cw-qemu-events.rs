@@ -210,6 +210,8 @@ fn dive(depth: u32) -> u32 {
 
 impl App for Demo {
     fn start_os(&self) {
+        // Interrupts stay off until StartOS's kernel call ends (no ISR before the OS runs).
+        cortex_m::interrupt::disable();
         mps2::start_tick(OS.isrs()[SYSTICK_ISR.0 as usize].priority);
         mps2::enable_software_irq(OS.isrs()[PING_ISR.0 as usize].priority);
         self.port.kernel(|os| {
