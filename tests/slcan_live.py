@@ -15,7 +15,8 @@ QEMU with `-serial tcp:127.0.0.1:PORT,server=on,wait=on` first. Both directions:
    an endless line, a remote frame) go out right before a good frame;
 3. transmit: a ThresholdConfig frame (encoded by cantools) chosen so that the level of
    the distance now measured changes; every DistanceFrame after it must carry the level
-   the new thresholds give, so the ECU applied the frame sent after the garbage.
+   the new thresholds give, so the ECU applied the frame sent after the garbage (sent
+   10 times, 20 ms apart, so that the image measures its receive path on several frames).
 
 Prints one line for the caller: `slcan-live: sent MALFORMED malformed lines and FRAMES
 frames`, which `cargo xtask qemu --live` checks against the image's own counts.
@@ -27,6 +28,7 @@ import time
 import can
 import cantools
 
+FRAMES = 10
 NOTHING_IN_RANGE = 4294967294
 INVALID = 4294967295
 LEVEL_OFF, LEVEL_YELLOW, LEVEL_RED, LEVEL_FAULT = 0, 1, 2, 3
@@ -118,18 +120,22 @@ def main(port, dbc_path):
             raw.write(line)
         raw.flush()
         data = config.encode({"RedBelow": red, "YellowBelow": yellow})
-        bus.send(can.Message(arbitration_id=config.frame_id, data=data, is_extended_id=False))
+        # The same frame several times, 20 ms apart: each is applied again, and the image
+        # measures its receive path once per frame.
+        for _ in range(FRAMES):
+            bus.send(can.Message(arbitration_id=config.frame_id, data=data, is_extended_id=False))
+            time.sleep(0.02)
 
         # Let the sample in flight and the next one pass, then every frame must agree.
         after = distance_frames(bus, db, 1.5, 15)
-        settled = after[3:]
+        settled = after[3:]  # the frames in flight while the thresholds arrived
         check_levels(settled, red, yellow, "after ThresholdConfig")
         print(
             f"slcan-live: received {len(before)} DistanceFrames (levels of red < 1000, yellow < 2000), "
             f"sent ThresholdConfig RedBelow={red} YellowBelow={yellow} after {len(MALFORMED)} malformed "
             f"lines, then {len(settled)} DistanceFrames all with the new thresholds' levels"
         )
-        print(f"slcan-live: sent {len(MALFORMED)} malformed lines and 1 frames")
+        print(f"slcan-live: sent {len(MALFORMED)} malformed lines and {FRAMES} frames")
     finally:
         bus.shutdown()
 

@@ -86,17 +86,22 @@ pub mod span {
     pub const TICK_NOTHING_DUE: usize = 3;
     /// `SysTickIsr` on a tick at which alarms expire and activate tasks.
     pub const TICK_ALARMS_DUE: usize = 4;
-    /// Span numbers 5 and 6 are the board's (5: the CAN driver's write, inside
-    /// [`COM_SEND`]); 7 is the port's calibration of its own measuring.
+    /// Span 5 is the board's (the CAN driver's write, inside [`COM_SEND`]).
+    pub const DRIVER_WRITE: usize = 5;
+    /// Inside `CanIsr`, a received frame from CanIf's checks through PduR to the signals
+    /// stored in Com (the RX indication path; `CAN_ISR` spans the whole ISR).
+    pub const RX_TO_COM: usize = 6;
+    /// The port's calibration of its own measuring.
     pub const CALIBRATION: usize = 7;
     /// The names, by number.
-    pub const NAMES: [&str; 6] = [
+    pub const NAMES: [&str; 7] = [
         "ActivateTask(OsComTask) to its first line",
         "OsComTask send (Com, PduR, CanIf, controller, RES_COM)",
         "CanIsr (entry to return)",
         "SysTickIsr, nothing due",
         "SysTickIsr, alarms due",
         "the CAN driver's write (inside the send)",
+        "a received frame, CanIf to the signal in Com (inside CanIsr)",
     ];
 }
 
@@ -541,7 +546,14 @@ impl<P: Port<Kernel = Kernel>, B: Board> Ecu<P, B> {
         self.isr(config::CAN_ISR, span::CAN_ISR, |ecu| {
             let _ = ecu.com.lock(&ecu.port, |stack| {
                 while let Some(event) = stack.can.take_event() {
+                    let rx = matches!(event, CanInterrupt::Received(..));
+                    if rx {
+                        ecu.port.span(span::RX_TO_COM, true);
+                    }
                     stack.can_event(event);
+                    if rx {
+                        ecu.port.span(span::RX_TO_COM, false);
+                    }
                 }
             });
         });

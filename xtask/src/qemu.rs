@@ -7,7 +7,8 @@
 //! The run uses `-icount shift=0`: one instruction per nanosecond, so SysTick's
 //! milliseconds are the image's own, independent of the host's speed.
 //!
-//! `--live` runs the image in real time (no `-icount`) with UART0 on a TCP port and
+//! `--live` runs the image in real time (`-icount shift=0,sleep=on`: counted instructions
+//! while the core runs, the host's clock while it sleeps) with UART0 on a TCP port and
 //! `tests/slcan_live.py` against it: python-can's `slcan` interface receives the distance
 //! frames and sends malformed lines and a `ThresholdConfig` frame that the ECU must apply;
 //! the image's count of malformed lines and received frames must equal what was sent.
@@ -181,7 +182,8 @@ fn free_port() -> Result<u16> {
         .map_err(|e| format!("qemu: no free TCP port: {e}"))
 }
 
-/// The image in real time with UART0 on a TCP port, `tests/slcan_live.py` against it.
+/// The image in real time with UART0 on a TCP port, `tests/slcan_live.py` against it;
+/// its report (with the receive path's instruction counts) goes to `out/image-live.txt`.
 fn live(image: &Path, out: &Path) -> Result {
     use std::io::Read;
     use std::process::{Command, Stdio};
@@ -190,12 +192,15 @@ fn live(image: &Path, out: &Path) -> Result {
     let serial = format!("tcp:127.0.0.1:{port},server=on,wait=on");
     let leds = out.join("fpgaio-live.log");
     println!(
-        "$ qemu-system-arm -machine mps2-an386 (real time) -serial {serial} -kernel {}",
+        "$ qemu-system-arm -machine mps2-an386 -icount shift=0,sleep=on -serial {serial} -kernel {}",
         image.display()
     );
     let mut qemu = Command::new("qemu-system-arm")
         .args(["-machine", "mps2-an386", "-nographic", "-monitor", "none"])
         .args(["-semihosting-config", "enable=on,target=native"])
+        // One instruction per ns while the core runs, real time while it sleeps (WFI):
+        // the run keeps pace with python-can, and the image's spans are instructions.
+        .args(["-icount", "shift=0,sleep=on"])
         .args(["-serial", &serial])
         .args(["-d", "trace:mps2_fpgaio_write", "-D"])
         .arg(&leds)
@@ -225,7 +230,16 @@ fn live(image: &Path, out: &Path) -> Result {
             .map_err(|e| format!("reading QEMU's output: {e}"))?;
     }
     let status = qemu.wait().map_err(|e| format!("qemu-system-arm: {e}"))?;
-    print!("{image_out}");
+    print!(
+        "{}",
+        image_out
+            .lines()
+            .filter(|l| !l.starts_with("cw-qemu: event "))
+            .map(|l| format!("{l}\n"))
+            .collect::<String>()
+    );
+    let path = out.join("image-live.txt");
+    std::fs::write(&path, &image_out).map_err(|e| format!("writing {}: {e}", path.display()))?;
     if !status.success() {
         return Err(format!("qemu: the live image ended with {status}"));
     }
@@ -249,7 +263,7 @@ fn live(image: &Path, out: &Path) -> Result {
     }
     println!(
         "qemu: live SLCAN both ways: the image counted the {got_malformed} malformed lines python-can \
-         sent and received its {got_frames} frame"
+         sent and received its {got_frames} frames"
     );
     Ok(())
 }

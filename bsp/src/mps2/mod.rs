@@ -292,7 +292,8 @@ pub fn slcan_stats() -> SlcanStats {
 }
 
 /// The trace span (`cortex_m::trace`) the driver's `Can_Write` is measured in: the SLCAN
-/// encoding and the characters the UART takes at once.
+/// encoding and the characters the UART takes at once (the ECU names it
+/// `span::DRIVER_WRITE`).
 pub const DRIVER_WRITE_SPAN: usize = 5;
 
 /// Received frames waiting for `CanIsr`.
