@@ -98,6 +98,30 @@ fn build_bin(bin: &str) -> Result<PathBuf> {
     Ok(target_dir().join(TARGET).join("release").join(bin))
 }
 
+/// The machine and the image's log and exit (semihosting), for every run.
+const QEMU_MACHINE: [&str; 7] = [
+    "-machine",
+    "mps2-an386",
+    "-nographic",
+    "-monitor",
+    "none",
+    "-semihosting-config",
+    "enable=on,target=native",
+];
+
+/// Prints the image's report without its event lines and keeps it whole in `path`.
+fn keep_report(report: &str, path: &Path) -> Result {
+    print!(
+        "{}",
+        report
+            .lines()
+            .filter(|l| !l.starts_with("cw-qemu: event "))
+            .map(|l| format!("{l}\n"))
+            .collect::<String>()
+    );
+    std::fs::write(path, report).map_err(|e| format!("writing {}: {e}", path.display()))
+}
+
 /// Runs the image on QEMU; the SLCAN output and the LED trace go to `out`, the image's
 /// semihosting report to `out/image.txt` (and the terminal).
 fn run_image(image: &Path, out: &Path, serial: Option<&str>) -> Result {
@@ -109,8 +133,7 @@ fn run_image(image: &Path, out: &Path, serial: Option<&str>) -> Result {
     }
     let serial = serial.map_or_else(|| format!("file:{}", slcan.display()), str::to_string);
     let report = Cmd::new("qemu-system-arm")
-        .args(["-machine", "mps2-an386", "-nographic", "-monitor", "none"])
-        .args(["-semihosting-config", "enable=on,target=native"])
+        .args(QEMU_MACHINE)
         .args(["-icount", "shift=0,sleep=off"])
         .args(["-serial", &serial])
         .args(["-d", "trace:mps2_fpgaio_write", "-D"])
@@ -118,16 +141,7 @@ fn run_image(image: &Path, out: &Path, serial: Option<&str>) -> Result {
         .arg("-kernel")
         .arg(image)
         .read()?;
-    print!(
-        "{}",
-        report
-            .lines()
-            .filter(|l| !l.starts_with("cw-qemu: event "))
-            .map(|l| format!("{l}\n"))
-            .collect::<String>()
-    );
-    let path = out.join("image.txt");
-    std::fs::write(&path, report).map_err(|e| format!("writing {}: {e}", path.display()))
+    keep_report(&report, &out.join("image.txt"))
 }
 
 /// Runs `cargo xtask qemu`.
@@ -159,8 +173,7 @@ fn events(out: &Path) -> Result {
     let image = build_bin("cw-qemu-events")?;
     std::fs::create_dir_all(out).map_err(|e| format!("creating {}: {e}", out.display()))?;
     let report = Cmd::new("qemu-system-arm")
-        .args(["-machine", "mps2-an386", "-nographic", "-monitor", "none"])
-        .args(["-semihosting-config", "enable=on,target=native"])
+        .args(QEMU_MACHINE)
         .args(["-icount", "shift=0,sleep=off"])
         .args(["-serial", "null"])
         .arg("-kernel")
@@ -196,8 +209,7 @@ fn live(image: &Path, out: &Path) -> Result {
         image.display()
     );
     let mut qemu = Command::new("qemu-system-arm")
-        .args(["-machine", "mps2-an386", "-nographic", "-monitor", "none"])
-        .args(["-semihosting-config", "enable=on,target=native"])
+        .args(QEMU_MACHINE)
         // One instruction per ns while the core runs, real time while it sleeps (WFI):
         // the run keeps pace with python-can, and the image's spans are instructions.
         .args(["-icount", "shift=0,sleep=on"])
@@ -230,16 +242,7 @@ fn live(image: &Path, out: &Path) -> Result {
             .map_err(|e| format!("reading QEMU's output: {e}"))?;
     }
     let status = qemu.wait().map_err(|e| format!("qemu-system-arm: {e}"))?;
-    print!(
-        "{}",
-        image_out
-            .lines()
-            .filter(|l| !l.starts_with("cw-qemu: event "))
-            .map(|l| format!("{l}\n"))
-            .collect::<String>()
-    );
-    let path = out.join("image-live.txt");
-    std::fs::write(&path, &image_out).map_err(|e| format!("writing {}: {e}", path.display()))?;
+    keep_report(&image_out, &out.join("image-live.txt"))?;
     if !status.success() {
         return Err(format!("qemu: the live image ended with {status}"));
     }

@@ -179,14 +179,20 @@ pub fn task_stack_use(task: TaskId) -> Option<usize> {
         let s = unsafe { &*SCHED.0.get() };
         s.own_stack.get(usize::from(task.0)).copied()
     })?;
-    (top != 0).then(|| painted_use(bottom as *const u32, ((top - bottom) / 4) as usize))
+    (top != 0).then(|| {
+        painted_use(
+            bottom as *const u32,
+            ((top - bottom) / 4) as usize,
+            GUARD_WORDS,
+        )
+    })
 }
 
 /// Bytes of a painted stack of `words` words at `base` that were overwritten, above its
-/// guard (the guard is never written: the MPU forbids it, and reading it from a context
-/// whose guard it is would fault).
-fn painted_use(base: *const u32, words: usize) -> usize {
-    let mut untouched = GUARD_WORDS.min(words);
+/// first `skip` words (a task stack's guard is never written: the MPU forbids it, and
+/// reading it from a context whose guard it is would fault).
+fn painted_use(base: *const u32, words: usize, skip: usize) -> usize {
+    let mut untouched = skip.min(words);
     while untouched < words {
         // SAFETY: the caller's stack: `words` words at `base`; a volatile read of memory
         // the tasks may use concurrently is a plain word read on this core.
@@ -197,6 +203,20 @@ fn painted_use(base: *const u32, words: usize) -> usize {
         untouched += 1;
     }
     (words - untouched) * 4
+}
+
+/// Paints the words from `bottom` up to `top` (word-aligned addresses).
+///
+/// # Safety
+/// The memory must be a stack nothing uses now (the OS has not started on it), and nothing
+/// else may live there.
+unsafe fn paint(bottom: u32, top: u32) {
+    let mut word = bottom;
+    while word < top {
+        // SAFETY: the caller's contract.
+        unsafe { (word as *mut u32).write_volatile(STACK_PAINT) };
+        word += 4;
+    }
 }
 
 /// The shared stack of the basic tasks (aligned for its MPU guard region).
@@ -395,26 +415,22 @@ pub fn main_stack_use() -> usize {
     if top == 0 {
         return 0;
     }
-    let words = MAIN_STACK_PAINTED / 4;
-    // Counted from the region's bottom; no guard words here.
-    let base = (top as usize - MAIN_STACK_PAINTED) as *const u32;
-    let mut untouched = 0;
-    while untouched < words {
-        // SAFETY: within the region `start` painted, below the main stack's top; a
-        // volatile word read.
-        let word = unsafe { base.add(untouched).read_volatile() };
-        if word != STACK_PAINT {
-            break;
-        }
-        untouched += 1;
-    }
-    (words - untouched) * 4
+    // The region has no guard: counted from its bottom.
+    painted_use(
+        (top as usize - MAIN_STACK_PAINTED) as *const u32,
+        MAIN_STACK_PAINTED / 4,
+        0,
+    )
 }
 
 /// The deepest use of the shared task stack so far, in bytes (the painted words above
 /// the guard that were overwritten), of [`BASIC_STACK_WORDS`] - [`GUARD_WORDS`] words.
 pub fn basic_stack_use() -> usize {
-    painted_use(BASIC_STACK.0.get().cast::<u32>(), BASIC_STACK_WORDS)
+    painted_use(
+        BASIC_STACK.0.get().cast::<u32>(),
+        BASIC_STACK_WORDS,
+        GUARD_WORDS,
+    )
 }
 
 /// Starts the OS on this port and becomes the idle loop: paints the task stack, sets
@@ -430,19 +446,14 @@ pub fn start(app: &'static dyn App, on_fatal: fn(&str) -> !) -> ! {
         *FATAL.0.get() = Some(on_fatal);
     }
     let base = BASIC_STACK.0.get().cast::<u32>();
-    for i in 0..BASIC_STACK_WORDS {
-        // SAFETY: within the array, which nothing uses yet.
-        unsafe { base.add(i).write_volatile(STACK_PAINT) };
-    }
+    let basic_bottom = base as u32;
+    // SAFETY: the shared stack's array, which nothing uses yet.
+    unsafe { paint(basic_bottom, basic_bottom + (BASIC_STACK_WORDS * 4) as u32) };
     // SAFETY: interrupts are off: the only reference to the table.
     let own = unsafe { (*SCHED.0.get()).own_stack };
     for (bottom, top) in own.into_iter().filter(|r| r.1 != 0) {
-        let mut word = bottom;
-        while word < top {
-            // SAFETY: within a task stack given by `set_task_stack`, not yet in use.
-            unsafe { (word as *mut u32).write_volatile(STACK_PAINT) };
-            word += 4;
-        }
+        // SAFETY: a task stack given by `set_task_stack`, not yet in use.
+        unsafe { paint(bottom, top) };
     }
     // SAFETY: one past the end of the stack array: the initial process stack pointer.
     let top = unsafe { base.add(BASIC_STACK_WORDS) } as u32;
@@ -520,13 +531,9 @@ extern "C" fn cw_port_idle() -> ! {
     // Thread mode runs on the task stack from here on, so the main stack pointer stays
     // where it is until an exception uses the memory below it: paint that memory.
     let painted_top = cortex_m::register::msp::read() & !7;
-    let mut word = painted_top - MAIN_STACK_PAINTED as u32;
-    while word < painted_top {
-        // SAFETY: below the main stack pointer, inside the RAM the linker leaves to the
-        // main stack: nothing lives there, and interrupts are still off.
-        unsafe { (word as *mut u32).write_volatile(STACK_PAINT) };
-        word += 4;
-    }
+    // SAFETY: below the main stack pointer, inside the RAM the linker leaves to the main
+    // stack: nothing lives there, and interrupts are still off.
+    unsafe { paint(painted_top - MAIN_STACK_PAINTED as u32, painted_top) };
     MAIN_PAINT_TOP.store(painted_top, core::sync::atomic::Ordering::Relaxed);
     // SAFETY: the OS starts now, from thread mode on the task stack.
     unsafe { cortex_m::interrupt::enable() };
