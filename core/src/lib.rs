@@ -45,6 +45,7 @@ pub mod ecum;
 pub mod os;
 pub mod pdur;
 pub mod rte;
+pub mod scenario;
 pub mod sonar;
 pub mod tables;
 pub mod warning;

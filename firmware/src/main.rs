@@ -98,7 +98,7 @@ fn figure7_table(scenario: &Scenario, trace: &[TraceRow]) -> String {
          distance   measured   level    red   yellow\n",
     );
     for seg in scenario.segments.iter().filter(|s| s.from_mm == s.to_mm) {
-        let end = seg.start_ms + seg.duration_ms;
+        let end = seg.end_ms();
         let Some(row) = trace
             .iter()
             .rev()

@@ -76,6 +76,7 @@ mod targets {
     use cw_core::os::spec::call_and_check;
     use cw_core::os::OSDEFAULTAPPMODE;
     use cw_proofs::{configs, Kernel};
+    use cw_core::scenario;
 
     fn codec_case<const N: usize>(
         start: u16,
@@ -192,5 +193,24 @@ mod targets {
                 };
                 assert!(slcan::spec::stream_contract(garbage, &frame));
             });
+    }
+
+    /// Any text as a scenario file (the host simulation's and the image's parser): read
+    /// or refused with a line number within the text, never a panic; every line read
+    /// writes back to a line that reads as the same command.
+    #[test]
+    fn scenario_text() {
+        bolero::check!().with_type::<String>().for_each(|text: &String| {
+            match scenario::Scenario::<8>::parse(text) {
+                Ok(s) => assert!(!s.segments.is_empty()),
+                Err(e) => assert!(e.line <= text.lines().count()),
+            }
+            for line in text.lines() {
+                if let Ok(Some(command)) = scenario::parse_line(line) {
+                    let again = command.to_string();
+                    assert_eq!(scenario::parse_line(&again), Ok(Some(command)), "{again}");
+                }
+            }
+        });
     }
 }

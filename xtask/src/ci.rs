@@ -14,6 +14,7 @@ pub const FUZZ_TARGETS: &[&str] = &[
     "targets::codec_roundtrip",
     "targets::scheduler_api",
     "targets::slcan_stream",
+    "targets::scenario_text",
 ];
 
 /// How long the `fuzz` stage runs each target (cargo-bolero `-T`).

@@ -8,6 +8,7 @@
 //! [`embedded_can::Id`].
 
 pub mod slcan;
+pub mod text;
 
 use embedded_can::{ExtendedId, Id, StandardId};
 

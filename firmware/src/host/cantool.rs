@@ -64,52 +64,14 @@ pub fn parse_log_line(line: &str) -> Result<LogLine, String> {
 /// # Errors
 /// A sentence naming what is malformed.
 pub fn parse_frame(text: &str) -> Result<CanFrame, String> {
-    let (id_text, data_text) = text
-        .split_once('#')
-        .ok_or_else(|| format!("`{text}` is not a frame (expected ID#HEXDATA)"))?;
-    let raw = id_text
-        .bytes()
-        .all(|c| c.is_ascii_hexdigit())
-        .then(|| u32::from_str_radix(id_text, 16).ok())
-        .flatten()
-        .ok_or_else(|| format!("`{id_text}` is not a hex CAN id"))?;
-    let id = if id_text.len() > 3 {
-        CanId::extended(raw)
-    } else {
-        u16::try_from(raw).ok().and_then(CanId::standard)
-    }
-    .ok_or_else(|| format!("CAN id {id_text} is out of range"))?;
-    if data_text.len() % 2 != 0 {
-        return Err(format!("`{data_text}` has an odd number of hex digits"));
-    }
-    // Byte pairs, not string slices: a non-ASCII character is refused, never split.
-    let bytes = data_text
-        .as_bytes()
-        .chunks(2)
-        .map(|pair| {
-            pair.iter()
-                .all(u8::is_ascii_hexdigit)
-                .then(|| std::str::from_utf8(pair).ok())
-                .flatten()
-                .and_then(|p| u8::from_str_radix(p, 16).ok())
-        })
-        .collect::<Option<Vec<u8>>>()
-        .ok_or_else(|| format!("`{data_text}` is not hex data"))?;
-    CanFrame::from_parts(id, &bytes)
-        .ok_or_else(|| format!("{} data bytes; a CAN frame holds at most 8", bytes.len()))
+    cw_core::can::text::parse_frame(text).map_err(|e| e.to_string())
 }
 
 /// Formats a frame as `ID#HEX`.
 pub fn format_frame(frame: &CanFrame) -> String {
-    let id = frame.can_id();
-    let mut out = if id.is_extended() {
-        format!("{:08X}#", id.raw())
-    } else {
-        format!("{:03X}#", id.raw())
-    };
-    for b in frame.bytes() {
-        out.push_str(&format!("{b:02X}"));
-    }
+    let mut out = String::new();
+    // Writing to a String cannot fail.
+    let _ = cw_core::can::text::write_frame(frame, &mut out);
     out
 }
 

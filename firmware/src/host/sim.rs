@@ -361,21 +361,31 @@ impl Simulation {
         self.bus.run_until_now();
         self.deliver_can_events();
         let t = self.now_ms;
-        for (_, count) in self.scenario.can_errors.iter().filter(|(at, _)| *at == t) {
+        for (_, count) in self
+            .scenario
+            .can_errors
+            .iter()
+            .filter(|(at, _)| u64::from(*at) == t)
+        {
             self.ecu.com_stack().can.inject_tx_errors(*count);
         }
-        for (_, frame) in self.scenario.frames.iter().filter(|(at, _)| *at == t) {
+        for (_, frame) in self
+            .scenario
+            .frames
+            .iter()
+            .filter(|(at, _)| u64::from(*at) == t)
+        {
             self.pc.send(frame);
         }
         let windows = self.scenario.no_communication.clone();
-        for (start, len) in windows {
-            if start == t {
+        for window in windows {
+            if u64::from(window.start_ms) == t {
                 self.mode_request(BswMRequest::CommunicationOff);
-            } else if start + len == t {
+            } else if window.end_ms() == t {
                 self.mode_request(BswMRequest::CommunicationOn);
             }
         }
-        if self.scenario.shutdown_at_ms == Some(t) {
+        if self.scenario.shutdown_at_ms.map(u64::from) == Some(t) {
             self.mode_request(BswMRequest::EcuPostRun);
         }
         {
