@@ -75,8 +75,8 @@ mod targets {
     use cw_core::com::signal::{spec, ByteOrder, SignalLayout, Signedness};
     use cw_core::os::spec::call_and_check;
     use cw_core::os::OSDEFAULTAPPMODE;
-    use cw_proofs::{configs, Kernel};
     use cw_core::scenario;
+    use cw_proofs::{configs, Kernel};
 
     fn codec_case<const N: usize>(
         start: u16,
@@ -200,17 +200,19 @@ mod targets {
     /// writes back to a line that reads as the same command.
     #[test]
     fn scenario_text() {
-        bolero::check!().with_type::<String>().for_each(|text: &String| {
-            match scenario::Scenario::<8>::parse(text) {
-                Ok(s) => assert!(!s.segments.is_empty()),
-                Err(e) => assert!(e.line <= text.lines().count()),
-            }
-            for line in text.lines() {
-                if let Ok(Some(command)) = scenario::parse_line(line) {
-                    let again = command.to_string();
-                    assert_eq!(scenario::parse_line(&again), Ok(Some(command)), "{again}");
+        bolero::check!()
+            .with_type::<String>()
+            .for_each(|text: &String| {
+                match scenario::Scenario::<8>::parse(text) {
+                    Ok(s) => assert!(!s.segments.is_empty()),
+                    Err(e) => assert!(e.line <= text.lines().count()),
                 }
-            }
-        });
+                for line in text.lines() {
+                    if let Ok(Some(command)) = scenario::parse_line(line) {
+                        let again = command.to_string();
+                        assert_eq!(scenario::parse_line(&again), Ok(Some(command)), "{again}");
+                    }
+                }
+            });
     }
 }

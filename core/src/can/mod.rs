@@ -7,8 +7,10 @@
 //! identifier for static configuration tables; it converts to and from
 //! [`embedded_can::Id`].
 
+pub mod confinement;
 pub mod slcan;
 pub mod text;
+pub mod timing;
 
 use embedded_can::{ExtendedId, Id, StandardId};
 

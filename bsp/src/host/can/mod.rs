@@ -26,7 +26,7 @@
 //!
 //! # Frames on the wire
 //!
-//! See [`timing`]: 44 + 8 x DLC bits (standard) or 64 + 8 x DLC bits (extended) from SOF
+//! See [`timing`] (`cw_core::can::timing`): 44 + 8 x DLC bits (standard) or 64 + 8 x DLC bits (extended) from SOF
 //! through EOF, plus stuff bits (counted exactly from the real bit pattern and CRC by
 //! default, or the worst case), then 3 bits of intermission. Events (confirmation,
 //! reception) happen at the end of EOF; the next SOF can follow the intermission.
@@ -86,7 +86,7 @@
 //! the in-flight frame being cut short: a controller stopped while its frame is on the wire
 //! lets the frame finish (the others receive it) but gets no confirmation.
 
-pub mod timing;
+pub use cw_core::can::timing;
 
 use core::cell::{Cell, RefCell, RefMut};
 use core::fmt;
@@ -103,12 +103,7 @@ use timing::{
     SUSPEND_TRANSMISSION_BITS,
 };
 
-/// TEC at and above which a node is error passive.
-const ERROR_PASSIVE_TEC: u16 = 128;
-/// TEC above which a node goes bus-off.
-const BUS_OFF_TEC: u16 = 255;
-/// TEC increment of a failed transmission.
-const TEC_PER_ERROR: u16 = 8;
+use cw_core::can::confinement::{ErrorState, Failure, TransmitErrors};
 
 /// A node on a [`VirtualBus`], numbered in order of attachment.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
@@ -377,7 +372,7 @@ enum Role {
 
 #[derive(Debug)]
 struct Node {
-    tec: u16,
+    errors: TransmitErrors,
     injected_errors: u32,
     /// Error-passive suspend: no new transmission before this time.
     ready_at_ns: u64,
@@ -433,7 +428,7 @@ impl Node {
             if let Some(end_ns) = c.recovery_end_ns.filter(|&r| c.bus_off && r <= t_ns) {
                 c.bus_off = false;
                 c.recovery_end_ns = None;
-                self.tec = 0;
+                self.errors.recovered();
                 // Settling early (an accessor at `t_ns`) must not let a frame start before
                 // the recovery ended.
                 self.ready_at_ns = self.ready_at_ns.max(end_ns);
@@ -547,7 +542,7 @@ impl Bus {
 
     fn attach(&mut self, role: Role) -> usize {
         self.nodes.push(Node {
-            tec: 0,
+            errors: TransmitErrors::new(),
             injected_errors: 0,
             ready_at_ns: 0,
             role,
@@ -685,8 +680,7 @@ impl Bus {
         let Some(sender) = self.nodes.get_mut(f.node) else {
             return;
         };
-        if sent {
-            sender.tec = sender.tec.saturating_sub(1);
+        let state = if sent {
             if sender.remove_pending(f.slot, f.seq) {
                 if let Role::Controller(c) = &mut sender.role {
                     c.stats.tx_confirmed += 1;
@@ -696,12 +690,14 @@ impl Bus {
                     });
                 }
             }
-        } else if f.outcome == Outcome::InjectedError || sender.tec < ERROR_PASSIVE_TEC {
-            // An error-passive transmitter's ACK error leaves its TEC unchanged.
-            sender.tec += TEC_PER_ERROR;
-        }
-        if sender.tec > BUS_OFF_TEC {
-            match &mut sender.role {
+            sender.errors.sent()
+        } else if f.outcome == Outcome::InjectedError {
+            sender.errors.failed(Failure::Error)
+        } else {
+            sender.errors.failed(Failure::NoAcknowledge)
+        };
+        match state {
+            ErrorState::BusOff => match &mut sender.role {
                 Role::Controller(c) => {
                     c.bus_off = true;
                     c.recovery_end_ns = None;
@@ -712,10 +708,10 @@ impl Bus {
                         event: CanEvent::BusOff,
                     });
                 }
-                Role::Tester(_) => sender.tec = BUS_OFF_TEC,
-            }
-        } else if sender.tec >= ERROR_PASSIVE_TEC {
-            sender.ready_at_ns = suspend_until_ns;
+                Role::Tester(_) => sender.errors.cap(),
+            },
+            ErrorState::Passive => sender.ready_at_ns = suspend_until_ns,
+            ErrorState::Active => {}
         }
         if !sent {
             return;
@@ -903,7 +899,7 @@ impl VirtualBus {
         let now_ns = bus.now_ns();
         let n = bus.nodes.get_mut(node.0)?;
         let settled = n.settle(now_ns);
-        let tec = n.tec;
+        let tec = n.errors.tec();
         if settled {
             bus.plan_cache.set(None);
         }
@@ -991,7 +987,7 @@ impl HostCan {
 
     /// The transmit error counter (above 255 while bus-off, 0 once recovered).
     pub fn tec(&self) -> u16 {
-        self.with(0, |n| n.tec)
+        self.with(0, |n| n.errors.tec())
     }
 
     /// Whether the controller is bus-off now (until its recovery after a restart is done).
@@ -1004,9 +1000,7 @@ impl HostCan {
 
     /// Whether the controller is error passive (TEC >= 128, not bus-off).
     pub fn is_error_passive(&self) -> bool {
-        self.with(false, |n| {
-            (ERROR_PASSIVE_TEC..=BUS_OFF_TEC).contains(&n.tec)
-        })
+        self.with(false, |n| n.errors.state() == ErrorState::Passive)
     }
 
     /// Frames waiting in the transmit mailboxes.

@@ -25,7 +25,7 @@
 //! for a missing acknowledgement) occupies the bus up to and including the ACK slot, then
 //! an error frame of 6 flag + 8 delimiter bits, then the intermission.
 
-use cw_core::can::CanFrame;
+use super::CanFrame;
 
 /// Recessive bits between two frames.
 pub const INTERMISSION_BITS: u32 = 3;
@@ -160,7 +160,8 @@ pub fn failed_attempt_bits(frame: &CanFrame, stuffing: Stuffing) -> u32 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use cw_core::can::CanId;
+    extern crate std;
+    use crate::can::CanId;
 
     fn frame(id: CanId, data: &[u8]) -> CanFrame {
         match CanFrame::from_parts(id, data) {
