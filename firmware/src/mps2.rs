@@ -4,13 +4,24 @@
 //! The sensor is deterministic: QEMU cannot time an HC-SR04 echo, so the Gpt capture
 //! returns the echo width the scenario's obstacle distance gives at the current OS time,
 //! converted by the same `SonarConfig::distance_to_echo_us` as the host simulation's
-//! sensor model.
+//! sensor model, and no echo in the scenario's dropouts.
+//!
+//! The scenario is a `cw_core::scenario` file, read over semihosting at start
+//! ([`load_scenario`]), by default the paper's Figure 7 compiled in. The image plays its
+//! movements (`hold`, `ramp`), `dropout`, `can-errors` (the SLCAN controller's next
+//! attempts fail, with the same error counter and bus times as the host's simulated bus)
+//! and `frame` (a tester's frame reaches the controller in the ms after its time, as it
+//! does on the host's bus). It refuses, with the line's command named, what it cannot
+//! play the way the host does: sensor noise and random dropouts (the host draws them
+//! from its own generator), and `no-communication` and `shutdown` (mode requests that
+//! the host simulation hands the ECU between its steps).
 
 use cw_bsp::cortex_m::{App, CortexMPort};
 use cw_bsp::mps2::{self, CoreDelay, Led, SlcanCan, SlcanEvent, Unconnected};
 use cw_bsp::port::Port;
 use cw_core::can::Hrh;
 use cw_core::os::{OsError, TaskId};
+use cw_core::scenario::{NoiseSpec, Scenario};
 use cw_core::sonar::SonarConfig;
 
 use crate::board::{Board, CanEvents, CanInterrupt, PortDriver, PulseCapture};
@@ -39,6 +50,7 @@ impl CanEvents for SlcanCan {
             SlcanEvent::TxConfirmation(pdu) => CanInterrupt::TxConfirmation(pdu),
             // The UART is one receive mailbox; CanIf filters by id.
             SlcanEvent::Received(frame) => CanInterrupt::Received(Hrh(0), frame),
+            SlcanEvent::BusOff => CanInterrupt::BusOff,
         })
     }
 }
@@ -52,52 +64,132 @@ impl PortDriver for Mps2PortDriver {
     }
 }
 
-/// An obstacle movement: held distances, mm, each for a duration, ms, back to back.
-pub type Holds = &'static [(u32, u32)];
+/// Lines of each kind a scenario on the image holds.
+pub const IMAGE_CAPACITY: usize = 8;
 
-/// The paper's Figure 7: the obstacle held at 0.5, 1.0, 1.5, 2.0 and 2.5 m, 3 s each
-/// (`scenarios/figure7.txt`).
-pub const FIGURE7: Holds = &[
-    (500, 3000),
-    (1000, 3000),
-    (1500, 3000),
-    (2000, 3000),
-    (2500, 3000),
-];
+/// A scenario on the image.
+pub type ImageScenario = Scenario<IMAGE_CAPACITY>;
+
+/// The paper's Figure 7, compiled in: the scenario when none is given.
+pub const FIGURE7: &str = include_str!("../../scenarios/figure7.txt");
+
+/// The longest scenario file the image reads, bytes.
+pub const SCENARIO_FILE_MAX: usize = 1024;
+
+/// Why the image cannot play a scenario.
+enum Refused<'a> {
+    /// The file could not be read.
+    File(cw_bsp::mps2::semihosting::HostFileError),
+    /// The text is not UTF-8.
+    NotText,
+    /// A malformed line.
+    Parse(cw_core::scenario::ScenarioError<'a>),
+    /// A command the image does not play.
+    Unsupported(&'static str),
+}
+
+impl core::fmt::Display for Refused<'_> {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            Self::File(e) => write!(f, "{e}"),
+            Self::NotText => write!(f, "it is not UTF-8 text"),
+            Self::Parse(e) => write!(f, "{e}"),
+            Self::Unsupported(what) => write!(
+                f,
+                "the image does not play `{what}` (the host simulation does)"
+            ),
+        }
+    }
+}
+
+/// The scenario the image runs: the file named by `--scenario PATH` on the semihosting
+/// command line (QEMU's `-semihosting-config ...,arg=--scenario,arg=PATH`), read from the
+/// host (at most [`SCENARIO_FILE_MAX`] bytes), or Figure 7. Its name goes to the log; a
+/// file that cannot be read or parsed, or asks for what the image does not play, is a
+/// fatal error naming the file, the line and the fault. Never inlined: its buffers
+/// leave the main stack before the OS starts.
+#[inline(never)]
+pub fn load_scenario() -> ImageScenario {
+    let mut line = [0u8; 256];
+    let path = cw_bsp::mps2::semihosting::command_line(&mut line).and_then(|line| {
+        let mut words = line.split_whitespace();
+        words.find(|w| *w == "--scenario")?;
+        words.next()
+    });
+    let mut text = [0u8; SCENARIO_FILE_MAX];
+    let (name, scenario) = match path {
+        None => ("scenarios/figure7.txt (compiled in)", parse(FIGURE7)),
+        Some(path) => (
+            path,
+            cw_bsp::mps2::semihosting::read_file(path, &mut text)
+                .map_err(Refused::File)
+                .and_then(|len| {
+                    text.get(..len)
+                        .and_then(|t| core::str::from_utf8(t).ok())
+                        .ok_or(Refused::NotText)
+                })
+                .and_then(parse),
+        ),
+    };
+    match scenario {
+        Ok(s) => {
+            cw_bsp::mps2_log!(
+                "cw-qemu: scenario {}: {} movements, {} dropouts, {} CAN error bursts, {} tester frames, {} ms\n",
+                name,
+                s.segments.len(),
+                s.dropouts.len(),
+                s.can_errors.len(),
+                s.frames.len(),
+                s.duration_ms()
+            );
+            s
+        }
+        Err(e) => {
+            mps2::leds_safe();
+            cw_bsp::mps2_log!("FATAL: scenario {}: {}\n", name, e);
+            mps2::exit(false)
+        }
+    }
+}
+
+/// Reads and checks a scenario for the image.
+fn parse(text: &str) -> Result<ImageScenario, Refused<'_>> {
+    let s = ImageScenario::parse(text).map_err(Refused::Parse)?;
+    if s.noise != NoiseSpec::Off {
+        return Err(Refused::Unsupported("noise"));
+    }
+    if s.dropout_ppm != 0 {
+        return Err(Refused::Unsupported("dropout-rate"));
+    }
+    if !s.no_communication.is_empty() {
+        return Err(Refused::Unsupported("no-communication"));
+    }
+    if s.shutdown_at_ms.is_some() {
+        return Err(Refused::Unsupported("shutdown"));
+    }
+    Ok(s)
+}
 
 /// The echo a scenario's obstacle gives, on the Gpt capture.
 pub struct ScenarioEcho {
     sensor: SonarConfig,
-    holds: Holds,
+    scenario: &'static ImageScenario,
 }
 
 impl ScenarioEcho {
-    /// The sensor `sensor` seeing the obstacle move as `holds` says.
-    pub const fn new(sensor: SonarConfig, holds: Holds) -> Self {
-        Self { sensor, holds }
-    }
-
-    /// The obstacle's distance at `t_ms` (the last one after the end).
-    pub fn distance_at(&self, t_ms: u32) -> u32 {
-        let mut start = 0u32;
-        for &(mm, duration) in self.holds {
-            start = start.saturating_add(duration);
-            if t_ms < start {
-                return mm;
-            }
-        }
-        self.holds.last().map_or(0, |h| h.0)
-    }
-
-    /// The scenario's length, ms.
-    pub fn duration_ms(&self) -> u32 {
-        self.holds.iter().fold(0u32, |t, h| t.saturating_add(h.1))
+    /// The sensor `sensor` seeing the obstacle move as `scenario` says.
+    pub const fn new(sensor: SonarConfig, scenario: &'static ImageScenario) -> Self {
+        Self { sensor, scenario }
     }
 }
 
 impl PulseCapture for ScenarioEcho {
     fn high_time_us(&mut self, timeout_us: u32) -> Option<u32> {
-        let distance = self.distance_at(mps2::now_ms());
+        let now = u64::from(mps2::now_ms());
+        if self.scenario.in_dropout(now) {
+            return None;
+        }
+        let distance = self.scenario.distance_at(now);
         let width = if distance > self.sensor.max_range_mm() {
             self.sensor.echo_timeout_us()
         } else {
@@ -115,6 +207,8 @@ pub struct Mps2App {
     pub ecu: Mps2Ecu,
     /// The run ends (QEMU exits) at this OS time, ms.
     pub end_ms: u32,
+    /// The scenario's bus events.
+    pub scenario: &'static ImageScenario,
 }
 
 impl App for Mps2App {
@@ -149,6 +243,12 @@ impl App for Mps2App {
             link.replies_dropped
         );
         cw_bsp::mps2_log!(
+            "cw-qemu: bus {} tester frames received, {} failed attempts, {} bus-offs\n",
+            link.bus_frames,
+            link.tx_errors,
+            link.bus_offs
+        );
+        cw_bsp::mps2_log!(
             "cw-qemu: end at {} ms; kernel errors {}, port errors {}; task stack used {} of {} bytes, main stack (ISRs) {} bytes\n",
             mps2::now_ms(),
             hooks.errors,
@@ -161,6 +261,21 @@ impl App for Mps2App {
     }
 
     fn tick(&self) {
+        // The scenario's bus events, before the OS tick, as the host simulation orders
+        // them: errors injected at their ms; a tester's frame, which takes a fraction of
+        // a ms on the bus, received in the ms after it was sent.
+        let now = mps2::now_ms();
+        for &(_, count) in self.scenario.can_errors.iter().filter(|(at, _)| *at == now) {
+            mps2::inject_tx_errors(count);
+        }
+        for &(_, frame) in self
+            .scenario
+            .frames
+            .iter()
+            .filter(|(at, _)| at.checked_add(1) == Some(now))
+        {
+            mps2::put_frame_on_bus(frame);
+        }
         self.ecu.port().advance_ms();
         self.ecu.tick();
     }

@@ -13,10 +13,16 @@
 //! frames and sends malformed lines and a `ThresholdConfig` frame that the ECU must apply;
 //! the image's count of malformed lines and received frames must equal what was sent.
 //!
-//! `--compare` runs the host simulation on the same scenario (Figure 7) and requires the
-//! same CAN frames (id and payload, in order) and the same transitions of each LED, in
-//! order. The image runs one frame further: its last sample's frame leaves the UART at
-//! once, while the simulated bus is still transmitting it when the simulation ends.
+//! `--scenario FILE` (repeatable; default `scenarios/figure7.txt`) names the scenarios the
+//! image plays: it reads each over semihosting (`-semihosting-config ...,arg=--scenario,
+//! arg=FILE`). Each run's files go to `target/qemu/<scenario name>/`.
+//!
+//! `--compare` runs the host simulation on each scenario and requires the same CAN frames
+//! the ECU sent (id and payload, in order; the tester's frames of the scenario are on the
+//! host's bus log but never on the image's UART) and the same transitions of each LED, in
+//! order, with times within one OS tick. The image runs one frame further: its last
+//! sample's frame leaves the UART at once, while the simulated bus is still transmitting
+//! it when the simulation ends.
 
 use std::path::{Path, PathBuf};
 
@@ -26,11 +32,13 @@ use crate::process::{root, target_dir, Cmd};
 use crate::Result;
 
 const TARGET: &str = "thumbv7em-none-eabihf";
-const SCENARIO: &str = "scenarios/figure7.txt";
+const FIGURE7: &str = "scenarios/figure7.txt";
+const FAULTS: &str = "scenarios/faults.txt";
 
 /// Options of `cargo xtask qemu`.
 #[derive(Default)]
 pub struct Options {
+    scenarios: Vec<PathBuf>,
     compare: bool,
     live: bool,
     events: bool,
@@ -41,6 +49,7 @@ impl Options {
     /// The options of the check command's `qemu` stage: the comparison, then the live test.
     pub fn ci() -> Self {
         Self {
+            scenarios: vec![root().join(FIGURE7), root().join(FAULTS)],
             compare: true,
             live: true,
             events: true,
@@ -48,13 +57,17 @@ impl Options {
         }
     }
 
-    /// Parses `[--compare] [--live] [--events] [--serial tcp:PORT]`.
+    /// Parses `[--scenario FILE]... [--compare] [--live] [--events] [--serial tcp:PORT]`.
     pub fn parse(args: &[String]) -> Result<Self> {
         let mut options = Self::default();
         let mut it = args.iter();
         while let Some(arg) = it.next() {
             match arg.as_str() {
                 "--compare" => options.compare = true,
+                "--scenario" => {
+                    let file = it.next().ok_or("qemu: --scenario takes a file")?;
+                    options.scenarios.push(PathBuf::from(file));
+                }
                 "--live" => options.live = true,
                 "--events" => options.events = true,
                 "--serial" => {
@@ -98,16 +111,27 @@ fn build_bin(bin: &str) -> Result<PathBuf> {
     Ok(target_dir().join(TARGET).join("release").join(bin))
 }
 
-/// The machine and the image's log and exit (semihosting), for every run.
-const QEMU_MACHINE: [&str; 7] = [
-    "-machine",
-    "mps2-an386",
-    "-nographic",
-    "-monitor",
-    "none",
-    "-semihosting-config",
-    "enable=on,target=native",
-];
+/// The machine and the image's log, exit and files (semihosting), for every run; the
+/// image's command line names `scenario` if given.
+fn qemu_machine(scenario: Option<&Path>) -> Vec<String> {
+    let mut semihosting = String::from("enable=on,target=native,arg=cw-qemu");
+    if let Some(file) = scenario {
+        // QEMU's option syntax doubles a comma inside a value.
+        let file = file.display().to_string().replace(',', ",,");
+        semihosting.push_str(&format!(",arg=--scenario,arg={file}"));
+    }
+    [
+        "-machine",
+        "mps2-an386",
+        "-nographic",
+        "-monitor",
+        "none",
+        "-semihosting-config",
+        &semihosting,
+    ]
+    .map(str::to_string)
+    .to_vec()
+}
 
 /// Prints the image's report without its event lines and keeps it whole in `path`.
 fn keep_report(report: &str, path: &Path) -> Result {
@@ -124,7 +148,7 @@ fn keep_report(report: &str, path: &Path) -> Result {
 
 /// Runs the image on QEMU; the SLCAN output and the LED trace go to `out`, the image's
 /// semihosting report to `out/image.txt` (and the terminal).
-fn run_image(image: &Path, out: &Path, serial: Option<&str>) -> Result {
+fn run_image(image: &Path, out: &Path, serial: Option<&str>, scenario: Option<&Path>) -> Result {
     std::fs::create_dir_all(out).map_err(|e| format!("creating {}: {e}", out.display()))?;
     let slcan = out.join("slcan.txt");
     let leds = out.join("fpgaio.log");
@@ -133,7 +157,7 @@ fn run_image(image: &Path, out: &Path, serial: Option<&str>) -> Result {
     }
     let serial = serial.map_or_else(|| format!("file:{}", slcan.display()), str::to_string);
     let report = Cmd::new("qemu-system-arm")
-        .args(QEMU_MACHINE)
+        .args(qemu_machine(scenario))
         .args(["-icount", "shift=0,sleep=off"])
         .args(["-serial", &serial])
         .args(["-d", "trace:mps2_fpgaio_write", "-D"])
@@ -155,10 +179,23 @@ pub fn run(options: &Options) -> Result {
     }
     let image = build()?;
     if options.compare || !options.live {
-        run_image(&image, &out, options.serial.as_deref())?;
-    }
-    if options.compare {
-        compare(&out)?;
+        let default = [root().join(FIGURE7)];
+        let scenarios = if options.scenarios.is_empty() {
+            &default[..]
+        } else {
+            &options.scenarios[..]
+        };
+        for scenario in scenarios {
+            let name = scenario
+                .file_stem()
+                .map_or_else(|| "scenario".into(), |s| s.to_string_lossy().to_string());
+            let dir = out.join(&name);
+            println!("qemu: scenario {}", scenario.display());
+            run_image(&image, &dir, options.serial.as_deref(), Some(scenario))?;
+            if options.compare {
+                compare(&dir, scenario)?;
+            }
+        }
     }
     if options.live {
         live(&image, &out)?;
@@ -173,7 +210,7 @@ fn events(out: &Path) -> Result {
     let image = build_bin("cw-qemu-events")?;
     std::fs::create_dir_all(out).map_err(|e| format!("creating {}: {e}", out.display()))?;
     let report = Cmd::new("qemu-system-arm")
-        .args(QEMU_MACHINE)
+        .args(qemu_machine(None))
         .args(["-icount", "shift=0,sleep=off"])
         .args(["-serial", "null"])
         .arg("-kernel")
@@ -209,7 +246,7 @@ fn live(image: &Path, out: &Path) -> Result {
         image.display()
     );
     let mut qemu = Command::new("qemu-system-arm")
-        .args(QEMU_MACHINE)
+        .args(qemu_machine(None))
         // One instruction per ns while the core runs, real time while it sleeps (WFI):
         // the run keeps pace with python-can, and the image's spans are instructions.
         .args(["-icount", "shift=0,sleep=on"])
@@ -443,20 +480,24 @@ fn read(path: &Path) -> Result<String> {
     std::fs::read_to_string(path).map_err(|e| format!("reading {}: {e}", path.display()))
 }
 
-/// The image's frames and LED transitions against the host simulation's.
-fn compare(out: &Path) -> Result {
+/// The image's frames and LED transitions against the host simulation's, on `scenario`.
+fn compare(out: &Path, scenario: &Path) -> Result {
     let can_log = out.join("host.log");
     let trace = out.join("host.csv");
     Cmd::new("cargo")
         .args(["run", "--release", "--quiet", "--", "--scenario"])
-        .arg(root().join(SCENARIO))
+        .arg(scenario)
         .arg("--can-log")
         .arg(&can_log)
         .arg("--trace")
         .arg(&trace)
         .run()?;
     let image = slcan_frames(&read(&out.join("slcan.txt"))?)?;
-    let host = candump_frames(&read(&can_log)?)?;
+    let text = read(scenario)?;
+    let tester = cw_core::scenario::Scenario::<64>::parse(&text)
+        .map_err(|e| format!("{}: {e}", scenario.display()))?
+        .frames;
+    let host = ecu_frames(candump_frames(&read(&can_log)?)?, &tester);
     if host.is_empty() || image.len() < host.len() || image.len() > host.len() + 1 {
         return Err(format!(
             "qemu: {} frames from the image, {} from the simulation",
@@ -499,8 +540,9 @@ fn compare(out: &Path) -> Result {
             "qemu: the image's schedule check failed: {schedule}"
         ));
     }
+    let scenario = scenario.display();
     println!(
-        "qemu: same ECU on {SCENARIO}: {} CAN frames compared (id and payload, in order; the \
+        "qemu: same ECU on {scenario}: {} CAN frames compared (id and payload, in order; the \
          image sent {} more), times within {frame_skew:.3} ms; {} red and {} yellow LED levels \
          compared in order, times within {led_skew:.3} ms; schedule: {schedule}",
         host.len(),
@@ -509,6 +551,25 @@ fn compare(out: &Path) -> Result {
         host_leds[1].len()
     );
     Ok(())
+}
+
+/// The frames on the host's bus without the scenario's tester frames: each tester frame
+/// takes the first frame equal to it at or after its time.
+fn ecu_frames(mut frames: Vec<Timed>, tester: &[(u32, cw_core::can::CanFrame)]) -> Vec<Timed> {
+    for (at, frame) in tester {
+        let text = {
+            let mut t = String::new();
+            let _ = cw_core::can::text::write_frame(frame, &mut t);
+            t
+        };
+        if let Some(i) = frames
+            .iter()
+            .position(|(t, f)| *t >= f64::from(*at) && *f == text)
+        {
+            frames.remove(i);
+        }
+    }
+    frames
 }
 
 /// One OS tick, ms: the tolerance on times compared.

@@ -239,6 +239,13 @@ fn with<R>(f: impl FnOnce(&mut Trace) -> R) -> R {
 /// SysTick counts since the OS started: `ms` whole ticks, plus how far SysTick has
 /// counted into the current one (a tick that is due but not yet handled counts).
 pub fn now(ms: u32) -> u32 {
+    let (whole, into, per_tick) = systick_position(ms);
+    whole.wrapping_mul(per_tick).wrapping_add(into)
+}
+
+/// Where SysTick stands: (whole ticks, counts into the current tick, counts per tick),
+/// `ms` being the ticks handled so far (a tick that is due but not yet handled counts).
+pub fn systick_position(ms: u32) -> (u32, u32, u32) {
     cortex_m::interrupt::free(|_| {
         let reload = SYST::get_reload();
         let current = SYST::get_current();
@@ -248,7 +255,7 @@ pub fn now(ms: u32) -> u32 {
         // The counter runs reload, .., 1, 0: reaching 0 is the tick (its interrupt), and
         // it reloads one count later. So 0 is the start of the tick `ms` counts.
         let into = (reload + 1 - current.min(reload)) % (reload + 1);
-        whole.wrapping_mul(reload + 1).wrapping_add(into)
+        (whole, into, reload + 1)
     })
 }
 

@@ -13,9 +13,15 @@
 //! `slcan` interface). One transmit mailbox: a frame occupies it until its last character
 //! has left the UART, then the driver reports the transmit confirmation.
 
+pub mod semihosting;
+
+use core::cell::RefCell;
 use core::convert::Infallible;
 use core::sync::atomic::{AtomicU32, Ordering};
 
+use cortex_m::interrupt::Mutex;
+use cw_core::can::confinement::{ErrorState, Failure, TransmitErrors};
+use cw_core::can::timing::{self, Stuffing};
 use cw_core::can::{slcan, CanBusy, CanDriver, CanFrame, ControllerMode, Hth, ModeRefused};
 use embedded_hal::delay::DelayNs;
 use embedded_hal::digital::{ErrorType, InputPin, OutputPin};
@@ -172,6 +178,12 @@ pub fn now_ms() -> u32 {
     MS.load(Ordering::Relaxed)
 }
 
+/// The time since the OS started, µs (SysTick's position within the current ms).
+pub fn now_us() -> u64 {
+    let (whole, into, per_tick) = crate::cortex_m::trace::systick_position(now_ms());
+    u64::from(whole) * 1000 + u64::from(into) * 1000 / u64::from(per_tick.max(1))
+}
+
 /// Starts SysTick: one interrupt per millisecond, at OSEK ISR priority `osek_priority`.
 pub fn start_tick(osek_priority: u8) {
     crate::cortex_m::start_systick(SYSCLK_HZ / 1000 - 1, osek_priority);
@@ -238,8 +250,12 @@ impl Uart {
 pub enum SlcanEvent {
     /// The frame of this PDU has left the UART.
     TxConfirmation(u16),
-    /// A frame arrived (an SLCAN `t`/`T` line from the other end).
+    /// A frame arrived (an SLCAN `t`/`T` line from the other end, or a tester's frame
+    /// put on the bus with [`put_frame_on_bus`]).
     Received(CanFrame),
+    /// The controller went bus-off (more than 255 in its transmit error counter): its
+    /// frame is dropped without confirmation and it is stopped until restarted.
+    BusOff,
 }
 
 /// What the SLCAN link has counted since start-up.
@@ -255,6 +271,12 @@ pub struct SlcanStats {
     pub rx_overruns: u32,
     /// Replies not sent because the reply queue was full.
     pub replies_dropped: u32,
+    /// Tester frames put on the bus ([`put_frame_on_bus`]) and received.
+    pub bus_frames: u32,
+    /// Transmission attempts that failed ([`inject_tx_errors`]).
+    pub tx_errors: u32,
+    /// Times the controller went bus-off.
+    pub bus_offs: u32,
 }
 
 /// The counters of UART0's SLCAN link, readable from anywhere (the end-of-run report in
@@ -265,6 +287,9 @@ struct SlcanCounters {
     rx_malformed: AtomicU32,
     rx_overruns: AtomicU32,
     replies_dropped: AtomicU32,
+    bus_frames: AtomicU32,
+    tx_errors: AtomicU32,
+    bus_offs: AtomicU32,
 }
 
 static SLCAN_COUNTERS: SlcanCounters = SlcanCounters {
@@ -273,6 +298,9 @@ static SLCAN_COUNTERS: SlcanCounters = SlcanCounters {
     rx_malformed: AtomicU32::new(0),
     rx_overruns: AtomicU32::new(0),
     replies_dropped: AtomicU32::new(0),
+    bus_frames: AtomicU32::new(0),
+    tx_errors: AtomicU32::new(0),
+    bus_offs: AtomicU32::new(0),
 };
 
 fn count(counter: &AtomicU32) {
@@ -288,6 +316,74 @@ pub fn slcan_stats() -> SlcanStats {
         rx_malformed: c.rx_malformed.load(Ordering::Relaxed),
         rx_overruns: c.rx_overruns.load(Ordering::Relaxed),
         replies_dropped: c.replies_dropped.load(Ordering::Relaxed),
+        bus_frames: c.bus_frames.load(Ordering::Relaxed),
+        tx_errors: c.tx_errors.load(Ordering::Relaxed),
+        bus_offs: c.bus_offs.load(Ordering::Relaxed),
+    }
+}
+
+/// The bus's bit time, ns: 500 kbit/s, the ECU's CAN bitrate (as on the host's simulated
+/// bus). Failed attempts, error frames and bus-off recovery take bus time in bits.
+const BIT_NS: u64 = 2000;
+
+/// Transmission attempts of the controller that the bus will fail next.
+static INJECTED_TX_ERRORS: AtomicU32 = AtomicU32::new(0);
+
+/// Tester frames on the bus, not yet taken by the controller (in the order put).
+static BUS_FRAMES: Mutex<RefCell<[Option<CanFrame>; RX_QUEUE]>> =
+    Mutex::new(RefCell::new([None; RX_QUEUE]));
+
+/// The ms at which the controller's delayed transmission or bus-off is due (`u32::MAX`:
+/// none): SysTick raises the controller's interrupt then.
+static DEFERRED_DUE_MS: AtomicU32 = AtomicU32::new(u32::MAX);
+
+/// Fault injection (a scenario's `can-errors`): the controller's next `count`
+/// transmission attempts fail, each raising its transmit error counter by 8 and taking
+/// the bus up to the ACK slot plus an error frame, before the automatic retransmission.
+pub fn inject_tx_errors(count: u32) {
+    let _ = INJECTED_TX_ERRORS.fetch_update(Ordering::Relaxed, Ordering::Relaxed, |n| {
+        Some(n.saturating_add(count))
+    });
+}
+
+/// Takes one injected error for an attempt, if any is left.
+fn take_injected_error() -> bool {
+    INJECTED_TX_ERRORS
+        .fetch_update(Ordering::Relaxed, Ordering::Relaxed, |n| n.checked_sub(1))
+        .is_ok()
+}
+
+/// A tester's frame on the bus (a scenario's `frame`): the controller receives it and
+/// raises its interrupt. A frame that finds the queue full is an overrun.
+pub fn put_frame_on_bus(frame: CanFrame) {
+    let queued = cortex_m::interrupt::free(|cs| {
+        let mut frames = BUS_FRAMES.borrow(cs).borrow_mut();
+        frames
+            .iter_mut()
+            .find(|slot| slot.is_none())
+            .map(|slot| *slot = Some(frame))
+            .is_some()
+    });
+    if !queued {
+        count(&SLCAN_COUNTERS.rx_overruns);
+    }
+    cortex_m::peripheral::NVIC::pend(Irq(0));
+}
+
+/// A transmission the bus holds back (failed attempts first, or bus-off recovery).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Deferred {
+    /// The frame goes out when its successful attempt ends, µs.
+    Send { frame: CanFrame, due_us: u64 },
+    /// The last failed attempt took the counter above 255, µs.
+    BusOff { due_us: u64 },
+}
+
+impl Deferred {
+    const fn due_us(&self) -> u64 {
+        match *self {
+            Self::Send { due_us, .. } | Self::BusOff { due_us } => due_us,
+        }
     }
 }
 
@@ -335,6 +431,16 @@ pub struct SlcanCan {
     replies: [u8; REPLY_QUEUE],
     reply_head: usize,
     reply_len: usize,
+    /// The transmit error counter.
+    errors: TransmitErrors,
+    /// Bus-off, not yet restarted.
+    bus_off: bool,
+    /// A bus-off `CanIsr` has not yet taken.
+    bus_off_event: bool,
+    /// After a restart from bus-off: no attempt before this time, µs (0: none).
+    recovery_end_us: u64,
+    /// A transmission the bus holds back.
+    deferred: Option<Deferred>,
 }
 
 impl SlcanCan {
@@ -358,6 +464,11 @@ impl SlcanCan {
             replies: [0; REPLY_QUEUE],
             reply_head: 0,
             reply_len: 0,
+            errors: TransmitErrors::new(),
+            bus_off: false,
+            bus_off_event: false,
+            recovery_end_us: 0,
+            deferred: None,
         }
     }
 
@@ -383,26 +494,35 @@ impl SlcanCan {
         }
     }
 
-    fn queue_frame(&mut self, frame: CanFrame) {
+    /// Queues a received frame for `CanIsr`; a full queue is an overrun (`false`).
+    fn queue(&mut self, frame: CanFrame) -> bool {
         let free = (0..RX_QUEUE)
             .map(|i| (self.rx_head + i) % RX_QUEUE)
             .find(|&i| self.rx.get(i).is_some_and(Option::is_none));
         match free.and_then(|i| self.rx.get_mut(i)) {
             Some(slot) => {
                 *slot = Some(frame);
-                count(&SLCAN_COUNTERS.rx_frames);
+                true
             }
-            None => count(&SLCAN_COUNTERS.rx_overruns),
+            None => {
+                count(&SLCAN_COUNTERS.rx_overruns);
+                false
+            }
         }
     }
 
+    #[inline(never)]
     fn receive(&mut self, byte: u8) {
         match self.decoder.push(byte) {
             None => {}
             Some(Ok(command)) => {
                 self.queue_reply(command.reply());
                 match command {
-                    slcan::Command::Frame(frame) => self.queue_frame(frame),
+                    slcan::Command::Frame(frame) => {
+                        if self.queue(frame) {
+                            count(&SLCAN_COUNTERS.rx_frames);
+                        }
+                    }
                     slcan::Command::Timestamps(on) => {
                         self.timestamps = on;
                         count(&SLCAN_COUNTERS.rx_commands);
@@ -435,6 +555,7 @@ impl SlcanCan {
                 self.source = TxSource::Idle;
                 if let Some(pdu) = self.pdu.take() {
                     self.confirmed = Some(pdu);
+                    let _ = self.errors.sent();
                 }
             }
             byte
@@ -452,11 +573,96 @@ impl SlcanCan {
 
     /// Moves characters: received ones into the decoder, queued lines into the UART while
     /// it takes them. A frame line sent completely frees the mailbox and leaves its
+    /// Puts `frame`'s line into the mailbox, time-stamped now, and starts sending it; a
+    /// line the UART took at once is confirmed from the TX interrupt all the same.
+    fn start_line(&mut self, frame: &CanFrame) {
+        self.load_line(frame);
+        self.pump();
+        if self.confirmed.is_some() {
+            cortex_m::peripheral::NVIC::pend(Irq(1));
+        }
+    }
+
+    /// Puts `frame`'s line into the mailbox, time-stamped now. Out of line, as the
+    /// decoder in [`Self::receive`]: `pump` runs in `CanIsr` on the main stack, and
+    /// each would add its locals to `pump`'s frame.
+    #[inline(never)]
+    fn load_line(&mut self, frame: &CanFrame) {
+        let at_ms = self.timestamps.then(now_ms);
+        self.len = slcan::encode_frame_at(frame, at_ms, &mut self.line);
+        self.sent = 0;
+    }
+
+    /// The bus's verdict on `frame`, written now: `None` if it goes out at once;
+    /// otherwise when it goes out after the bus-off recovery and the failed attempts
+    /// injected (each taking the bus up to the ACK slot, an error frame and the
+    /// intermission, plus the suspend time while error passive), or when the counter
+    /// passes 255 and the controller goes bus-off.
+    fn attempts(&mut self, frame: &CanFrame) -> Option<Deferred> {
+        // The common case costs two loads: no recovery under way, no error injected.
+        if self.recovery_end_us == 0 && INJECTED_TX_ERRORS.load(Ordering::Relaxed) == 0 {
+            return None;
+        }
+        let now_us = now_us();
+        if self.recovery_end_us <= now_us {
+            self.recovery_end_us = 0;
+        }
+        let mut delayed = self.recovery_end_us > now_us;
+        let mut t_ns = now_us.max(self.recovery_end_us) * 1000;
+        let bits = |n: u32| u64::from(n) * BIT_NS;
+        while take_injected_error() {
+            delayed = true;
+            count(&SLCAN_COUNTERS.tx_errors);
+            t_ns += bits(timing::failed_attempt_bits(frame, Stuffing::Exact));
+            match self.errors.failed(Failure::Error) {
+                ErrorState::BusOff => {
+                    return Some(Deferred::BusOff {
+                        due_us: t_ns.div_ceil(1000),
+                    })
+                }
+                ErrorState::Passive => {
+                    t_ns += bits(timing::INTERMISSION_BITS + timing::SUSPEND_TRANSMISSION_BITS);
+                }
+                ErrorState::Active => t_ns += bits(timing::INTERMISSION_BITS),
+            }
+        }
+        delayed.then(|| Deferred::Send {
+            frame: *frame,
+            due_us: (t_ns + bits(timing::frame_bits(frame, Stuffing::Exact))).div_ceil(1000),
+        })
+    }
+
     /// confirmation for `CanIsr`.
     fn pump(&mut self) {
         self.uart.clear_interrupts();
         while let Some(byte) = self.uart.rx_byte() {
             self.receive(byte);
+        }
+        while let Some(frame) = cortex_m::interrupt::free(|cs| {
+            let mut frames = BUS_FRAMES.borrow(cs).borrow_mut();
+            let first = frames.first_mut().and_then(Option::take);
+            frames.rotate_left(1);
+            first
+        }) {
+            if self.queue(frame) {
+                count(&SLCAN_COUNTERS.bus_frames);
+            }
+        }
+        if let Some(deferred) = self.deferred.filter(|d| now_us() >= d.due_us()) {
+            self.deferred = None;
+            DEFERRED_DUE_MS.store(u32::MAX, Ordering::Relaxed);
+            match deferred {
+                // The transmitter below sends it; its confirmation follows in this
+                // interrupt.
+                Deferred::Send { frame, .. } => self.load_line(&frame),
+                Deferred::BusOff { .. } => {
+                    self.pdu = None;
+                    self.mode = ControllerMode::Stopped;
+                    self.bus_off = true;
+                    self.bus_off_event = true;
+                    count(&SLCAN_COUNTERS.bus_offs);
+                }
+            }
         }
         while self.uart.tx_ready() {
             let Some(byte) = self.next_tx_byte() else {
@@ -473,6 +679,9 @@ impl SlcanCan {
         if let Some(pdu) = self.confirmed.take() {
             return Some(SlcanEvent::TxConfirmation(pdu));
         }
+        if core::mem::take(&mut self.bus_off_event) {
+            return Some(SlcanEvent::BusOff);
+        }
         let frame = self.rx.get_mut(self.rx_head).and_then(Option::take)?;
         self.rx_head = (self.rx_head + 1) % RX_QUEUE;
         Some(SlcanEvent::Received(frame))
@@ -483,7 +692,10 @@ impl CanDriver for SlcanCan {
     fn write(&mut self, _hth: Hth, pdu: u16, frame: &CanFrame) -> Result<(), CanBusy> {
         // Busy while a line is waiting or on its way (also one a stop let finish), or its
         // confirmation is not yet taken.
-        if self.mode != ControllerMode::Started || self.sent < self.len || self.confirmed.is_some()
+        if self.mode != ControllerMode::Started
+            || self.sent < self.len
+            || self.confirmed.is_some()
+            || self.deferred.is_some()
         {
             return Err(CanBusy);
         }
@@ -491,15 +703,14 @@ impl CanDriver for SlcanCan {
             DRIVER_WRITE_SPAN,
             crate::cortex_m::trace::now(now_ms()),
         );
-        let at_ms = self.timestamps.then(now_ms);
-        self.len = slcan::encode_frame_at(frame, at_ms, &mut self.line);
-        self.sent = 0;
         self.pdu = Some(pdu);
-        // Start the transmission; the TX interrupt carries it on. A line the UART took at
-        // once is confirmed from the TX interrupt all the same.
-        self.pump();
-        if self.confirmed.is_some() {
-            cortex_m::peripheral::NVIC::pend(Irq(1));
+        match self.attempts(frame) {
+            None => self.start_line(frame),
+            Some(deferred) => {
+                self.deferred = Some(deferred);
+                let due_ms = deferred.due_us().div_ceil(1000);
+                DEFERRED_DUE_MS.store(u32::try_from(due_ms).unwrap_or(u32::MAX), Ordering::Relaxed);
+            }
         }
         crate::cortex_m::trace::span_end(DRIVER_WRITE_SPAN, crate::cortex_m::trace::now(now_ms()));
         Ok(())
@@ -513,10 +724,19 @@ impl CanDriver for SlcanCan {
             // The pending transmission is cancelled: no confirmation. A line already on
             // the wire is finished, so the other end never sees half a line.
             self.pdu = None;
+            self.deferred = None;
+            DEFERRED_DUE_MS.store(u32::MAX, Ordering::Relaxed);
             if self.source != TxSource::Frame {
                 self.len = 0;
                 self.sent = 0;
             }
+        } else if self.mode != ControllerMode::Started && self.bus_off {
+            // Restart after bus-off: 128 x 11 recessive bits before the next attempt,
+            // with the counter at 0.
+            self.bus_off = false;
+            self.errors.recovered();
+            self.recovery_end_us =
+                now_us() + (u64::from(timing::BUS_OFF_RECOVERY_BITS) * BIT_NS).div_ceil(1000);
         }
         self.mode = mode;
         Ok(())
@@ -617,7 +837,11 @@ pub fn fatal(what: &str) -> ! {
 
 #[cortex_m_rt::exception]
 fn SysTick() {
-    MS.fetch_add(1, Ordering::Relaxed);
+    let ms = MS.fetch_add(1, Ordering::Relaxed).wrapping_add(1);
+    if ms >= DEFERRED_DUE_MS.load(Ordering::Relaxed) {
+        // The CAN controller's delayed transmission or bus-off is due.
+        cortex_m::peripheral::NVIC::pend(Irq(1));
+    }
     if let Some(app) = app() {
         app.tick();
     }
