@@ -6,9 +6,9 @@
 //!   cantools on random layouts, values and PDU lengths;
 //! - `cargo xtask callgrind`: instructions per call of the codec and scheduler probes;
 //! - `cargo xtask mutants`: kernel mutants the OSEK conformance suite must catch;
-//! - `cargo xtask qemu [--compare] [--live] [--events] [--serial tcp:PORT]`: the ECU's Cortex-M4 image on
-//!   QEMU's mps2-an386, its comparison with the host simulation, and python-can against it
-//!   live.
+//! - `cargo xtask qemu [--scenario FILE].. [--compare] [--live] [--events] [--serial tcp:PORT]`:
+//!   the ECU's Cortex-M4 image on QEMU's mps2-an386, the emulator-in-the-loop tests against
+//!   the host simulation (`tests/`), and python-can against it live.
 //!
 //! Every command the runner starts is printed first, prefixed with `$`. Child processes get
 //! no stdin, so the runner behaves the same in a terminal and under `CI=true`.
@@ -46,9 +46,11 @@ commands:
   mutants
         plant each kernel mutant in a copy of the workspace and require the OSEK
         conformance sequences named for it to fail
-  qemu [--compare] [--live] [--events] [--serial tcp:PORT]
-        build the ECU's Cortex-M4 image and run it on QEMU's mps2-an386 (Figure 7);
-        --compare: require the host simulation's CAN frames and LED transitions;
+  qemu [--scenario FILE].. [--compare] [--live] [--events] [--serial tcp:PORT]
+        build the ECU's Cortex-M4 image and run it on QEMU's mps2-an386 on each scenario
+        file (default scenarios/figure7.txt; the image reads it over semihosting);
+        --compare: the emulator-in-the-loop tests (tests/, cw-tests): figure7 and faults
+        give the host simulation's CAN frames and LED levels, bad scenarios are refused;
         --live: run it in real time on a TCP port and test it with python-can (slcan)
         --events: run the extended-task and stack-guard demo image (cw-qemu-events)
         --serial: serve the SLCAN UART on a TCP port (python-can: slcan, socket://)

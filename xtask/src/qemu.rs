@@ -17,23 +17,18 @@
 //! image plays: it reads each over semihosting (`-semihosting-config ...,arg=--scenario,
 //! arg=FILE`). Each run's files go to `target/qemu/<scenario name>/`.
 //!
-//! `--compare` runs the host simulation on each scenario and requires the same CAN frames
-//! the ECU sent (id and payload, in order; the tester's frames of the scenario are on the
-//! host's bus log but never on the image's UART) and the same transitions of each LED, in
-//! order, with times within one OS tick. The image runs one frame further: its last
-//! sample's frame leaves the UART at once, while the simulated bus is still transmitting
-//! it when the simulation ends.
+//! `--compare` runs the emulator-in-the-loop tests in `tests/` (package `cw-tests`) on
+//! the image it built: on `scenarios/figure7.txt` and `scenarios/faults.txt` the image
+//! and the host simulation must give the same CAN frames the ECU sent (id and payload, in
+//! order) and the same levels of each LED, in order, with times within one OS tick.
 
 use std::path::{Path, PathBuf};
-
-use cw_core::can::slcan;
 
 use crate::process::{root, target_dir, Cmd};
 use crate::Result;
 
 const TARGET: &str = "thumbv7em-none-eabihf";
 const FIGURE7: &str = "scenarios/figure7.txt";
-const FAULTS: &str = "scenarios/faults.txt";
 
 /// Options of `cargo xtask qemu`.
 #[derive(Default)]
@@ -49,7 +44,7 @@ impl Options {
     /// The options of the check command's `qemu` stage: the comparison, then the live test.
     pub fn ci() -> Self {
         Self {
-            scenarios: vec![root().join(FIGURE7), root().join(FAULTS)],
+            scenarios: Vec::new(),
             compare: true,
             live: true,
             events: true,
@@ -178,7 +173,7 @@ pub fn run(options: &Options) -> Result {
         }
     }
     let image = build()?;
-    if options.compare || !options.live {
+    if !options.scenarios.is_empty() || !(options.compare || options.live) {
         let default = [root().join(FIGURE7)];
         let scenarios = if options.scenarios.is_empty() {
             &default[..]
@@ -189,13 +184,17 @@ pub fn run(options: &Options) -> Result {
             let name = scenario
                 .file_stem()
                 .map_or_else(|| "scenario".into(), |s| s.to_string_lossy().to_string());
-            let dir = out.join(&name);
             println!("qemu: scenario {}", scenario.display());
-            run_image(&image, &dir, options.serial.as_deref(), Some(scenario))?;
-            if options.compare {
-                compare(&dir, scenario)?;
-            }
+            run_image(
+                &image,
+                &out.join(&name),
+                options.serial.as_deref(),
+                Some(scenario),
+            )?;
         }
+    }
+    if options.compare {
+        compare(&image)?;
     }
     if options.live {
         live(&image, &out)?;
@@ -333,287 +332,19 @@ fn counts_after(text: &str, prefix: &str, separators: &[&str]) -> Result<Vec<u32
     Ok(numbers)
 }
 
-/// A frame as `ID#HEX` and when it went out, ms.
-type Timed = (f64, String);
-
-/// The image's frames from its SLCAN lines (`tIIILDD..SSSS`: Lawicel time stamps, ms
-/// modulo 60 000, unwrapped here: the image sends at least one frame a minute).
-fn slcan_frames(text: &str) -> Result<Vec<Timed>> {
-    let mut frames = Vec::new();
-    let mut minutes = 0u32;
-    let mut last = 0u32;
-    for (i, line) in text.split('\r').filter(|l| !l.is_empty()).enumerate() {
-        let (frame, stamp) = slcan::parse_adapter_line(line.as_bytes())
-            .map_err(|e| format!("SLCAN line {}: `{line}`: {e:?}", i + 1))?;
-        let stamp =
-            stamp.ok_or_else(|| format!("SLCAN line {}: `{line}` has no time stamp", i + 1))?;
-        let stamp = u32::from(stamp);
-        if stamp < last {
-            minutes += 1;
-        }
-        last = stamp;
-        let id = frame.can_id();
-        let id = if id.is_extended() {
-            format!("{:08X}", id.raw())
-        } else {
-            format!("{:03X}", id.raw())
-        };
-        let data: String = frame.bytes().iter().map(|b| format!("{b:02X}")).collect();
-        let ms = minutes * slcan::TIMESTAMP_MODULUS + stamp;
-        frames.push((f64::from(ms), format!("{id}#{data}")));
-    }
-    Ok(frames)
-}
-
-/// Frames from a candump log (`(SECONDS) can0 ID#HEX`), times in ms from the log's epoch
-/// (the simulation's logs start at 1 700 000 000 s).
-fn candump_frames(text: &str) -> Result<Vec<Timed>> {
-    text.lines()
-        .enumerate()
-        .map(|(i, line)| {
-            let bad = || {
-                format!(
-                    "candump line {}: `{line}` is not `(SECONDS) IFACE ID#DATA`",
-                    i + 1
-                )
-            };
-            let mut fields = line.split_whitespace();
-            let stamp = fields
-                .next()
-                .and_then(|t| t.strip_prefix('(')?.strip_suffix(')'))
-                .ok_or_else(bad)?;
-            // Whole seconds and microseconds as integers: no rounding on the way.
-            let (whole, micros) = stamp.split_once('.').ok_or_else(bad)?;
-            let whole: i64 = whole.parse().map_err(|_| bad())?;
-            let micros: i64 = format!("{micros:0<6}")
-                .get(..6)
-                .and_then(|m| m.parse().ok())
-                .ok_or_else(bad)?;
-            let us = (whole - 1_700_000_000) * 1_000_000 + micros;
-            let frame = fields.nth(1).ok_or_else(bad)?;
-            Ok((us as f64 / 1000.0, frame.to_string()))
-        })
-        .collect()
-}
-
-/// One LED's levels in order, each with the time it was taken, ms.
-type Levels = Vec<(f64, bool)>;
-
-/// The levels each LED (red, yellow) took, from the image's `led MS RED YELLOW` lines.
-fn image_transitions(report: &str) -> Result<[Levels; 2]> {
-    let mut seq: [Levels; 2] = [vec![(0.0, false)], vec![(0.0, false)]];
-    for line in report.lines() {
-        let Some(rest) = line.strip_prefix("cw-qemu: led ") else {
-            continue;
-        };
-        let fields: Vec<u32> = rest
-            .split_whitespace()
-            .map(str::parse)
-            .collect::<std::result::Result<_, _>>()
-            .map_err(|_| format!("image report: `{line}` is not `led MS RED YELLOW`"))?;
-        let [at, red, yellow] = fields[..] else {
-            return Err(format!("image report: `{line}` is not `led MS RED YELLOW`"));
-        };
-        push_level(&mut seq[0], f64::from(at), red == 1);
-        push_level(&mut seq[1], f64::from(at), yellow == 1);
-    }
-    if report.contains("cw-qemu: led changes not logged") {
-        return Err("image report: the LED log overflowed".into());
-    }
-    Ok(seq)
-}
-
-/// The levels each LED took, from the simulation's trace CSV (every 10 ms, after that
-/// millisecond's tasks: the LED task's 10 ms period).
-fn csv_transitions(text: &str) -> Result<[Levels; 2]> {
-    // The LEDs are dark from Port_Init on.
-    let mut seq: [Levels; 2] = [vec![(0.0, false)], vec![(0.0, false)]];
-    for (i, line) in text.lines().enumerate().skip(1) {
-        let cols: Vec<&str> = line.split(',').collect();
-        let bad = || {
-            format!(
-                "trace line {}: `{line}` is not `time_ms,..,red,yellow,..`",
-                i + 1
-            )
-        };
-        let (Some(at), Some(red), Some(yellow)) = (cols.first(), cols.get(4), cols.get(5)) else {
-            return Err(bad());
-        };
-        let at: f64 = at.parse().map_err(|_| bad())?;
-        push_level(&mut seq[0], at, *red == "1");
-        push_level(&mut seq[1], at, *yellow == "1");
-    }
-    Ok(seq)
-}
-
-fn push_level(seq: &mut Levels, at: f64, level: bool) {
-    if seq.last().map(|l| l.1) != Some(level) {
-        seq.push((at, level));
-    }
-}
-
-/// The largest time difference between paired events, ms; an error naming the first pair
-/// that differs in content.
-fn max_skew<T: PartialEq + std::fmt::Debug>(
-    what: &str,
-    image: &[(f64, T)],
-    host: &[(f64, T)],
-) -> Result<f64> {
-    let mut skew = 0f64;
-    for (i, (a, b)) in image.iter().zip(host).enumerate() {
-        if a.1 != b.1 {
-            return Err(format!(
-                "qemu: {what} {} differs: image {:?} at {} ms, simulation {:?} at {} ms",
-                i + 1,
-                a.1,
-                a.0,
-                b.1,
-                b.0
-            ));
-        }
-        skew = skew.max((a.0 - b.0).abs());
-    }
-    Ok(skew)
-}
-
-fn read(path: &Path) -> Result<String> {
-    std::fs::read_to_string(path).map_err(|e| format!("reading {}: {e}", path.display()))
-}
-
-/// The image's frames and LED transitions against the host simulation's, on `scenario`.
-fn compare(out: &Path, scenario: &Path) -> Result {
-    let can_log = out.join("host.log");
-    let trace = out.join("host.csv");
+/// The emulator-in-the-loop tests (`tests/`, package `cw-tests`) on `image`: the image
+/// on Figure 7 and on the faults scenario against the host simulation, and its refusals
+/// of scenarios it cannot play.
+fn compare(image: &Path) -> Result {
     Cmd::new("cargo")
-        .args(["run", "--release", "--quiet", "--", "--scenario"])
-        .arg(scenario)
-        .arg("--can-log")
-        .arg(&can_log)
-        .arg("--trace")
-        .arg(&trace)
-        .run()?;
-    let image = slcan_frames(&read(&out.join("slcan.txt"))?)?;
-    let text = read(scenario)?;
-    let tester = cw_core::scenario::Scenario::<64>::parse(&text)
-        .map_err(|e| format!("{}: {e}", scenario.display()))?
-        .frames;
-    let host = ecu_frames(candump_frames(&read(&can_log)?)?, &tester);
-    if host.is_empty() || image.len() < host.len() || image.len() > host.len() + 1 {
-        return Err(format!(
-            "qemu: {} frames from the image, {} from the simulation",
-            image.len(),
-            host.len()
-        ));
-    }
-    // The image stamps a frame at Can_Write (whole ms); the simulation logs it when its
-    // last bit has crossed the simulated 500 kbit/s bus, a fraction of a ms later.
-    let frame_skew = max_skew("frame", &image, &host)?;
-    let report = read(&out.join("image.txt"))?;
-    let image_leds = image_transitions(&report)?;
-    let host_leds = csv_transitions(&read(&trace)?)?;
-    let mut led_skew = 0f64;
-    for (name, (a, b)) in ["red", "yellow"]
-        .iter()
-        .zip(image_leds.iter().zip(&host_leds))
-    {
-        if a.len() != b.len() {
-            return Err(format!(
-                "qemu: the {name} LED took {} levels on the image, {} in the simulation",
-                a.len(),
-                b.len()
-            ));
-        }
-        led_skew = led_skew.max(max_skew(&format!("{name} LED level"), a, b)?);
-    }
-    if frame_skew >= OS_TICK_MS || led_skew >= OS_TICK_MS {
-        return Err(format!(
-            "qemu: times differ by more than one OS tick: frames by up to {frame_skew:.3} ms, \
-             LED changes by up to {led_skew:.3} ms"
-        ));
-    }
-    let schedule = report
-        .lines()
-        .find_map(|l| l.strip_prefix("cw-qemu: schedule "))
-        .ok_or("qemu: the image reported no schedule check")?;
-    if !schedule.contains(" 0 not by a higher priority; 0 periodic tasks") {
-        return Err(format!(
-            "qemu: the image's schedule check failed: {schedule}"
-        ));
-    }
-    let scenario = scenario.display();
-    println!(
-        "qemu: same ECU on {scenario}: {} CAN frames compared (id and payload, in order; the \
-         image sent {} more), times within {frame_skew:.3} ms; {} red and {} yellow LED levels \
-         compared in order, times within {led_skew:.3} ms; schedule: {schedule}",
-        host.len(),
-        image.len() - host.len(),
-        host_leds[0].len(),
-        host_leds[1].len()
-    );
-    Ok(())
-}
-
-/// The frames on the host's bus without the scenario's tester frames: each tester frame
-/// takes the first frame equal to it at or after its time.
-fn ecu_frames(mut frames: Vec<Timed>, tester: &[(u32, cw_core::can::CanFrame)]) -> Vec<Timed> {
-    for (at, frame) in tester {
-        let text = {
-            let mut t = String::new();
-            let _ = cw_core::can::text::write_frame(frame, &mut t);
-            t
-        };
-        if let Some(i) = frames
-            .iter()
-            .position(|(t, f)| *t >= f64::from(*at) && *f == text)
-        {
-            frames.remove(i);
-        }
-    }
-    frames
-}
-
-/// One OS tick, ms: the tolerance on times compared.
-const OS_TICK_MS: f64 = 1.0;
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn parsers_read_their_formats_and_refuse_garbage() {
-        assert_eq!(
-            slcan_frames("t1008F4010000030000000028\rt2001AA0030\rt2001AA0001\r").unwrap(),
-            [
-                (40.0, "100#F401000003000000".to_string()),
-                (48.0, "200#AA".to_string()),
-                (60_001.0, "200#AA".to_string())
-            ]
-        );
-        assert!(slcan_frames("x123\r").is_err());
-        assert!(
-            slcan_frames("t2001AA\r").is_err(),
-            "a line without a time stamp"
-        );
-        assert_eq!(
-            candump_frames("(1700000000.040250) can0 100#AA\n").unwrap(),
-            [(40.25, "100#AA".to_string())]
-        );
-        assert!(candump_frames("garbage\n").is_err());
-        let leds =
-            image_transitions("cw-qemu: led 10 1 0\ncw-qemu: led 10 1 1\ncw-qemu: led 70 0 1\n")
-                .unwrap();
-        assert_eq!(leds[0], [(0.0, false), (10.0, true), (70.0, false)]);
-        assert_eq!(leds[1], [(0.0, false), (10.0, true)]);
-        assert!(image_transitions("cw-qemu: led 10 x\n").is_err());
-        let csv = csv_transitions("h\n10,1,1,Red,1,0,d\n20,1,1,Red,1,1,d\n").unwrap();
-        assert_eq!(
-            csv,
-            [
-                vec![(0.0, false), (10.0, true)],
-                vec![(0.0, false), (20.0, true)]
-            ]
-        );
-        assert!(max_skew("frame", &[(1.0, 1)], &[(1.5, 2)]).is_err());
-        assert_eq!(max_skew("frame", &[(1.0, 1)], &[(1.5, 1)]).unwrap(), 0.5);
-    }
+        .args([
+            "test",
+            "-p",
+            "cw-tests",
+            "--",
+            "--nocapture",
+            "--test-threads=1",
+        ])
+        .env("CW_QEMU_IMAGE", image)
+        .run()
 }

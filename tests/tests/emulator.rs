@@ -1,0 +1,105 @@
+//! Emulator in the loop: the Cortex-M4 image on QEMU is the same ECU as the host
+//! simulation (same frames, same LED levels, times within one OS tick, the schedule as
+//! configured), and it refuses a scenario it cannot play, naming why.
+//!
+//! Run with `cargo xtask qemu --compare`: it builds the image and sets `CW_QEMU_IMAGE`.
+
+use std::path::{Path, PathBuf};
+
+use cw_tests::{compare, image, run_image, simulate};
+
+fn root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
+}
+
+fn out(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join("qemu")
+        .join(name)
+}
+
+/// The image on `scenario` against the simulation; prints the counts compared.
+fn same_ecu(scenario: &str) {
+    let image = image().unwrap_or_else(|e| panic!("{e}"));
+    let path = root().join("scenarios").join(scenario);
+    let run = run_image(&image, Some(&path), &out(scenario)).unwrap_or_else(|e| panic!("{e}"));
+    assert!(run.success, "the image failed:\n{}", run.report);
+    let schedule = run
+        .schedule()
+        .unwrap_or_else(|| panic!("no schedule line in:\n{}", run.report));
+    assert!(
+        schedule.contains(" 0 not by a higher priority; 0 periodic tasks"),
+        "the image's schedule check failed: {schedule}"
+    );
+    let image_trace = run.trace().unwrap_or_else(|e| panic!("{e}"));
+    let host = simulate(&path).unwrap_or_else(|e| panic!("{e}"));
+    let a = compare(&image_trace, &host).unwrap_or_else(|e| panic!("{scenario}: {e}"));
+    println!(
+        "same ECU on scenarios/{scenario}: {} CAN frames compared (id and payload, in order; \
+         the image sent {} more), times within {:.3} ms; {} red and {} yellow LED levels \
+         compared in order, times within {:.3} ms; schedule: {schedule}",
+        a.frames, a.image_extra, a.frame_skew_ms, a.red, a.yellow, a.led_skew_ms
+    );
+}
+
+#[test]
+fn figure7_is_the_same_ecu_on_the_image() {
+    same_ecu("figure7.txt");
+}
+
+#[test]
+fn faults_is_the_same_ecu_on_the_image() {
+    same_ecu("faults.txt");
+}
+
+/// A scenario the image cannot read or play: the run fails, the LEDs stay dark, and the
+/// report names the file, the line and the fault.
+fn refused(name: &str, text: Option<&str>, reason: &str) {
+    let image = image().unwrap_or_else(|e| panic!("{e}"));
+    let dir = out(name.trim_end_matches(".txt"));
+    let path = dir.join(name);
+    if let Some(text) = text {
+        std::fs::create_dir_all(&dir).unwrap_or_else(|e| panic!("{e}"));
+        std::fs::write(&path, text).unwrap_or_else(|e| panic!("{e}"));
+    }
+    let run = run_image(&image, Some(&path), &dir).unwrap_or_else(|e| panic!("{e}"));
+    assert!(!run.success, "the image accepted {name}:\n{}", run.report);
+    let want = format!("FATAL: scenario {}: {reason}", path.display());
+    assert!(
+        run.report.lines().any(|l| l == want),
+        "expected `{want}` in:\n{}",
+        run.report
+    );
+    assert!(run.slcan.is_empty(), "no frame before the scenario is read");
+}
+
+#[test]
+fn a_malformed_scenario_is_refused_with_its_line() {
+    refused(
+        "teleport.txt",
+        Some("hold 500 1000\nteleport 3\n"),
+        "line 2: unknown command `teleport`",
+    );
+}
+
+#[test]
+fn a_scenario_the_image_cannot_play_is_refused() {
+    refused(
+        "shutdown.txt",
+        Some("hold 500 1000\nshutdown 500\n"),
+        "the image does not play `shutdown` (the host simulation does)",
+    );
+    refused(
+        "noise.txt",
+        Some("hold 500 1000\nnoise uniform 20\n"),
+        "the image does not play `noise` (the host simulation does)",
+    );
+}
+
+#[test]
+fn a_missing_or_oversized_scenario_file_is_refused() {
+    refused("missing.txt", None, "the host cannot open it");
+    let long = "# padding\n".repeat(200) + "hold 500 1000\n";
+    let reason = format!("{} bytes is more than the image reads", long.len());
+    refused("long.txt", Some(&long), &reason);
+}
