@@ -240,6 +240,7 @@ fn strip_comment(raw: &str) -> &str {
 ///
 /// # Errors
 /// What is wrong with the line.
+#[inline(never)]
 pub fn parse_line(raw: &str) -> Result<Option<Command>, LineError<'_>> {
     let mut words = strip_comment(raw).split_whitespace();
     let Some(command) = words.next() else {
@@ -425,6 +426,7 @@ impl<const N: usize> Scenario<N> {
     ///
     /// # Errors
     /// [`LineError::Full`] when its kind is full, [`LineError::ShutdownTwice`].
+    #[inline(never)]
     pub fn add(&mut self, command: Command) -> Result<(), LineError<'static>> {
         let mut movement = |from_mm, to_mm, duration_ms| {
             let start_ms = self.segments.last().map_or(0, Segment::end_ms);

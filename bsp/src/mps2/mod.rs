@@ -17,7 +17,7 @@ pub mod semihosting;
 
 use core::cell::RefCell;
 use core::convert::Infallible;
-use core::sync::atomic::{AtomicU32, Ordering};
+use core::sync::atomic::{AtomicBool, AtomicU32, Ordering};
 
 use cortex_m::interrupt::Mutex;
 use cw_core::can::confinement::{ErrorState, Failure, TransmitErrors};
@@ -333,6 +333,10 @@ static INJECTED_TX_ERRORS: AtomicU32 = AtomicU32::new(0);
 static BUS_FRAMES: Mutex<RefCell<[Option<CanFrame>; RX_QUEUE]>> =
     Mutex::new(RefCell::new([None; RX_QUEUE]));
 
+/// Whether [`BUS_FRAMES`] may hold a frame: the controller's interrupt work reads one
+/// flag, not the queue under a lock, when no tester is on the bus.
+static BUS_FRAMES_WAITING: AtomicBool = AtomicBool::new(false);
+
 /// The ms at which the controller's delayed transmission or bus-off is due (`u32::MAX`:
 /// none): SysTick raises the controller's interrupt then.
 static DEFERRED_DUE_MS: AtomicU32 = AtomicU32::new(u32::MAX);
@@ -364,7 +368,9 @@ pub fn put_frame_on_bus(frame: CanFrame) {
             .map(|slot| *slot = Some(frame))
             .is_some()
     });
-    if !queued {
+    if queued {
+        BUS_FRAMES_WAITING.store(true, Ordering::Release);
+    } else {
         count(&SLCAN_COUNTERS.rx_overruns);
     }
     cortex_m::peripheral::NVIC::pend(Irq(0));
@@ -511,6 +517,8 @@ impl SlcanCan {
         }
     }
 
+    /// Out of line: `pump` runs in `CanIsr` on the main stack, and the decoder's locals
+    /// would add to its frame.
     #[inline(never)]
     fn receive(&mut self, byte: u8) {
         match self.decoder.push(byte) {
@@ -583,10 +591,7 @@ impl SlcanCan {
         }
     }
 
-    /// Puts `frame`'s line into the mailbox, time-stamped now. Out of line, as the
-    /// decoder in [`Self::receive`]: `pump` runs in `CanIsr` on the main stack, and
-    /// each would add its locals to `pump`'s frame.
-    #[inline(never)]
+    /// Puts `frame`'s line into the mailbox, time-stamped now.
     fn load_line(&mut self, frame: &CanFrame) {
         let at_ms = self.timestamps.then(now_ms);
         self.len = slcan::encode_frame_at(frame, at_ms, &mut self.line);
@@ -638,12 +643,18 @@ impl SlcanCan {
         while let Some(byte) = self.uart.rx_byte() {
             self.receive(byte);
         }
-        while let Some(frame) = cortex_m::interrupt::free(|cs| {
-            let mut frames = BUS_FRAMES.borrow(cs).borrow_mut();
-            let first = frames.first_mut().and_then(Option::take);
-            frames.rotate_left(1);
-            first
-        }) {
+        while BUS_FRAMES_WAITING.load(Ordering::Acquire) {
+            let Some(frame) = cortex_m::interrupt::free(|cs| {
+                let mut frames = BUS_FRAMES.borrow(cs).borrow_mut();
+                let first = frames.first_mut().and_then(Option::take);
+                frames.rotate_left(1);
+                if frames.first().is_none_or(Option::is_none) {
+                    BUS_FRAMES_WAITING.store(false, Ordering::Release);
+                }
+                first
+            }) else {
+                break;
+            };
             if self.queue(frame) {
                 count(&SLCAN_COUNTERS.bus_frames);
             }
