@@ -58,9 +58,9 @@ const BUDGET_S: &[(&str, u32)] = &[
     ("miri", 580),
     ("model", 60),
     ("mutants", 120),
-    ("qemu", 90),
+    ("qemu", 65),
     ("differential", 15),
-    ("interop", 20),
+    ("interop", 45),
     ("fuzz", 240),
     ("bench", 130),
 ];
