@@ -48,4 +48,6 @@ pub mod rte;
 pub mod scenario;
 pub mod sonar;
 pub mod tables;
+#[cfg(any(test, kani))]
+mod testing;
 pub mod warning;

@@ -3,6 +3,7 @@
 extern crate std;
 
 use super::*;
+use crate::testing::FixedText;
 use std::string::{String, ToString};
 
 type Small = Scenario<8>;
@@ -197,30 +198,12 @@ fn any_short_line_is_read_or_refused() {
         .for_each(|bytes| {
             if let Ok(line) = core::str::from_utf8(&bytes) {
                 if let Ok(Some(command)) = parse_line(line) {
-                    let mut again = Line {
-                        buf: [0; 64],
-                        len: 0,
-                    };
+                    // A written command is at most 57 characters.
+                    let mut again = FixedText::<64>::new();
                     assert!(fmt::Write::write_fmt(&mut again, format_args!("{command}")).is_ok());
-                    let text = core::str::from_utf8(&again.buf[..again.len]);
+                    let text = again.as_str();
                     assert_eq!(text.map(parse_line), Ok(Ok(Some(command))));
                 }
             }
         });
-}
-
-/// A line buffer without the heap (a written command is at most 57 characters).
-struct Line {
-    buf: [u8; 64],
-    len: usize,
-}
-
-impl fmt::Write for Line {
-    fn write_str(&mut self, s: &str) -> fmt::Result {
-        let end = self.len + s.len();
-        let slot = self.buf.get_mut(self.len..end).ok_or(fmt::Error)?;
-        slot.copy_from_slice(s.as_bytes());
-        self.len = end;
-        Ok(())
-    }
 }

@@ -2,6 +2,7 @@
 extern crate std;
 
 use super::*;
+use crate::testing::FixedText;
 use std::string::{String, ToString};
 
 fn written(frame: &CanFrame) -> String {
@@ -52,22 +53,6 @@ fn every_refusal_names_the_part_that_is_wrong() {
     }
 }
 
-/// A writer into a fixed buffer (the longest frame text is 8 + 1 + 16 characters).
-struct Fixed {
-    buf: [u8; 25],
-    len: usize,
-}
-
-impl fmt::Write for Fixed {
-    fn write_str(&mut self, s: &str) -> fmt::Result {
-        let end = self.len + s.len();
-        let slot = self.buf.get_mut(self.len..end).ok_or(fmt::Error)?;
-        slot.copy_from_slice(s.as_bytes());
-        self.len = end;
-        Ok(())
-    }
-}
-
 /// Any frame, written and read back, is itself.
 #[test]
 #[cfg_attr(kani, kani::proof, kani::unwind(26))]
@@ -86,12 +71,10 @@ fn any_frame_round_trips_through_its_text() {
             else {
                 panic!("masked id out of range");
             };
-            let mut out = Fixed {
-                buf: [0; 25],
-                len: 0,
-            };
+            // The longest frame text is 8 + 1 + 16 characters.
+            let mut out = FixedText::<25>::new();
             assert!(write_frame(&frame, &mut out).is_ok());
-            let text = core::str::from_utf8(&out.buf[..out.len]);
+            let text = out.as_str();
             assert_eq!(text.map(parse_frame), Ok(Ok(frame)));
         });
 }
