@@ -17,6 +17,8 @@
 
 use crate::warning::Measurement;
 
+pub mod uart;
+
 /// What the board observed on the echo line for one trigger.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum Echo {
@@ -159,13 +161,19 @@ impl SonarConfig {
                 if width_us >= self.echo_timeout_us {
                     return Measurement::NothingInRange;
                 }
-                let distance_mm = self.echo_to_distance_mm(width_us);
-                if distance_mm > self.max_range_mm {
-                    Measurement::NothingInRange
-                } else {
-                    Measurement::Distance { distance_mm }
-                }
+                self.classify_distance(self.echo_to_distance_mm(width_us))
             }
+        }
+    }
+
+    /// A distance the sensor measured, as a measurement: beyond the rated range it is
+    /// nothing in range.
+    #[inline]
+    pub const fn classify_distance(&self, distance_mm: u32) -> Measurement {
+        if distance_mm > self.max_range_mm {
+            Measurement::NothingInRange
+        } else {
+            Measurement::Distance { distance_mm }
         }
     }
 

@@ -11,16 +11,19 @@
 //! | AUTOSAR module | here |
 //! |---|---|
 //! | Port (`Port_Init`) | [`PortDriver::port_init`]: every pin to its direction and initial level |
-//! | Dio (`Dio_WriteChannel`, `Dio_ReadChannel`) | [`Leds`], [`SonarIo::trigger`] (`OutputPin`), [`SonarIo::echo`] (`InputPin`) |
-//! | Gpt (delays, the echo's duration) | [`SonarIo::delay`] (`DelayNs`), [`SonarIo::capture`] ([`PulseCapture`]) |
+//! | Dio (`Dio_WriteChannel`, `Dio_ReadChannel`) | [`Leds`], [`EchoSensor::trigger`] (`OutputPin`), [`EchoSensor::echo`] (`InputPin`) |
+//! | Gpt (delays, the echo's duration) | [`EchoSensor::delay`] (`DelayNs`), [`EchoSensor::capture`] ([`PulseCapture`]) |
 //! | Can | [`BoardParts::can`] ([`CanDriver`] and [`CanEvents`]) |
+//! | a UART receiver (no AUTOSAR driver names it) | [`SerialSensor::rx`] ([`SerialRx`]) |
 //!
 //! The OS port (time base, interrupt controller, task switching) is the board's too:
 //! `cw_bsp::port::Port`.
 
 use cw_core::can::CanDriver;
-use embedded_hal::delay::DelayNs;
-use embedded_hal::digital::{InputPin, OutputPin};
+use cw_core::sonar::uart::Ranger;
+use cw_core::sonar::SonarConfig;
+use cw_core::warning::Measurement;
+use embedded_hal::digital::OutputPin;
 
 /// A CAN controller event, taken by the ECU's CAN interrupt (`CanIsr`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -55,20 +58,29 @@ pub trait PortDriver {
     fn port_init(&mut self);
 }
 
+/// A UART's receiver: the bytes that arrived since the last call, oldest first (the
+/// board's interrupt takes them off the UART into a buffer).
+pub trait SerialRx {
+    /// The oldest byte not yet read, if any.
+    fn read_byte(&mut self) -> Option<u8>;
+}
+
+/// The distance sensor as IoHwAb samples it: once per `OsSonarTask` job.
+pub trait DistanceSensor {
+    /// One sample with the ECU's sensor parameters: a distance, nothing in range, or
+    /// invalid. Never an error: a sensor that cannot be read is an invalid sample, which
+    /// UltraSonic holds over or reports.
+    fn sample(&mut self, config: &SonarConfig) -> Measurement;
+}
+
 /// A board the ECU runs on: the types of its MCAL drivers.
 pub trait Board {
     /// The CAN controller driver.
     type Can: CanDriver + CanEvents;
     /// A warning LED's Dio channel (high = lit).
     type Led: OutputPin;
-    /// The sensor's trigger line (a high pulse of at least 10 µs starts a measurement).
-    type Trigger: OutputPin;
-    /// The sensor's echo line (high while the echo is timed; idle low).
-    type Echo: InputPin;
-    /// The Gpt busy-wait delay.
-    type Delay: DelayNs;
-    /// The Gpt input capture on the echo line.
-    type Capture: PulseCapture;
+    /// The ultrasonic sensor.
+    type Sensor: DistanceSensor;
     /// The Port driver.
     type Port: PortDriver;
 }
@@ -81,16 +93,37 @@ pub struct Leds<B: Board> {
     pub yellow: B::Led,
 }
 
-/// The ultrasonic sensor's lines and timer.
-pub struct SonarIo<B: Board> {
-    /// The trigger line.
-    pub trigger: B::Trigger,
-    /// The echo line.
-    pub echo: B::Echo,
-    /// The Gpt delay (the trigger pulse's length).
-    pub delay: B::Delay,
+/// An HC-SR04-class sensor (the paper's): a trigger line, an echo line, a Gpt delay and
+/// the Gpt capture of the echo's width (sampled by [`crate::iohwab::measure_echo`]).
+pub struct EchoSensor<T, E, D, C> {
+    /// The trigger line (a high pulse of at least 10 µs starts a measurement).
+    pub trigger: T,
+    /// The echo line (high while the echo is timed; idle low).
+    pub echo: E,
+    /// The Gpt busy-wait delay (the trigger pulse's length).
+    pub delay: D,
     /// The Gpt capture of the echo's width.
-    pub capture: B::Capture,
+    pub capture: C,
+}
+
+/// A UART ranging module (A02YYUW, JSN-SR04T in UART mode: `cw_core::sonar::uart`) on a
+/// UART receiver: each sample takes the bytes received since the last one.
+pub struct SerialSensor<R> {
+    /// The UART receiver the module sends to.
+    pub rx: R,
+    /// The frame decoder and the sample rules.
+    pub ranger: Ranger,
+}
+
+impl<R: SerialRx> SerialSensor<R> {
+    /// The module on `rx`, silent after `silent_after_samples` samples without a good
+    /// frame.
+    pub const fn new(rx: R, silent_after_samples: u8) -> Self {
+        Self {
+            rx,
+            ranger: Ranger::new(silent_after_samples),
+        }
+    }
 }
 
 /// Everything the ECU takes from a board.
@@ -102,5 +135,5 @@ pub struct BoardParts<B: Board> {
     /// The LEDs.
     pub leds: Leds<B>,
     /// The sensor.
-    pub sonar: SonarIo<B>,
+    pub sonar: B::Sensor,
 }

@@ -19,6 +19,7 @@
 //! |---|---|---|---|
 //! | `SysTickIsr` | 2 | 2 | advances the 1 ms system counter; due alarms activate tasks |
 //! | `CanIsr` | 2 | 1 | takes the CAN controller's events into CanIf (receptions, confirmations, bus-off) |
+//! | `SensorRxIsr` | 1 | 3 | takes the UART ranging module's bytes off its UART into the driver's buffer (boards with that sensor; no OS service, no shared state but the buffer's atomics) |
 //!
 //! | resource | guards | taken by | ceiling |
 //! |---|---|---|---|
@@ -79,9 +80,25 @@ pub const SYSTEM_COUNTER: CounterId = CounterId(0);
 pub const SYSTICK_ISR: IsrId = IsrId(0);
 /// The CAN controller's interrupt.
 pub const CAN_ISR: IsrId = IsrId(1);
+/// The UART ranging module's receive interrupt (category 1: above every category-2 ISR,
+/// so that `SuspendOSInterrupts` leaves it running and no byte at 9600 baud waits for an
+/// OS job).
+pub const SENSOR_RX_ISR: IsrId = IsrId(2);
 
 /// Task periods in ms (0: not periodic), indexed by task.
 pub const PERIOD_MS: [u32; 6] = [0, 10, 10, 20, 0, 40];
+
+/// The longest time a UART ranging module takes between two frames, ms (A02YYUW in its
+/// "processed" output mode: 100 to 300 ms).
+pub const SENSOR_FRAME_PERIOD_MAX_MS: u32 = 300;
+
+/// Samples of `OsSonarTask` without a good frame after which a UART ranging module is
+/// silent (its samples invalid): the first sample past the module's longest period.
+pub const SENSOR_SILENT_AFTER_SAMPLES: u8 = {
+    let samples = SENSOR_FRAME_PERIOD_MAX_MS / PERIOD_MS[SONAR_TASK.0 as usize] + 1;
+    assert!(samples <= u8::MAX as u32);
+    samples as u8
+};
 
 const fn cyclic(name: &'static str, task: TaskId, period_ms: u32) -> AlarmConfig {
     AlarmConfig::new(name, SYSTEM_COUNTER, AlarmAction::ActivateTask(task))
@@ -89,8 +106,8 @@ const fn cyclic(name: &'static str, task: TaskId, period_ms: u32) -> AlarmConfig
 }
 
 /// The OS: six tasks, three resources, four cyclic alarms on a 1 ms counter, two
-/// category-2 ISRs.
-pub static OS: OsConfig<6, 3, 1, 4, 2> = match OsConfig::new(
+/// category-2 ISRs and one of category 1.
+pub static OS: OsConfig<6, 3, 1, 4, 3> = match OsConfig::new(
     OsDescription::new(
         [
             TaskConfig::basic("OsStartupTask", 7)
@@ -117,6 +134,7 @@ pub static OS: OsConfig<6, 3, 1, 4, 2> = match OsConfig::new(
         [
             IsrConfig::cat2("SysTickIsr", 2),
             IsrConfig::cat2("CanIsr", 1).uses(USES_COM),
+            IsrConfig::cat1("SensorRxIsr", 3),
         ],
     )
     .class(ConformanceClass::Bcc1)
@@ -134,11 +152,11 @@ pub static OS: OsConfig<6, 3, 1, 4, 2> = match OsConfig::new(
 
 cw_core::static_tables!(
     /// [`OS`] as a build-time constant: the kernel's table lookups fold away.
-    pub OsTables: OsConfig<6, 3, 1, 4, 2> = OS
+    pub OsTables: OsConfig<6, 3, 1, 4, 3> = OS
 );
 
 /// The OS kernel type for [`OS`], with the ECU's hooks.
-pub type Kernel = cw_core::os::Os<6, 3, 1, 4, 2, 6, OsTables, crate::ecu::EcuHooks>;
+pub type Kernel = cw_core::os::Os<6, 3, 1, 4, 3, 6, OsTables, crate::ecu::EcuHooks>;
 
 /// The kernel for [`OS`], before `StartOS`.
 ///

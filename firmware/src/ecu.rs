@@ -33,7 +33,7 @@ use cw_core::rte::RteError;
 use cw_core::sonar::SonarConfig;
 use cw_core::warning::{Measurement, WarningLevel};
 
-use crate::board::{Board, BoardParts, CanEvents, CanInterrupt, Leds, PortDriver, SonarIo};
+use crate::board::{Board, BoardParts, CanEvents, CanInterrupt, DistanceSensor, Leds, PortDriver};
 use crate::config::{self, Kernel};
 use crate::iohwab;
 use crate::rte::Rte;
@@ -275,7 +275,7 @@ impl<B: Board> LedOutputs<B> {
 
 /// `OsSonarTask`'s own state.
 struct SonarPart<B: Board> {
-    io: SonarIo<B>,
+    io: B::Sensor,
     swc: UltraSonic,
     last: Measurement,
 }
@@ -353,6 +353,12 @@ impl<P: Port<Kernel = Kernel>, B: Board> Ecu<P, B> {
     /// The EcuM state.
     pub fn ecum(&mut self) -> &EcuM {
         &self.com.get_mut().ecum
+    }
+
+    /// Runs `f` with the sensor's driver, unless `OsSonarTask` has a job under way (then
+    /// `None`): for a board's report of what its sensor counted.
+    pub fn with_sensor<R>(&self, f: impl FnOnce(&mut B::Sensor) -> R) -> Option<R> {
+        self.sonar.with(|part| f(&mut part.io))
     }
 
     /// The newest measurement UltraSonic published.
@@ -644,8 +650,8 @@ impl<P: Port<Kernel = Kernel>, B: Board> Ecu<P, B> {
     /// preempts it at once.
     fn sonar_task(&self) {
         let Some(measurement) = self.sonar.with(|part| {
-            let echo = iohwab::measure_echo(&mut part.io, part.swc.sensor().echo_timeout_us());
-            part.last = part.swc.run(echo);
+            let sample = part.io.sample(part.swc.sensor());
+            part.last = part.swc.run(sample);
             part.last
         }) else {
             return;

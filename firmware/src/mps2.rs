@@ -1,13 +1,18 @@
 //! The ECU on QEMU's mps2-an386 (Cortex-M4): the board's drivers named for [`Board`], and
 //! the ECU's entry points for the Cortex-M port (`cw_bsp::cortex_m::App`).
 //!
-//! The sensor is deterministic: QEMU cannot time an HC-SR04 echo, so the Gpt capture
-//! returns the echo width the scenario's obstacle distance gives at the current OS time,
-//! converted by the same `SonarConfig::distance_to_echo_us` as the host simulation's
-//! sensor model, and no echo in the scenario's dropouts.
+//! The sensor is one of two ([`Mps2Sensor`]):
+//! - by default deterministic: QEMU cannot time an HC-SR04 echo, so the Gpt capture
+//!   returns the echo width the scenario's obstacle distance gives at the current OS
+//!   time, converted by the same `SonarConfig::distance_to_echo_us` as the host
+//!   simulation's sensor model, and no echo in the scenario's dropouts;
+//! - with `--sensor uart` on the semihosting command line, a UART ranging module
+//!   (A02YYUW protocol, `cw_core::sonar::uart`) on UART1, QEMU's second `-serial`: what
+//!   a live run's test program sends there is what the ECU measures. The scenario's
+//!   movements and dropouts are then not played; its length and bus events are.
 //!
 //! The scenario is a `cw_core::scenario` file, read over semihosting at start
-//! ([`load_scenario`]), by default the paper's Figure 7 compiled in. The image plays its
+//! ([`load`]), by default the paper's Figure 7 compiled in. The image plays its
 //! movements (`hold`, `ramp`), `dropout`, `can-errors` (the SLCAN controller's next
 //! attempts fail, with the same error counter and bus times as the host's simulated bus)
 //! and `frame` (a tester's frame reaches the controller in the ms after its time, as it
@@ -17,14 +22,18 @@
 //! the host simulation hands the ECU between its steps).
 
 use cw_bsp::cortex_m::{App, CortexMPort};
-use cw_bsp::mps2::{self, CoreDelay, Led, SlcanCan, SlcanEvent, Unconnected};
+use cw_bsp::mps2::{self, CoreDelay, Led, SensorUart, SlcanCan, SlcanEvent, Unconnected};
 use cw_bsp::port::Port;
 use cw_core::can::Hrh;
 use cw_core::os::{OsError, TaskId};
 use cw_core::scenario::{NoiseSpec, Scenario};
 use cw_core::sonar::SonarConfig;
+use cw_core::warning::Measurement;
 
-use crate::board::{Board, CanEvents, CanInterrupt, PortDriver, PulseCapture};
+use crate::board::{
+    Board, CanEvents, CanInterrupt, DistanceSensor, EchoSensor, PortDriver, PulseCapture, SerialRx,
+    SerialSensor,
+};
 use crate::config::{self, Kernel};
 use crate::ecu::{span, Ecu};
 
@@ -34,11 +43,52 @@ pub struct Mps2Board;
 impl Board for Mps2Board {
     type Can = SlcanCan;
     type Led = Led;
-    type Trigger = Unconnected;
-    type Echo = Unconnected;
-    type Delay = CoreDelay;
-    type Capture = ScenarioEcho;
+    type Sensor = Mps2Sensor;
     type Port = Mps2PortDriver;
+}
+
+/// The image's sensor.
+pub enum Mps2Sensor {
+    /// The scenario's obstacle, as an HC-SR04's echo (no trigger or echo line: the
+    /// capture computes the width).
+    Scenario(EchoSensor<Unconnected, Unconnected, CoreDelay, ScenarioEcho>),
+    /// A UART ranging module on UART1.
+    Uart(SerialSensor<SensorUart>),
+}
+
+impl Mps2Sensor {
+    /// The sensor a run asked for: the module on UART1 if `uart`, else the scenario's
+    /// obstacle.
+    pub fn new(uart: bool, scenario: &'static ImageScenario) -> Self {
+        if uart {
+            Self::Uart(SerialSensor::new(
+                SensorUart::uart1(),
+                config::SENSOR_SILENT_AFTER_SAMPLES,
+            ))
+        } else {
+            Self::Scenario(EchoSensor {
+                trigger: Unconnected,
+                echo: Unconnected,
+                delay: CoreDelay,
+                capture: ScenarioEcho::new(SonarConfig::HC_SR04, scenario),
+            })
+        }
+    }
+}
+
+impl DistanceSensor for Mps2Sensor {
+    fn sample(&mut self, config: &SonarConfig) -> Measurement {
+        match self {
+            Self::Scenario(sensor) => sensor.sample(config),
+            Self::Uart(sensor) => sensor.sample(config),
+        }
+    }
+}
+
+impl SerialRx for SensorUart {
+    fn read_byte(&mut self) -> Option<u8> {
+        SensorUart::read_byte(self)
+    }
 }
 
 /// The ECU on this board.
@@ -102,22 +152,41 @@ impl core::fmt::Display for Refused<'_> {
     }
 }
 
-/// The scenario the image runs: the file named by `--scenario PATH` on the semihosting
-/// command line (QEMU's `-semihosting-config ...,arg=--scenario,arg=PATH`), read from the
-/// host (at most [`SCENARIO_FILE_MAX`] bytes), or Figure 7. Its name goes to the log; a
-/// file that cannot be read or parsed, or asks for what the image does not play, is a
-/// fatal error naming the file, the line and the fault. Never inlined: its buffers
-/// leave the main stack before the OS starts.
+/// What the semihosting command line asks for (QEMU's `-semihosting-config
+/// ...,arg=cw-qemu,arg=--scenario,arg=PATH,arg=--sensor,arg=uart`).
+pub struct Start {
+    /// The scenario: its movements, faults, bus events and length.
+    pub scenario: ImageScenario,
+    /// The sensor is the UART ranging module on UART1 (`--sensor uart`).
+    pub uart_sensor: bool,
+}
+
+/// The run the command line asks for: the scenario file named by `--scenario PATH`, read
+/// from the host (at most [`SCENARIO_FILE_MAX`] bytes), or Figure 7; the sensor named
+/// by `--sensor scenario|uart` (default `scenario`). The scenario's name goes to the
+/// log; a file that cannot be read or parsed, or asks for what the image does not play,
+/// or an unknown sensor, is a fatal error naming the file, the line and the fault.
+/// Never inlined: its buffers leave the main stack before the OS starts.
 #[inline(never)]
-pub fn load_scenario() -> ImageScenario {
+pub fn load() -> Start {
     let mut line = [0u8; 256];
-    let path = cw_bsp::mps2::semihosting::command_line(&mut line).and_then(|line| {
+    let line = cw_bsp::mps2::semihosting::command_line(&mut line).unwrap_or("");
+    let option = |name: &str| {
         let mut words = line.split_whitespace();
-        words.find(|w| *w == "--scenario")?;
+        words.find(|w| *w == name)?;
         words.next()
-    });
+    };
+    let uart_sensor = match option("--sensor") {
+        None | Some("scenario") => false,
+        Some("uart") => true,
+        Some(_) => {
+            mps2::leds_safe();
+            cw_bsp::mps2_log!("FATAL: --sensor takes `scenario` or `uart`\n");
+            mps2::exit(false)
+        }
+    };
     let mut text = [0u8; SCENARIO_FILE_MAX];
-    let (name, scenario) = match path {
+    let (name, scenario) = match option("--scenario") {
         None => ("scenarios/figure7.txt (compiled in)", parse(FIGURE7)),
         Some(path) => (
             path,
@@ -142,7 +211,13 @@ pub fn load_scenario() -> ImageScenario {
                 s.frames.len(),
                 s.duration_ms()
             );
-            s
+            if uart_sensor {
+                mps2::log("cw-qemu: sensor: the UART ranging module on UART1 (the scenario's movements and dropouts are not played)\n");
+            }
+            Start {
+                scenario: s,
+                uart_sensor,
+            }
         }
         Err(e) => {
             mps2::leds_safe();
@@ -209,6 +284,8 @@ pub struct Mps2App {
     pub end_ms: u32,
     /// The scenario's bus events.
     pub scenario: &'static ImageScenario,
+    /// The sensor is the UART ranging module.
+    pub uart_sensor: bool,
 }
 
 impl App for Mps2App {
@@ -220,6 +297,11 @@ impl App for Mps2App {
         mps2::start_tick(config::OS.isrs()[config::SYSTICK_ISR.0 as usize].priority);
         calibrate(self.ecu.port());
         SlcanCan::enable_interrupts(config::OS.isrs()[config::CAN_ISR.0 as usize].priority);
+        if self.uart_sensor {
+            SensorUart::enable_interrupt(
+                config::OS.isrs()[config::SENSOR_RX_ISR.0 as usize].priority,
+            );
+        }
         self.ecu.start_os();
     }
 
@@ -248,6 +330,24 @@ impl App for Mps2App {
             link.tx_errors,
             link.bus_offs
         );
+        if self.uart_sensor {
+            let uart = mps2::sensor_uart_stats();
+            let counts = self.ecu.with_sensor(|sensor| match sensor {
+                Mps2Sensor::Uart(s) => s.ranger.counts(),
+                Mps2Sensor::Scenario(_) => Default::default(),
+            });
+            let c = counts.unwrap_or_default();
+            cw_bsp::mps2_log!(
+                "cw-qemu: sensor received {} bytes: {} frames, {} bad checksums, {} in the blind zone, {} stray bytes; {} overruns, {} silent samples\n",
+                uart.received,
+                c.frames,
+                c.bad_checksums,
+                c.blind,
+                c.stray_bytes,
+                uart.overruns,
+                c.silent_samples
+            );
+        }
         cw_bsp::mps2_log!(
             "cw-qemu: end at {} ms; kernel errors {}, port errors {}; task stack used {} of {} bytes, main stack (ISRs) {} bytes\n",
             mps2::now_ms(),

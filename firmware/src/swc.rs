@@ -1,7 +1,7 @@
 //! The paper's software components (§3.2.1), as plain state machines: each runnable takes
 //! its inputs and returns its outputs; the RTE ([`crate::rte`]) moves the data between them.
 //!
-//! - UltraSonic (40 ms): echo -> measurement; holds the last valid value through up to
+//! - UltraSonic (40 ms): the sensor's sample (IoHwAb) -> measurement; holds the last valid value through up to
 //!   [`FAULT_AFTER_SAMPLES`]` - 1` bad samples, then reports the measurement invalid.
 //! - ObstacleDetection (20 ms): measurement -> warning level with the configured thresholds
 //!   (the PC may change them over CAN; an invalid pair is refused and counted).
@@ -9,7 +9,7 @@
 //!   blink at [`BLINK_HALF_PERIOD_MS`].
 //! - CanTranslate (on data received): measurement and level -> the CAN signals.
 
-use cw_core::sonar::{Echo, SonarConfig};
+use cw_core::sonar::SonarConfig;
 use cw_core::warning::{Measurement, Thresholds, WarningLevel};
 
 /// Consecutive bad samples after which the measurement is reported invalid (3 x 40 ms).
@@ -19,7 +19,8 @@ pub const BLINK_HALF_PERIOD_MS: u32 = 250;
 /// The distance signal's value for "nothing within range" (DBC `VAL_`).
 pub const DISTANCE_NOTHING_IN_RANGE: u64 = 0xFFFF_FFFE;
 
-/// UltraSonic: echo to measurement, with a short hold over bad samples.
+/// UltraSonic: the sensor's sample to the measurement published, with a short hold over
+/// bad samples.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct UltraSonic {
     sensor: SonarConfig,
@@ -42,9 +43,10 @@ impl UltraSonic {
         &self.sensor
     }
 
-    /// The runnable: one echo in, the measurement to publish out.
-    pub fn run(&mut self, echo: Echo) -> Measurement {
-        match self.sensor.measure(echo) {
+    /// The runnable: one sample in (IoHwAb's, with [`Self::sensor`]'s parameters), the
+    /// measurement to publish out.
+    pub fn run(&mut self, sample: Measurement) -> Measurement {
+        match sample {
             Measurement::Invalid => {
                 self.bad_in_a_row = self.bad_in_a_row.saturating_add(1);
                 match self.last_good {
@@ -157,22 +159,26 @@ mod tests {
     #[test]
     fn ultrasonic_holds_then_faults_then_recovers() {
         let mut swc = UltraSonic::new(SonarConfig::HC_SR04);
-        let good = swc.run(Echo::Pulse { width_us: 5831 });
+        let good = swc.run(Measurement::Distance { distance_mm: 1000 });
         assert_eq!(good, Measurement::Distance { distance_mm: 1000 });
-        assert_eq!(swc.run(Echo::Missing), good, "one bad sample is held");
-        assert_eq!(swc.run(Echo::Missing), good, "two are held");
         assert_eq!(
-            swc.run(Echo::Missing),
+            swc.run(Measurement::Invalid),
+            good,
+            "one bad sample is held"
+        );
+        assert_eq!(swc.run(Measurement::Invalid), good, "two are held");
+        assert_eq!(
+            swc.run(Measurement::Invalid),
             Measurement::Invalid,
             "the third is a fault"
         );
         assert_eq!(
-            swc.run(Echo::Pulse { width_us: 38_000 }),
+            swc.run(Measurement::NothingInRange),
             Measurement::NothingInRange
         );
         let mut fresh = UltraSonic::new(SonarConfig::HC_SR04);
         assert_eq!(
-            fresh.run(Echo::Missing),
+            fresh.run(Measurement::Invalid),
             Measurement::Invalid,
             "nothing to hold yet"
         );

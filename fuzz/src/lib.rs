@@ -76,6 +76,7 @@ mod targets {
     use cw_core::os::spec::call_and_check;
     use cw_core::os::OSDEFAULTAPPMODE;
     use cw_core::scenario;
+    use cw_core::sonar::uart;
     use cw_proofs::{configs, Kernel};
 
     fn codec_case<const N: usize>(
@@ -214,5 +215,15 @@ mod targets {
                     }
                 }
             });
+    }
+
+    /// Any bytes on the distance sensor's UART (the A02YYUW protocol): the streaming
+    /// decoder gives exactly the verdicts, stray and pending counts of the batch rule
+    /// (`cw_core::sonar::uart::spec::matches_reference`), never a panic.
+    #[test]
+    fn sensor_uart_stream() {
+        bolero::check!()
+            .with_type::<Vec<u8>>()
+            .for_each(|bytes: &Vec<u8>| assert!(uart::spec::matches_reference(bytes)));
     }
 }

@@ -15,6 +15,7 @@ pub const FUZZ_TARGETS: &[&str] = &[
     "targets::scheduler_api",
     "targets::slcan_stream",
     "targets::scenario_text",
+    "targets::sensor_uart_stream",
 ];
 
 /// How long the `fuzz` stage runs each target (cargo-bolero `-T`).

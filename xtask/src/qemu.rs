@@ -8,10 +8,13 @@
 //! milliseconds are the image's own, independent of the host's speed.
 //!
 //! `--live` runs the image in real time (`-icount shift=0,sleep=on`: counted instructions
-//! while the core runs, the host's clock while it sleeps) with UART0 on a TCP port and
-//! `tests/slcan_live.py` against it: python-can's `slcan` interface receives the distance
-//! frames and sends malformed lines and a `ThresholdConfig` frame that the ECU must apply;
-//! the image's count of malformed lines and received frames must equal what was sent.
+//! while the core runs, the host's clock while it sleeps) with UART0 (CAN, SLCAN) and
+//! UART1 (the distance sensor, `--sensor uart`) each on a TCP port and `tests/live.py`
+//! against them: a simulated A02YYUW module sends distances with bad checksums, noise
+//! and a silence; python-can's `slcan` interface receives the distance frames and sends
+//! malformed lines and a `ThresholdConfig` frame that the ECU must apply. The image's
+//! counts of malformed lines, received frames, sensor frames, bad checksums, blind-zone
+//! readings and stray bytes must equal what was sent.
 //!
 //! `--scenario FILE` (repeatable; default `scenarios/figure7.txt`) names the scenarios the
 //! image plays: it reads each over semihosting (`-semihosting-config ...,arg=--scenario,
@@ -107,13 +110,16 @@ fn build_bin(bin: &str) -> Result<PathBuf> {
 }
 
 /// The machine and the image's log, exit and files (semihosting), for every run; the
-/// image's command line names `scenario` if given.
-fn qemu_machine(scenario: Option<&Path>) -> Vec<String> {
+/// image's command line names `scenario` if given, and the UART sensor if `uart_sensor`.
+fn qemu_machine(scenario: Option<&Path>, uart_sensor: bool) -> Vec<String> {
     let mut semihosting = String::from("enable=on,target=native,arg=cw-qemu");
     if let Some(file) = scenario {
         // QEMU's option syntax doubles a comma inside a value.
         let file = file.display().to_string().replace(',', ",,");
         semihosting.push_str(&format!(",arg=--scenario,arg={file}"));
+    }
+    if uart_sensor {
+        semihosting.push_str(",arg=--sensor,arg=uart");
     }
     [
         "-machine",
@@ -152,7 +158,7 @@ fn run_image(image: &Path, out: &Path, serial: Option<&str>, scenario: Option<&P
     }
     let serial = serial.map_or_else(|| format!("file:{}", slcan.display()), str::to_string);
     let report = Cmd::new("qemu-system-arm")
-        .args(qemu_machine(scenario))
+        .args(qemu_machine(scenario, false))
         .args(["-icount", "shift=0,sleep=off"])
         .args(["-serial", &serial])
         .args(["-d", "trace:mps2_fpgaio_write", "-D"])
@@ -209,7 +215,7 @@ fn events(out: &Path) -> Result {
     let image = build_bin("cw-qemu-events")?;
     std::fs::create_dir_all(out).map_err(|e| format!("creating {}: {e}", out.display()))?;
     let report = Cmd::new("qemu-system-arm")
-        .args(qemu_machine(None))
+        .args(qemu_machine(None, false))
         .args(["-icount", "shift=0,sleep=off"])
         .args(["-serial", "null"])
         .arg("-kernel")
@@ -231,25 +237,28 @@ fn free_port() -> Result<u16> {
         .map_err(|e| format!("qemu: no free TCP port: {e}"))
 }
 
-/// The image in real time with UART0 on a TCP port, `tests/slcan_live.py` against it;
-/// its report (with the receive path's instruction counts) goes to `out/image-live.txt`.
+/// The image in real time with UART0 (CAN) and UART1 (the sensor) on TCP ports,
+/// `tests/live.py` against them; the image's report (with the receive path's instruction
+/// counts) goes to `out/image-live.txt`.
 fn live(image: &Path, out: &Path) -> Result {
     use std::io::Read;
     use std::process::{Command, Stdio};
     std::fs::create_dir_all(out).map_err(|e| format!("creating {}: {e}", out.display()))?;
-    let port = free_port()?;
-    let serial = format!("tcp:127.0.0.1:{port},server=on,wait=on");
+    let (can_port, sensor_port) = (free_port()?, free_port()?);
+    let can_serial = format!("tcp:127.0.0.1:{can_port},server=on,wait=on");
+    let sensor_serial = format!("tcp:127.0.0.1:{sensor_port},server=on,wait=on");
     let leds = out.join("fpgaio-live.log");
     println!(
-        "$ qemu-system-arm -machine mps2-an386 -icount shift=0,sleep=on -serial {serial} -kernel {}",
+        "$ qemu-system-arm -machine mps2-an386 -icount shift=0,sleep=on -serial {can_serial} -serial {sensor_serial} -kernel {} (semihosting: --sensor uart)",
         image.display()
     );
     let mut qemu = Command::new("qemu-system-arm")
-        .args(qemu_machine(None))
+        .args(qemu_machine(None, true))
         // One instruction per ns while the core runs, real time while it sleeps (WFI):
-        // the run keeps pace with python-can, and the image's spans are instructions.
+        // the run keeps pace with the test, and the image's spans are instructions.
         .args(["-icount", "shift=0,sleep=on"])
-        .args(["-serial", &serial])
+        .args(["-serial", &can_serial])
+        .args(["-serial", &sensor_serial])
         .args(["-d", "trace:mps2_fpgaio_write", "-D"])
         .arg(&leds)
         .arg("-kernel")
@@ -258,8 +267,9 @@ fn live(image: &Path, out: &Path) -> Result {
         .spawn()
         .map_err(|e| format!("qemu-system-arm: {e}"))?;
     let test = Cmd::new(crate::setup::venv_python())
-        .arg(root().join("tests").join("slcan_live.py"))
-        .arg(port.to_string())
+        .arg(root().join("tests").join("live.py"))
+        .arg(can_port.to_string())
+        .arg(sensor_port.to_string())
         .arg(root().join("firmware").join("ecu.dbc"))
         .read();
     let test = match test {
@@ -282,11 +292,7 @@ fn live(image: &Path, out: &Path) -> Result {
     if !status.success() {
         return Err(format!("qemu: the live image ended with {status}"));
     }
-    let sent = counts_after(
-        &test,
-        "slcan-live: sent ",
-        &[" malformed lines and ", " frames"],
-    )?;
+    let sent = counts_after(&test, "live: sent ", &[" malformed lines and ", " frames"])?;
     let got = counts_after(
         &image_out,
         "cw-qemu: slcan received ",
@@ -303,6 +309,41 @@ fn live(image: &Path, out: &Path) -> Result {
     println!(
         "qemu: live SLCAN both ways: the image counted the {got_malformed} malformed lines python-can \
          sent and received its {got_frames} frames"
+    );
+    let sensor_sent = counts_after(
+        &test,
+        "live: sensor sent ",
+        &[
+            " frames, ",
+            " bad checksums, ",
+            " in the blind zone, ",
+            " stray bytes",
+        ],
+    )?;
+    let sensor_got = counts_after(
+        &image_out,
+        "cw-qemu: sensor received ",
+        &[
+            " bytes: ",
+            " frames, ",
+            " bad checksums, ",
+            " in the blind zone, ",
+            " stray bytes; ",
+            " overruns",
+        ],
+    )?;
+    if sensor_got[1..5] != sensor_sent[..] || sensor_got[5] != 0 {
+        return Err(format!(
+            "qemu: the sensor sent {sensor_sent:?} (frames, bad checksums, blind-zone readings, \
+             stray bytes); the image counted {:?} and {} overruns",
+            &sensor_got[1..5],
+            sensor_got[5]
+        ));
+    }
+    println!(
+        "qemu: live sensor: the image decoded the {} frames the module sent ({} in the blind zone) \
+         and counted its {} bad checksums and {} stray bytes, with no overrun",
+        sensor_sent[0], sensor_sent[2], sensor_sent[1], sensor_sent[3]
     );
     Ok(())
 }

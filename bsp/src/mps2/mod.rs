@@ -5,6 +5,7 @@
 //! |---|---|---|
 //! | warning LEDs | [`Led`]: FPGAIO LED bits 0 (red) and 1 (yellow) | FPGAIO `LED0` at `0x4002_8000` |
 //! | CAN | [`SlcanCan`]: frames as SLCAN (Lawicel) text on UART0 | CMSDK APB UART0 at `0x4000_4000`, IRQ 0 (RX), 1 (TX) |
+//! | distance sensor (live runs) | [`SensorUart`]: a UART ranging module's bytes ([`sensor`]) | CMSDK APB UART1 at `0x4000_5000`, IRQ 2 (RX) |
 //! | OS tick | SysTick, 25 000 core clocks per ms | SCS |
 //! | log, exit | semihosting (`-semihosting-config enable=on,target=native`) | |
 //!
@@ -14,6 +15,9 @@
 //! has left the UART, then the driver reports the transmit confirmation.
 
 pub mod semihosting;
+pub mod sensor;
+
+pub use sensor::{sensor_uart_stats, SensorUart, SensorUartStats};
 
 use core::cell::RefCell;
 use core::convert::Infallible;
@@ -923,7 +927,8 @@ extern "C" fn unused_irq() {
 }
 
 /// The external interrupt vector: UART0's receive and transmit lines are the CAN
-/// controller's, line 31 is [`SOFTWARE_IRQ`]; no other line is enabled.
+/// controller's, UART1's receive line the distance sensor's, line 31 is
+/// [`SOFTWARE_IRQ`]; no other line is enabled.
 #[link_section = ".vector_table.interrupts"]
 #[no_mangle]
 #[used]
@@ -931,6 +936,7 @@ static __INTERRUPTS: [extern "C" fn(); 32] = {
     let mut v: [extern "C" fn(); 32] = [unused_irq; 32];
     v[0] = uart0_rx;
     v[1] = uart0_tx;
+    v[sensor::SENSOR_RX_IRQ as usize] = sensor::uart1_rx;
     v[SOFTWARE_IRQ as usize] = software_irq;
     v
 };

@@ -5,15 +5,13 @@
 #![no_main]
 
 use cw_bsp::cortex_m::CortexMPort;
-use cw_bsp::mps2::{self, CoreDelay, Led, SlcanCan, Unconnected};
+use cw_bsp::mps2::{self, Led, SlcanCan};
 use cw_bsp::port::Slot;
 use cw_core::sonar::SonarConfig;
-use cw_firmware::board::{BoardParts, Leds, SonarIo};
+use cw_firmware::board::{BoardParts, Leds};
 use cw_firmware::config;
 use cw_firmware::ecu::Ecu;
-use cw_firmware::mps2::{
-    load_scenario, ImageScenario, Mps2App, Mps2Board, Mps2PortDriver, ScenarioEcho,
-};
+use cw_firmware::mps2::{load, ImageScenario, Mps2App, Mps2Board, Mps2PortDriver, Mps2Sensor};
 
 static APP: Slot<Mps2App> = Slot::new();
 static SCENARIO: Slot<ImageScenario> = Slot::new();
@@ -24,11 +22,12 @@ fn main() -> ! {
         mps2::fatal("the OS configuration is inconsistent")
     };
     mps2::log("cw-qemu: collision-warning ECU on mps2-an386\n");
-    let Some(scenario) = SCENARIO.init(load_scenario()) else {
+    let start = load();
+    let uart_sensor = start.uart_sensor;
+    let Some(scenario) = SCENARIO.init(start.scenario) else {
         mps2::fatal("started twice")
     };
     let scenario: &'static ImageScenario = scenario;
-    let capture = ScenarioEcho::new(SonarConfig::HC_SR04, scenario);
     let end_ms = u32::try_from(scenario.duration_ms()).unwrap_or(u32::MAX);
     let parts = BoardParts::<Mps2Board> {
         port: Mps2PortDriver,
@@ -37,18 +36,14 @@ fn main() -> ! {
             red: Led::RED,
             yellow: Led::YELLOW,
         },
-        sonar: SonarIo {
-            trigger: Unconnected,
-            echo: Unconnected,
-            delay: CoreDelay,
-            capture,
-        },
+        sonar: Mps2Sensor::new(uart_sensor, scenario),
     };
     let ecu = Ecu::new(CortexMPort::new(kernel), parts, SonarConfig::HC_SR04);
     let Some(app) = APP.init(Mps2App {
         ecu,
         end_ms,
         scenario,
+        uart_sensor,
     }) else {
         mps2::fatal("started twice")
     };

@@ -15,7 +15,7 @@ use cw_core::warning::{Measurement, WarningLevel};
 
 use super::scenario::{NoiseSpec, Scenario};
 use crate::board::{
-    Board, BoardParts, CanEvents, CanInterrupt, Leds, PortDriver, PulseCapture, SonarIo,
+    Board, BoardParts, CanEvents, CanInterrupt, EchoSensor, Leds, PortDriver, PulseCapture,
 };
 use crate::config::{self, Kernel};
 use crate::ecu::Ecu;
@@ -27,10 +27,7 @@ pub struct HostBoard;
 impl Board for HostBoard {
     type Can = HostCan;
     type Led = SimPin;
-    type Trigger = SimPin;
-    type Echo = SimInput;
-    type Delay = SimDelay;
-    type Capture = HostSonar;
+    type Sensor = EchoSensor<SimPin, SimInput, SimDelay, HostSonar>;
     type Port = HostPortDriver;
 }
 
@@ -235,7 +232,7 @@ impl Simulation {
                 red: red.clone(),
                 yellow: yellow.clone(),
             },
-            sonar: SonarIo {
+            sonar: EchoSensor {
                 trigger: trigger.clone(),
                 echo: echo.clone(),
                 delay: SimDelay::new(&clock),
