@@ -526,6 +526,16 @@ impl<const N: usize> Scenario<N> {
     pub fn in_dropout(&self, t_ms: u64) -> bool {
         self.dropouts.iter().any(|w| w.contains(t_ms))
     }
+
+    /// Whether communication is disabled at `t_ms` (inside a `no-communication` window).
+    pub fn in_no_communication(&self, t_ms: u64) -> bool {
+        self.no_communication.iter().any(|w| w.contains(t_ms))
+    }
+
+    /// Whether the ignition is on at `t_ms` (before the `shutdown` time, if any).
+    pub fn ignition_on(&self, t_ms: u64) -> bool {
+        self.shutdown_at_ms.is_none_or(|at| t_ms < u64::from(at))
+    }
 }
 
 #[cfg(test)]

@@ -11,7 +11,7 @@
 //! | AUTOSAR module | here |
 //! |---|---|
 //! | Port (`Port_Init`) | [`PortDriver::port_init`]: every pin to its direction and initial level |
-//! | Dio (`Dio_WriteChannel`, `Dio_ReadChannel`) | [`Leds`], [`EchoSensor::trigger`] (`OutputPin`), [`EchoSensor::echo`] (`InputPin`) |
+//! | Dio (`Dio_WriteChannel`, `Dio_ReadChannel`) | [`Leds`], [`EchoSensor::trigger`] (`OutputPin`), [`EchoSensor::echo`], [`ModeInputs`] (`InputPin`) |
 //! | Gpt (delays, the echo's duration) | [`EchoSensor::delay`] (`DelayNs`), [`EchoSensor::capture`] ([`PulseCapture`]) |
 //! | Can | [`BoardParts::can`] ([`CanDriver`] and [`CanEvents`]) |
 //! | a UART receiver (no AUTOSAR driver names it) | [`SerialSensor::rx`] ([`SerialRx`]) |
@@ -23,7 +23,7 @@ use cw_core::can::CanDriver;
 use cw_core::sonar::uart::Ranger;
 use cw_core::sonar::SonarConfig;
 use cw_core::warning::Measurement;
-use embedded_hal::digital::OutputPin;
+use embedded_hal::digital::{InputPin, OutputPin};
 
 /// A CAN controller event, taken by the ECU's CAN interrupt (`CanIsr`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -81,6 +81,8 @@ pub trait Board {
     type Led: OutputPin;
     /// The ultrasonic sensor.
     type Sensor: DistanceSensor;
+    /// A mode input's Dio channel (high = on).
+    type ModeInput: InputPin;
     /// The Port driver.
     type Port: PortDriver;
 }
@@ -91,6 +93,16 @@ pub struct Leds<B: Board> {
     pub red: B::Led,
     /// The yellow LED.
     pub yellow: B::Led,
+}
+
+/// The mode inputs the ModeManager SWC reads every 10 ms (Dio input channels, high =
+/// on).
+pub struct ModeInputs<B: Board> {
+    /// Ignition (terminal 15): low asks the ECU to run down and shut off.
+    pub ignition: B::ModeInput,
+    /// Communication enable: low asks the ECU to stop transmitting while it keeps working
+    /// (a diagnostic communication control, or the network released).
+    pub com_enable: B::ModeInput,
 }
 
 /// An HC-SR04-class sensor (the paper's): a trigger line, an echo line, a Gpt delay and
@@ -136,4 +148,6 @@ pub struct BoardParts<B: Board> {
     pub leds: Leds<B>,
     /// The sensor.
     pub sonar: B::Sensor,
+    /// The mode inputs.
+    pub modes: ModeInputs<B>,
 }

@@ -29,15 +29,18 @@ use cw_core::com::ipdu::Com;
 use cw_core::com::signal::SignalValue;
 use cw_core::ecum::{bswm_execute, BswMRequest, EcuM};
 use cw_core::os::{Hooks, IsrId, OsError, ServiceId, StatusType, TaskId, E_OK, OSDEFAULTAPPMODE};
-use cw_core::rte::RteError;
 use cw_core::sonar::SonarConfig;
 use cw_core::warning::{Measurement, WarningLevel};
 
-use crate::board::{Board, BoardParts, CanEvents, CanInterrupt, DistanceSensor, Leds, PortDriver};
+use crate::board::{
+    Board, BoardParts, CanEvents, CanInterrupt, DistanceSensor, Leds, ModeInputs, PortDriver,
+};
 use crate::config::{self, Kernel};
 use crate::iohwab;
 use crate::rte::Rte;
-use crate::swc::{can_translate, LedActuator, LedColor, ObstacleDetection, UltraSonic};
+use crate::swc::{
+    can_translate, LedActuator, LedColor, ModeManager, ObstacleDetection, UltraSonic,
+};
 
 /// The ECU's hook routines and their data (the OS configuration enables `ErrorHook` and
 /// `ShutdownHook`).
@@ -281,6 +284,14 @@ struct SonarPart<B: Board> {
 }
 
 /// `OsObstacleDetectionTask`'s own state.
+/// `OsBswServiceTask`'s own state: the mode inputs and ModeManager.
+struct ModePart<B: Board> {
+    inputs: ModeInputs<B>,
+    swc: ModeManager,
+    /// Requests the RTE's queue had no room for.
+    refused: u32,
+}
+
 struct ObstaclePart {
     swc: ObstacleDetection,
     /// The last threshold pair received from the PC and applied (raw), to apply each once.
@@ -295,6 +306,7 @@ pub struct Ecu<P, B: Board> {
     leds: Resource<LedOutputs<B>>,
     sonar: TaskLocal<SonarPart<B>>,
     obstacle: TaskLocal<ObstaclePart>,
+    modes: TaskLocal<ModePart<B>>,
     /// The Port driver, until `Port_Init`.
     port_driver: Option<B::Port>,
 }
@@ -320,6 +332,11 @@ impl<P: Port<Kernel = Kernel>, B: Board> Ecu<P, B> {
                 io: parts.sonar,
                 swc: UltraSonic::new(sensor),
                 last: Measurement::Invalid,
+            }),
+            modes: TaskLocal::new(ModePart {
+                inputs: parts.modes,
+                swc: ModeManager::new(),
+                refused: 0,
             }),
             obstacle: TaskLocal::new(ObstaclePart {
                 swc: ObstacleDetection::new(),
@@ -396,14 +413,9 @@ impl<P: Port<Kernel = Kernel>, B: Board> Ecu<P, B> {
         }
     }
 
-    /// A mode request to BswM (from the mode-management SWC: ignition off, or a
-    /// communication control), carried out by BswM's main function in the next
-    /// `OsBswServiceTask`.
-    ///
-    /// # Errors
-    /// [`RteError::Limit`] when four requests are already waiting; this one is not stored.
-    pub fn request_mode(&mut self, request: BswMRequest) -> Result<(), RteError> {
-        self.rte.get_mut().mode_requests.send(request).map(|_| ())
+    /// Mode requests of ModeManager that found the RTE's queue full (not stored).
+    pub fn mode_requests_dropped(&self) -> u32 {
+        self.modes.with(|part| part.refused).unwrap_or(0)
     }
 
     /// Whether the ECU has shut down (`ShutdownOS` ran: it no longer runs).
@@ -594,12 +606,30 @@ impl<P: Port<Kernel = Kernel>, B: Board> Ecu<P, B> {
     /// their safe state (LEDs off) and the ECU shuts down (`ShutdownOS(E_OK)`: no more
     /// ticks, tasks or interrupts).
     fn bsw_task(&self) {
+        // ModeManager: the inputs' edges become mode requests through the RTE.
+        let inputs = self.modes.with(|part| {
+            let ignition = iohwab::read_input(&mut part.inputs.ignition);
+            let com_enable = iohwab::read_input(&mut part.inputs.com_enable);
+            part.swc.run(ignition, com_enable)
+        });
         let mut requests = [None; 4];
-        let _ = self.rte.lock(&self.port, |rte| {
+        let refused = self.rte.lock(&self.port, |rte| {
+            let refused = inputs
+                .into_iter()
+                .flatten()
+                .flatten()
+                .filter(|&r| rte.mode_requests.send(r).is_err())
+                .count();
             for slot in &mut requests {
                 *slot = rte.mode_requests.receive().ok();
             }
+            refused
         });
+        if let Ok(n @ 1..) = refused {
+            let _ = self.modes.with(|part| {
+                part.refused = part.refused.saturating_add(n as u32);
+            });
+        }
         let shut_down = self.com.lock(&self.port, |stack| {
             for request in requests.into_iter().flatten() {
                 stack.bswm(request);

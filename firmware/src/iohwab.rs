@@ -30,6 +30,11 @@ pub fn set_led<B: Board>(leds: &mut Leds<B>, color: LedColor, lit: bool) -> Resu
     written.map_err(|_| PinFault)
 }
 
+/// A Dio input channel's level: `Some(high)`, or `None` when the driver refuses the read.
+pub fn read_input<P: InputPin>(pin: &mut P) -> Option<bool> {
+    pin.is_high().ok()
+}
+
 /// One ultrasonic measurement: checks that the echo line is idle, sends the trigger pulse
 /// (Dio + Gpt delay) and times the echo (Gpt capture).
 ///

@@ -44,6 +44,7 @@ impl Board for Mps2Board {
     type Can = SlcanCan;
     type Led = Led;
     type Sensor = Mps2Sensor;
+    type ModeInput = ScenarioInput;
     type Port = Mps2PortDriver;
 }
 
@@ -236,13 +237,51 @@ fn parse(text: &str) -> Result<ImageScenario, Refused<'_>> {
     if s.dropout_ppm != 0 {
         return Err(Refused::Unsupported("dropout-rate"));
     }
-    if !s.no_communication.is_empty() {
-        return Err(Refused::Unsupported("no-communication"));
-    }
     if s.shutdown_at_ms.is_some() {
         return Err(Refused::Unsupported("shutdown"));
     }
     Ok(s)
+}
+
+/// A mode input the scenario drives (the board has no such lines): its level at the
+/// current OS ms.
+pub struct ScenarioInput {
+    scenario: &'static ImageScenario,
+    line: ModeLine,
+}
+
+/// Which mode input a [`ScenarioInput`] is.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ModeLine {
+    /// The ignition: on until the scenario's `shutdown`.
+    Ignition,
+    /// Communication enable: off inside the scenario's `no-communication` windows.
+    ComEnable,
+}
+
+impl ScenarioInput {
+    /// The input `line` as `scenario` drives it.
+    pub const fn new(scenario: &'static ImageScenario, line: ModeLine) -> Self {
+        Self { scenario, line }
+    }
+}
+
+impl embedded_hal::digital::ErrorType for ScenarioInput {
+    type Error = core::convert::Infallible;
+}
+
+impl embedded_hal::digital::InputPin for ScenarioInput {
+    fn is_high(&mut self) -> Result<bool, Self::Error> {
+        let now = u64::from(mps2::now_ms());
+        Ok(match self.line {
+            ModeLine::Ignition => self.scenario.ignition_on(now),
+            ModeLine::ComEnable => !self.scenario.in_no_communication(now),
+        })
+    }
+
+    fn is_low(&mut self) -> Result<bool, Self::Error> {
+        self.is_high().map(|high| !high)
+    }
 }
 
 /// The echo a scenario's obstacle gives, on the Gpt capture.

@@ -8,7 +8,10 @@
 //! - LEDActuator (10 ms), prototypes RedLED and YellowLED: level -> pin; on Fault both
 //!   blink at [`BLINK_HALF_PERIOD_MS`].
 //! - CanTranslate (on data received): measurement and level -> the CAN signals.
+//! - ModeManager (10 ms, in `OsBswServiceTask`): the ignition and communication-enable
+//!   inputs -> BswM mode requests, on their edges.
 
+use cw_core::ecum::BswMRequest;
 use cw_core::sonar::SonarConfig;
 use cw_core::warning::{Measurement, Thresholds, WarningLevel};
 
@@ -152,6 +155,55 @@ pub const fn can_translate(measurement: Measurement, level: WarningLevel) -> (Op
     (distance, level as u64)
 }
 
+/// ModeManager: the mode inputs (Dio, sampled every 10 ms) to BswM mode requests, on
+/// their edges: ignition off asks for post-run (and so for the shutdown), the
+/// communication-enable line low and high again asks to stop and restart communication.
+/// Both inputs are on at power-on (ModeManagerInit has asked for the run mode). A pin
+/// that cannot be read keeps its last level. When both change within one sample the
+/// ignition goes first: a run-down is never overtaken by a restart of communication,
+/// which BswM then refuses.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct ModeManager {
+    ignition: bool,
+    com_enable: bool,
+}
+
+impl Default for ModeManager {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl ModeManager {
+    /// Both inputs on.
+    pub const fn new() -> Self {
+        Self {
+            ignition: true,
+            com_enable: true,
+        }
+    }
+
+    /// The runnable: the inputs now (`None`: unreadable), the requests their edges make,
+    /// in order.
+    pub fn run(
+        &mut self,
+        ignition: Option<bool>,
+        com_enable: Option<bool>,
+    ) -> [Option<BswMRequest>; 2] {
+        let ignition = ignition.unwrap_or(self.ignition);
+        let com_enable = com_enable.unwrap_or(self.com_enable);
+        let run_down = (self.ignition && !ignition).then_some(BswMRequest::EcuPostRun);
+        let com = (com_enable != self.com_enable).then_some(if com_enable {
+            BswMRequest::CommunicationOn
+        } else {
+            BswMRequest::CommunicationOff
+        });
+        self.ignition = ignition;
+        self.com_enable = com_enable;
+        [run_down, com]
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -226,5 +278,28 @@ mod tests {
             can_translate(Measurement::Invalid, WarningLevel::Fault),
             (None, 3)
         );
+    }
+
+    #[test]
+    fn mode_manager_requests_on_edges_ignition_first() {
+        let mut mm = ModeManager::new();
+        assert_eq!(mm.run(Some(true), Some(true)), [None, None]);
+        assert_eq!(
+            mm.run(Some(true), Some(false)),
+            [None, Some(BswMRequest::CommunicationOff)]
+        );
+        assert_eq!(
+            mm.run(Some(true), None),
+            [None, None],
+            "unreadable: unchanged"
+        );
+        assert_eq!(
+            mm.run(Some(false), Some(true)),
+            [
+                Some(BswMRequest::EcuPostRun),
+                Some(BswMRequest::CommunicationOn)
+            ]
+        );
+        assert_eq!(mm.run(Some(true), Some(true)), [None, None]);
     }
 }

@@ -319,9 +319,10 @@ fn ignition_off_goes_through_post_run_to_shutdown_with_leds_dark_and_bus_silent(
 
 #[test]
 fn communication_is_not_restarted_during_post_run() {
-    // Ignition off at 1001 ms, and a communication-on request at 1005 ms (the end of a
-    // no-communication window): both reach BswM at 1010 ms, in order. RUN is released
-    // first, so the second is refused and counted, and the ECU shuts down silent.
+    // Ignition off at 1001 ms, and communication enabled again at 1005 ms (the end of a
+    // no-communication window): ModeManager sees both edges at 1010 ms and asks for
+    // post-run first, so BswM refuses the communication restart and counts it, and the
+    // ECU shuts down silent.
     let mut sim = run("hold 500 2000\nno-communication 900 105\nshutdown 1001");
     assert!(sim.ecu().is_off());
     assert_eq!(sim.ecu().stats().mode_requests_refused, 1);

@@ -52,6 +52,11 @@ fn faults_is_the_same_ecu_on_the_image() {
     same_ecu("faults.txt");
 }
 
+#[test]
+fn no_communication_is_the_same_ecu_on_the_image() {
+    same_ecu("no-communication.txt");
+}
+
 /// A scenario the image cannot read or play: the run fails, the LEDs stay dark, and the
 /// report names the file, the line and the fault.
 fn refused(name: &str, text: Option<&str>, reason: &str) {

@@ -21,7 +21,8 @@
 //! arg=FILE`). Each run's files go to `target/qemu/<scenario name>/`.
 //!
 //! `--compare` runs the emulator-in-the-loop tests in `tests/` (package `cw-tests`) on
-//! the image it built: on `scenarios/figure7.txt` and `scenarios/faults.txt` the image
+//! the image it built: on `scenarios/figure7.txt`, `scenarios/faults.txt` and
+//! `scenarios/no-communication.txt` the image
 //! and the host simulation must give the same CAN frames the ECU sent (id and payload, in
 //! order) and the same levels of each LED, in order, with times within one OS tick.
 

@@ -8,10 +8,12 @@ use cw_bsp::cortex_m::CortexMPort;
 use cw_bsp::mps2::{self, Led, SlcanCan};
 use cw_bsp::port::Slot;
 use cw_core::sonar::SonarConfig;
-use cw_firmware::board::{BoardParts, Leds};
+use cw_firmware::board::{BoardParts, Leds, ModeInputs};
 use cw_firmware::config;
 use cw_firmware::ecu::Ecu;
-use cw_firmware::mps2::{load, ImageScenario, Mps2App, Mps2Board, Mps2PortDriver, Mps2Sensor};
+use cw_firmware::mps2::{
+    load, ImageScenario, ModeLine, Mps2App, Mps2Board, Mps2PortDriver, Mps2Sensor, ScenarioInput,
+};
 
 static APP: Slot<Mps2App> = Slot::new();
 static SCENARIO: Slot<ImageScenario> = Slot::new();
@@ -37,6 +39,10 @@ fn main() -> ! {
             yellow: Led::YELLOW,
         },
         sonar: Mps2Sensor::new(uart_sensor, scenario),
+        modes: ModeInputs {
+            ignition: ScenarioInput::new(scenario, ModeLine::Ignition),
+            com_enable: ScenarioInput::new(scenario, ModeLine::ComEnable),
+        },
     };
     let ecu = Ecu::new(CortexMPort::new(kernel), parts, SonarConfig::HC_SR04);
     let Some(app) = APP.init(Mps2App {

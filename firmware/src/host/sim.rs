@@ -8,14 +8,14 @@ use cw_bsp::host::{
     SimPin, Tester, VirtualBus, VirtualClock,
 };
 use cw_core::can::Hrh;
-use cw_core::ecum::BswMRequest;
 use cw_core::os::TaskId;
 use cw_core::sonar::{Echo, SonarConfig};
 use cw_core::warning::{Measurement, WarningLevel};
 
 use super::scenario::{NoiseSpec, Scenario};
 use crate::board::{
-    Board, BoardParts, CanEvents, CanInterrupt, EchoSensor, Leds, PortDriver, PulseCapture,
+    Board, BoardParts, CanEvents, CanInterrupt, EchoSensor, Leds, ModeInputs, PortDriver,
+    PulseCapture,
 };
 use crate::config::{self, Kernel};
 use crate::ecu::Ecu;
@@ -28,6 +28,7 @@ impl Board for HostBoard {
     type Can = HostCan;
     type Led = SimPin;
     type Sensor = EchoSensor<SimPin, SimInput, SimDelay, HostSonar>;
+    type ModeInput = SimInput;
     type Port = HostPortDriver;
 }
 
@@ -113,6 +114,8 @@ struct BoardView {
     yellow: SimPin,
     trigger: SimPin,
     echo: SimInput,
+    ignition: SimInput,
+    com_enable: SimInput,
     sonar: Rc<RefCell<SonarState>>,
     port_inits: Rc<Cell<u32>>,
 }
@@ -183,7 +186,6 @@ pub struct Simulation {
     now_ms: u64,
     trace: Vec<TraceRow>,
     frames: Vec<BusRecord>,
-    mode_requests_refused: u32,
 }
 
 impl Simulation {
@@ -215,6 +217,8 @@ impl Simulation {
         let yellow = SimPin::new("YellowLED", &clock);
         let trigger = SimPin::new("SonarTrigger", &clock);
         let echo = SimInput::new("SonarEcho", false);
+        let ignition = SimInput::new("Ignition", true);
+        let com_enable = SimInput::new("ComEnable", true);
         let sonar = Rc::new(RefCell::new(SonarState {
             sensor,
             true_distance_mm: scenario.distance_at(0),
@@ -232,6 +236,10 @@ impl Simulation {
                 red: red.clone(),
                 yellow: yellow.clone(),
             },
+            modes: ModeInputs {
+                ignition: ignition.clone(),
+                com_enable: com_enable.clone(),
+            },
             sonar: EchoSensor {
                 trigger: trigger.clone(),
                 echo: echo.clone(),
@@ -247,6 +255,8 @@ impl Simulation {
             yellow,
             trigger,
             echo,
+            ignition,
+            com_enable,
             sonar,
             port_inits,
         };
@@ -263,7 +273,6 @@ impl Simulation {
             now_ms: 0,
             trace: Vec::new(),
             frames: Vec::new(),
-            mode_requests_refused: 0,
         };
         sim.ecu.init();
         sim.ecu.start_os();
@@ -374,17 +383,12 @@ impl Simulation {
         {
             self.pc.send(frame);
         }
-        let windows = self.scenario.no_communication.clone();
-        for window in windows {
-            if u64::from(window.start_ms) == t {
-                self.mode_request(BswMRequest::CommunicationOff);
-            } else if window.end_ms() == t {
-                self.mode_request(BswMRequest::CommunicationOn);
-            }
-        }
-        if self.scenario.shutdown_at_ms.map(u64::from) == Some(t) {
-            self.mode_request(BswMRequest::EcuPostRun);
-        }
+        // The mode inputs: ignition off from the shutdown time on, communication
+        // disabled inside the no-communication windows; ModeManager samples them.
+        self.board.ignition.set_level(self.scenario.ignition_on(t));
+        self.board
+            .com_enable
+            .set_level(!self.scenario.in_no_communication(t));
         {
             let mut sonar = self.board.sonar.borrow_mut();
             sonar.true_distance_mm = self.scenario.distance_at(t);
@@ -405,16 +409,9 @@ impl Simulation {
         }
     }
 
-    /// Hands a mode request to the ECU; a full request queue is counted.
-    fn mode_request(&mut self, request: BswMRequest) {
-        if self.ecu.request_mode(request).is_err() {
-            self.mode_requests_refused += 1;
-        }
-    }
-
-    /// Mode requests the ECU refused because its queue was full.
-    pub const fn mode_requests_refused(&self) -> u32 {
-        self.mode_requests_refused
+    /// Mode requests the ECU's RTE queue had no room for.
+    pub fn mode_requests_refused(&self) -> u32 {
+        self.ecu.mode_requests_dropped()
     }
 
     /// The CAN controller's new events raise its interrupt.
