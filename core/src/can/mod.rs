@@ -58,6 +58,18 @@ impl CanId {
     pub const fn key(self) -> u32 {
         self.key
     }
+
+    /// The identifier `raw` names once masked to its width (11 or 29 bits): total, so
+    /// that harnesses and generators can draw any identifier from plain integers.
+    pub const fn masked(raw: u32, extended: bool) -> Self {
+        if extended {
+            Self {
+                key: (raw & 0x1FFF_FFFF) | EXTENDED_FLAG,
+            }
+        } else {
+            Self { key: raw & 0x7FF }
+        }
+    }
 }
 
 impl From<CanId> for Id {
@@ -104,6 +116,24 @@ impl CanFrame {
             dlc: data.len() as u8,
             data: bytes,
         })
+    }
+
+    /// The frame with `id` and the first `len % 9` bytes of `data` (the rest zero, as
+    /// `from_parts` leaves them): total, so that harnesses and generators can draw any
+    /// frame from plain integers.
+    pub const fn masked(id: CanId, len: u8, data: [u8; 8]) -> Self {
+        let dlc = len % 9;
+        let mut bytes = [0u8; 8];
+        let mut i = 0;
+        while i < dlc as usize {
+            bytes[i] = data[i];
+            i += 1;
+        }
+        Self {
+            id,
+            dlc,
+            data: bytes,
+        }
     }
 
     /// The identifier.
@@ -243,5 +273,20 @@ mod tests {
         assert!(frame.is_standard() && frame.is_data_frame());
         assert_eq!(CanFrame::from_parts(id, &[0; 9]), None);
         assert!(CanFrame::new_remote(StandardId::ZERO, 1).is_none());
+    }
+
+    #[test]
+    fn masked_ids_and_frames_are_the_checked_ones() {
+        assert_eq!(Some(CanId::masked(0x8123, false)), CanId::standard(0x123));
+        assert_eq!(
+            Some(CanId::masked(0xE000_0100, true)),
+            CanId::extended(0x100)
+        );
+        let id = CanId::masked(0x123, false);
+        let data = [1, 2, 3, 4, 5, 6, 7, 8];
+        for len in 0..=20u8 {
+            let want = CanFrame::from_parts(id, &data[..usize::from(len % 9)]);
+            assert_eq!(Some(CanFrame::masked(id, len, data)), want, "len {len}");
+        }
     }
 }

@@ -145,15 +145,7 @@ fn adapter_lines_carry_optional_time_stamps() {
 }
 
 fn any_frame(raw: u32, extended: bool, len: u8, data: [u8; 8]) -> CanFrame {
-    let id = if extended {
-        CanId::extended(raw & 0x1FFF_FFFF)
-    } else {
-        CanId::standard((raw & 0x7FF) as u16)
-    };
-    match id.and_then(|id| CanFrame::from_parts(id, &data[..usize::from(len % 9)])) {
-        Some(f) => f,
-        None => panic!("masked id out of range"),
-    }
+    CanFrame::masked(CanId::masked(raw, extended), len, data)
 }
 
 /// Any frame, encoded and decoded, is itself, and its line is canonical; with any time

@@ -61,16 +61,7 @@ fn any_frame_round_trips_through_its_text() {
         .with_type::<(u32, bool, u8, [u8; 8])>()
         .cloned()
         .for_each(|(raw, extended, len, data)| {
-            let id = if extended {
-                CanId::extended(raw & 0x1FFF_FFFF)
-            } else {
-                CanId::standard((raw & 0x7FF) as u16)
-            };
-            let Some(frame) =
-                id.and_then(|id| CanFrame::from_parts(id, &data[..usize::from(len % 9)]))
-            else {
-                panic!("masked id out of range");
-            };
+            let frame = CanFrame::masked(CanId::masked(raw, extended), len, data);
             // The longest frame text is 8 + 1 + 16 characters.
             let mut out = FixedText::<25>::new();
             assert!(write_frame(&frame, &mut out).is_ok());

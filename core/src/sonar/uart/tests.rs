@@ -162,17 +162,16 @@ impl Sent {
 
     fn bytes(self) -> ([u8; 5], usize) {
         let mut out = [0u8; 5];
-        let frame = |mm| encode(mm);
         let n = match self {
             Self::Nothing => 0,
             Self::Good(mm) => {
-                out[..4].copy_from_slice(&frame(mm));
+                out[..4].copy_from_slice(&encode(mm));
                 4
             }
             Self::Bad(mm) => {
                 // No 0xFF after the header: the decoder's resynchronization inside a bad
                 // frame is the business of the decoder's own harnesses.
-                let mut f = frame(mm & 0x7F7F);
+                let mut f = encode(mm & 0x7F7F);
                 f[3] = match f[3].wrapping_add(1) {
                     HEADER => f[3].wrapping_add(2),
                     sum => sum,
@@ -182,7 +181,7 @@ impl Sent {
             }
             Self::NoiseThenGood(noise, mm) => {
                 out[0] = noise;
-                out[1..].copy_from_slice(&frame(mm));
+                out[1..].copy_from_slice(&encode(mm));
                 5
             }
         };
