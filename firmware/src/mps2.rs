@@ -16,16 +16,18 @@
 //! movements (`hold`, `ramp`), `dropout`, `can-errors` (the SLCAN controller's next
 //! attempts fail, with the same error counter and bus times as the host's simulated bus)
 //! and `frame` (a tester's frame reaches the controller in the ms after its time, as it
-//! does on the host's bus). It refuses, with the line's command named, what it cannot
-//! play the way the host does: sensor noise and random dropouts (the host draws them
-//! from its own generator), and `no-communication` and `shutdown` (mode requests that
-//! the host simulation hands the ECU between its steps).
+//! does on the host's bus), and `no-communication` and `shutdown` through the mode inputs
+//! ([`ScenarioInput`]) that the ModeManager SWC samples, as on the host board. A
+//! `shutdown` ends the run at `ShutdownOS` (the port's [`App::shut_down`]): interrupts
+//! stay off, the report follows. It refuses, with the line's command named, what it
+//! cannot play the way the host does: sensor noise and random dropouts (the host draws
+//! them from its own generator).
 
 use cw_bsp::cortex_m::{App, CortexMPort};
 use cw_bsp::mps2::{self, CoreDelay, Led, SensorUart, SlcanCan, SlcanEvent, Unconnected};
 use cw_bsp::port::Port;
 use cw_core::can::Hrh;
-use cw_core::os::{OsError, TaskId};
+use cw_core::os::{status_name, OsError, TaskId, E_OK};
 use cw_core::scenario::{NoiseSpec, Scenario};
 use cw_core::sonar::SonarConfig;
 use cw_core::warning::Measurement;
@@ -237,9 +239,6 @@ fn parse(text: &str) -> Result<ImageScenario, Refused<'_>> {
     if s.dropout_ppm != 0 {
         return Err(Refused::Unsupported("dropout-rate"));
     }
-    if s.shutdown_at_ms.is_some() {
-        return Err(Refused::Unsupported("shutdown"));
-    }
     Ok(s)
 }
 
@@ -352,7 +351,73 @@ impl App for Mps2App {
         if mps2::now_ms() < self.end_ms {
             return;
         }
+        // The scenario's end, with the OS running (a `shutdown` line ends the run at
+        // ShutdownOS, earlier).
+        self.end_run(true)
+    }
+
+    fn tick(&self) {
+        // The scenario's bus events, before the OS tick, as the host simulation orders
+        // them: errors injected at their ms; a tester's frame, which takes a fraction of
+        // a ms on the bus, received in the ms after it was sent.
+        let now = mps2::now_ms();
+        for &(_, count) in self.scenario.can_errors.iter().filter(|(at, _)| *at == now) {
+            mps2::inject_tx_errors(count);
+        }
+        for &(_, frame) in self
+            .scenario
+            .frames
+            .iter()
+            .filter(|(at, _)| at.checked_add(1) == Some(now))
+        {
+            mps2::put_frame_on_bus(frame);
+        }
+        self.ecu.port().advance_ms();
+        self.ecu.tick();
+    }
+
+    fn irq(&self, line: u16) {
+        match line {
+            // UART0 RX and TX: the CAN controller.
+            0 | 1 => self.ecu.can_isr(),
+            _ => mps2::fatal("an interrupt line the ECU does not use"),
+        }
+    }
+
+    fn stack_fault(&self, task: Option<TaskId>) -> ! {
+        mps2::leds_safe();
+        cw_bsp::mps2_log!(
+            "FATAL: stack overflow on the {} stack: ShutdownOS(E_OS_STACKFAULT)\n",
+            task.map_or("shared task", |t| task_name(usize::from(t.0)))
+        );
+        // The port hands the end to `shut_down`.
+        self.ecu
+            .port()
+            .kernel(|os| os.shutdown_on_fault(OsError::StackFault));
+        mps2::fatal("the OS did not shut down on a stack overflow")
+    }
+
+    fn shut_down(&self) -> ! {
+        // The outputs' safe state, whatever shut the OS down (EcuM's post-run has set it
+        // already on a normal shutdown).
+        mps2::leds_safe();
+        let status = self.ecu.hooks().shutdown.unwrap_or(E_OK);
+        cw_bsp::mps2_log!(
+            "cw-qemu: ShutdownOS at {} ms: ShutdownHook saw {}; no task or interrupt runs from here on\n",
+            mps2::now_ms(),
+            status_name(status).unwrap_or("an application's code")
+        );
+        self.end_run(status == E_OK)
+    }
+}
+
+impl Mps2App {
+    /// The end-of-run report over semihosting, then QEMU's exit: success if `ok`, the
+    /// schedule held and no kernel or port error was counted.
+    fn end_run(&self, ok: bool) -> ! {
         let hooks = self.ecu.hooks();
+        let task_stack = cw_bsp::cortex_m::basic_stack_use();
+        let main_stack = cw_bsp::cortex_m::main_stack_use();
         let schedule_ok = report_trace();
         let link = mps2::slcan_stats();
         cw_bsp::mps2_log!(
@@ -392,52 +457,11 @@ impl App for Mps2App {
             mps2::now_ms(),
             hooks.errors,
             hooks.port_errors,
-            cw_bsp::cortex_m::basic_stack_use(),
+            task_stack,
             (cw_bsp::cortex_m::BASIC_STACK_WORDS - cw_bsp::cortex_m::GUARD_WORDS) * 4,
-            cw_bsp::cortex_m::main_stack_use()
+            main_stack
         );
-        mps2::exit(schedule_ok && hooks.errors == 0 && hooks.port_errors == 0);
-    }
-
-    fn tick(&self) {
-        // The scenario's bus events, before the OS tick, as the host simulation orders
-        // them: errors injected at their ms; a tester's frame, which takes a fraction of
-        // a ms on the bus, received in the ms after it was sent.
-        let now = mps2::now_ms();
-        for &(_, count) in self.scenario.can_errors.iter().filter(|(at, _)| *at == now) {
-            mps2::inject_tx_errors(count);
-        }
-        for &(_, frame) in self
-            .scenario
-            .frames
-            .iter()
-            .filter(|(at, _)| at.checked_add(1) == Some(now))
-        {
-            mps2::put_frame_on_bus(frame);
-        }
-        self.ecu.port().advance_ms();
-        self.ecu.tick();
-    }
-
-    fn irq(&self, line: u16) {
-        match line {
-            // UART0 RX and TX: the CAN controller.
-            0 | 1 => self.ecu.can_isr(),
-            _ => mps2::fatal("an interrupt line the ECU does not use"),
-        }
-    }
-
-    fn stack_fault(&self, task: Option<TaskId>) -> ! {
-        self.ecu
-            .port()
-            .kernel(|os| os.shutdown_on_fault(OsError::StackFault));
-        let shutdown = self.ecu.hooks().shutdown;
-        cw_bsp::mps2_log!(
-            "cw-qemu: stack overflow on the {} stack: ShutdownOS(E_OS_STACKFAULT), ShutdownHook saw {:?}\n",
-            task.map_or("shared task", |t| task_name(usize::from(t.0))),
-            shutdown
-        );
-        mps2::fatal("stack overflow")
+        mps2::exit(ok && schedule_ok && hooks.errors == 0 && hooks.port_errors == 0);
     }
 }
 

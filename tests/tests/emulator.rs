@@ -19,7 +19,7 @@ fn out(name: &str) -> PathBuf {
 }
 
 /// The image on `scenario` against the simulation; prints the counts compared.
-fn same_ecu(scenario: &str) {
+fn same_ecu(scenario: &str) -> cw_tests::ImageRun {
     let image = image().unwrap_or_else(|e| panic!("{e}"));
     let path = root().join("scenarios").join(scenario);
     let run = run_image(&image, Some(&path), &out(scenario)).unwrap_or_else(|e| panic!("{e}"));
@@ -40,6 +40,7 @@ fn same_ecu(scenario: &str) {
          compared in order, times within {:.3} ms; schedule: {schedule}",
         a.frames, a.image_extra, a.frame_skew_ms, a.red, a.yellow, a.led_skew_ms
     );
+    run
 }
 
 #[test]
@@ -55,6 +56,32 @@ fn faults_is_the_same_ecu_on_the_image() {
 #[test]
 fn no_communication_is_the_same_ecu_on_the_image() {
     same_ecu("no-communication.txt");
+}
+
+/// The ignition goes off: EcuM's post-run darkens the LEDs and calls ShutdownOS(E_OK); on
+/// the image the run ends there (interrupts off for good), with the same frames and LED
+/// levels as the host simulation, whose ECU stays silent after it.
+#[test]
+fn shutdown_is_the_same_ecu_on_the_image_and_ends_at_shutdown_os() {
+    let run = same_ecu("shutdown.txt");
+    let line = run
+        .report
+        .lines()
+        .find(|l| l.starts_with("cw-qemu: ShutdownOS at "))
+        .unwrap_or_else(|| panic!("no ShutdownOS line in:\n{}", run.report));
+    assert!(
+        line.ends_with("ShutdownHook saw E_OK; no task or interrupt runs from here on"),
+        "{line}"
+    );
+    // The scenario's shutdown is at 6 s and it lasts 8 s: the run ends within the
+    // post-run's few BSW cycles of 6 s, not at 8 s.
+    let at: u32 = line
+        .trim_start_matches("cw-qemu: ShutdownOS at ")
+        .split(' ')
+        .next()
+        .and_then(|ms| ms.parse().ok())
+        .unwrap_or_else(|| panic!("no time in `{line}`"));
+    assert!((6_000..6_100).contains(&at), "{line}");
 }
 
 /// A scenario the image cannot read or play: the run fails, the LEDs stay dark, and the
@@ -90,9 +117,9 @@ fn a_malformed_scenario_is_refused_with_its_line() {
 #[test]
 fn a_scenario_the_image_cannot_play_is_refused() {
     refused(
-        "shutdown.txt",
-        Some("hold 500 1000\nshutdown 500\n"),
-        "the image does not play `shutdown` (the host simulation does)",
+        "dropout-rate.txt",
+        Some("hold 500 1000\ndropout-rate 20000\n"),
+        "the image does not play `dropout-rate` (the host simulation does)",
     );
     refused(
         "noise.txt",

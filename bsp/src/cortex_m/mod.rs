@@ -21,6 +21,10 @@
 //!   0, moved at every switch, makes inaccessible to the running context: an overflow
 //!   faults at its first access, and [`App::stack_fault`] shuts the OS down with
 //!   `E_OS_STACKFAULT`.
+//! - **Shutdown.** When a kernel call leaves the OS shut down (`ShutdownOS`, or the
+//!   OS's own on a stack fault), PRIMASK stays set for good and no task is switched to;
+//!   the port hands the end to [`App::shut_down`] (report, safe state, stop) from that
+//!   call, once.
 //! - **Interrupt masking.** The kernel's interrupt mask ([`cw_core::os::InterruptMask`])
 //!   becomes BASEPRI (`UpTo(p)`: every ISR of OSEK priority up to `p`, and PendSV, held)
 //!   or PRIMASK (`All`) after every kernel call: resources shared with ISRs and
@@ -108,6 +112,8 @@ struct Sched {
     in_kernel: bool,
     /// Each task's own stack as (lowest address, top), or (0, 0): the shared stack.
     own_stack: [(u32, u32); MAX_TASKS],
+    /// `ShutdownOS` ran and the application was told ([`App::shut_down`]).
+    stopped: bool,
 }
 
 struct SchedCell(UnsafeCell<Sched>);
@@ -127,6 +133,7 @@ static SCHED: SchedCell = SchedCell(UnsafeCell::new(Sched {
     basic_top: 0,
     in_kernel: false,
     own_stack: [(0, 0); MAX_TASKS],
+    stopped: false,
 }));
 
 /// A task's own stack (aligned for its MPU guard region). Extended tasks need one: `WaitEvent` keeps the task's context while
@@ -243,9 +250,17 @@ pub trait App: Sync {
     /// External interrupt line `line` of the board.
     fn irq(&self, line: u16);
     /// A stack overflowed (`task`'s, or the shared stack's: `None`): the application
-    /// shuts the OS down with `E_OS_STACKFAULT` (its ShutdownHook sees it) and reports.
-    /// Called from PendSV with interrupts disabled; never returns.
+    /// reports which and shuts the OS down with `E_OS_STACKFAULT` (its ShutdownHook sees
+    /// it), which ends in [`App::shut_down`]. Called from PendSV or the MemManage fault
+    /// with interrupts disabled; never returns.
     fn stack_fault(&self, task: Option<TaskId>) -> !;
+    /// `ShutdownOS` ran (the application's own call, or the OS's on a fault): called once,
+    /// from the kernel call that shut the OS down, in the context that made it, with
+    /// interrupts disabled for good (OSEK: the OS does not come back, no task or ISR runs
+    /// again). The application puts its outputs in their safe state, reports and stops
+    /// (on silicon: EcuM's power-off or reset). Kernel calls that only read (the hooks'
+    /// record) are still served, without switching tasks or unmasking interrupts.
+    fn shut_down(&self) -> !;
 }
 
 struct AppCell(UnsafeCell<Option<&'static dyn App>>);
@@ -306,6 +321,14 @@ impl<K: OsKernel> CortexMPort<K> {
         let result = f(kernel, sched);
         sched.in_kernel = false;
         let next = kernel.running().map_or(IDLE, |t| t.0);
+        if next == IDLE && kernel.is_shut_down() {
+            // ShutdownOS ran: PRIMASK stays set and nothing is switched to; the first
+            // call to see it hands the end to the application.
+            if !core::mem::replace(&mut sched.stopped, true) {
+                os_stopped();
+            }
+            return result;
+        }
         sched.next = next;
         if next != sched.current || sched.ended {
             SCB::set_pendsv();
@@ -372,6 +395,14 @@ impl<K: OsKernel> Port for CortexMPort<K> {
         } else {
             trace::span_end(id, at);
         }
+    }
+}
+
+/// The OS has shut down: the application ends the run.
+fn os_stopped() -> ! {
+    match app() {
+        Some(app) => app.shut_down(),
+        None => fatal("ShutdownOS before the application started"),
     }
 }
 

@@ -71,6 +71,37 @@ impl OsError {
     pub const fn status(self) -> StatusType {
         self as StatusType
     }
+
+    /// Every error, in the order of their codes.
+    pub const ALL: [Self; 11] = [
+        Self::Access,
+        Self::CallLevel,
+        Self::Id,
+        Self::Limit,
+        Self::NoFunc,
+        Self::Resource,
+        Self::State,
+        Self::Value,
+        Self::MissingEnd,
+        Self::DisabledInt,
+        Self::StackFault,
+    ];
+
+    /// The error a `StatusType` value names (`None`: `E_OK`, or a code no service of
+    /// this kernel returns, such as an application's own `ShutdownOS` code).
+    pub fn from_status(status: StatusType) -> Option<Self> {
+        Self::ALL.into_iter().find(|e| e.status() == status)
+    }
+}
+
+/// The standard's name of a `StatusType` value: `E_OK`, an error's name, or `None` for a
+/// code the standard does not name here (an application's own).
+pub fn status_name(status: StatusType) -> Option<&'static str> {
+    if status == E_OK {
+        Some("E_OK")
+    } else {
+        OsError::from_status(status).map(OsError::name)
+    }
 }
 
 /// `OSServiceIdType`: which service an error came from (`OSErrorGetServiceId`). The
@@ -245,5 +276,24 @@ impl ServiceId {
                 | Self::SuspendOsInterrupts
                 | Self::ResumeOsInterrupts
         )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_status_names_itself_and_codes_round_trip() {
+        for e in OsError::ALL {
+            assert_eq!(OsError::from_status(e.status()), Some(e));
+            assert_eq!(status_name(e.status()), Some(e.name()));
+        }
+        assert_eq!(status_name(E_OK), Some("E_OK"));
+        assert_eq!(OsError::from_status(E_OK), None);
+        // 9 and 10 are AUTOSAR codes this kernel never returns; 200 an application's.
+        for code in [9, 10, 14, 200] {
+            assert_eq!(status_name(code), None, "{code}");
+        }
     }
 }

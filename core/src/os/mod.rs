@@ -101,7 +101,7 @@ pub use config::{
     TaskConfig, TaskKind, ISR_LEVEL_BASE, MAX_APP_MODES, MAX_ISRS, MAX_ISR_PRIORITY, MAX_PRIORITY,
     MAX_RESOURCES, MAX_TASKS,
 };
-pub use error::{OsError, ServiceId, StatusType, E_OK};
+pub use error::{status_name, OsError, ServiceId, StatusType, E_OK};
 pub use hooks::{Hooks, NoHooks};
 pub use irq::{InterruptControl, InterruptMask, VirtualInterrupts};
 pub use kernel::{AlarmBase, Locks, Os, Phase};

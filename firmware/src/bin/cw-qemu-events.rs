@@ -24,9 +24,9 @@ use cw_bsp::cortex_m::{self as port, App, CortexMPort, TaskStack};
 use cw_bsp::port::{Port, Slot};
 use cw_bsp::{mps2, mps2_log};
 use cw_core::os::{
-    AlarmAction, AlarmConfig, ConformanceClass, CounterConfig, CounterId, Dialect, EventMask,
-    HookSet, Hooks, IsrConfig, IsrId, Os, OsConfig, OsDescription, OsError, Status, StatusType,
-    TaskConfig, TaskId, OSDEFAULTAPPMODE,
+    status_name, AlarmAction, AlarmConfig, ConformanceClass, CounterConfig, CounterId, Dialect,
+    EventMask, HookSet, Hooks, IsrConfig, IsrId, Os, OsConfig, OsDescription, OsError, Status,
+    StatusType, TaskConfig, TaskId, OSDEFAULTAPPMODE,
 };
 
 const WAITER: TaskId = TaskId(0);
@@ -116,6 +116,8 @@ static LATE_WAKES: AtomicU32 = AtomicU32::new(0);
 static PINGS: AtomicU32 = AtomicU32::new(0);
 static WORK_JOBS: AtomicU32 = AtomicU32::new(0);
 static DIVING: AtomicU32 = AtomicU32::new(0);
+/// 1: the stack fault the port reported was on the waiter's own stack.
+static FAULT_ON_WAITER: AtomicU32 = AtomicU32::new(0);
 
 struct Demo {
     port: CortexMPort<Kernel>,
@@ -257,23 +259,35 @@ impl App for Demo {
     }
 
     fn stack_fault(&self, task: Option<TaskId>) -> ! {
-        self.port
-            .kernel(|os| os.shutdown_on_fault(OsError::StackFault));
-        let hooks = self.port.inspect(|os| *os.hooks());
         let who = task.map_or("the shared", |t| OS.tasks()[usize::from(t.0)].name);
         mps2_log!(
-            "cw-qemu-events: stack overflow caught by the MPU guard on {} stack; ShutdownOS(E_OS_STACKFAULT): ShutdownHook saw {:?}\n",
-            who,
-            hooks.shutdown
+            "cw-qemu-events: stack overflow caught by the MPU guard on {} stack; ShutdownOS(E_OS_STACKFAULT)\n",
+            who
         );
-        let planned = DIVING.load(Ordering::Relaxed) == 1 && task == Some(WAITER);
+        FAULT_ON_WAITER.store(u32::from(task == Some(WAITER)), Ordering::Relaxed);
+        // The port hands the end to `shut_down`.
+        self.port
+            .kernel(|os| os.shutdown_on_fault(OsError::StackFault));
+        mps2::fatal("the OS did not shut down on a stack overflow")
+    }
+
+    fn shut_down(&self) -> ! {
+        mps2::leds_safe();
+        let hooks = self.port.inspect(|os| *os.hooks());
+        mps2_log!(
+            "cw-qemu-events: ShutdownHook saw {}\n",
+            hooks
+                .shutdown
+                .map_or("nothing", |s| status_name(s).unwrap_or("an unknown code"))
+        );
+        let planned =
+            DIVING.load(Ordering::Relaxed) == 1 && FAULT_ON_WAITER.load(Ordering::Relaxed) == 1;
         let ok = planned
             && hooks.shutdown == Some(OsError::StackFault.status())
             && hooks.errors == 0
             && LATE_WAKES.load(Ordering::Relaxed) == 0
             && ALARM_WAKES.load(Ordering::Relaxed) == WAKES
             && ISR_WAKES.load(Ordering::Relaxed) > 0;
-        mps2::leds_safe();
         mps2_log!("cw-qemu-events: {}\n", if ok { "ok" } else { "FAILED" });
         mps2::exit(ok)
     }
