@@ -96,6 +96,9 @@ pub mod span {
     pub const RX_TO_COM: usize = 6;
     /// The port's calibration of its own measuring.
     pub const CALIBRATION: usize = 7;
+    /// The spans that are ISRs (bit per span): the trace takes their time off the spans
+    /// and jobs they interrupt.
+    pub const ISR_SPANS: u32 = 1 << CAN_ISR | 1 << TICK_NOTHING_DUE | 1 << TICK_ALARMS_DUE;
     /// The names, by number.
     pub const NAMES: [&str; 7] = [
         "ActivateTask(OsComTask) to its first line",

@@ -334,6 +334,7 @@ impl App for Mps2App {
         cortex_m::interrupt::disable();
         mps2::start_tick(config::OS.isrs()[config::SYSTICK_ISR.0 as usize].priority);
         calibrate(self.ecu.port());
+        cw_bsp::cortex_m::trace::set_isr_spans(span::ISR_SPANS);
         SlcanCan::enable_interrupts(config::OS.isrs()[config::CAN_ISR.0 as usize].priority);
         if self.uart_sensor {
             SensorUart::enable_interrupt(

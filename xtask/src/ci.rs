@@ -59,7 +59,7 @@ const BUDGET_S: &[(&str, u32)] = &[
     ("miri", 580),
     ("model", 60),
     ("mutants", 120),
-    ("qemu", 65),
+    ("qemu", 110),
     ("differential", 15),
     ("interop", 45),
     ("fuzz", 240),

@@ -19,6 +19,7 @@ mod differential;
 mod json;
 mod mutants;
 mod process;
+mod profile;
 mod qemu;
 mod rng;
 mod setup;

@@ -20,9 +20,12 @@
 //! image plays: it reads each over semihosting (`-semihosting-config ...,arg=--scenario,
 //! arg=FILE`). Each run's files go to `target/qemu/<scenario name>/`.
 //!
+//! `--profile` runs each scenario instruction by instruction and counts where the
+//! instructions go, per function (`crate::profile`): `target/qemu/<name>/profile.txt`.
+//!
 //! `--compare` runs the emulator-in-the-loop tests in `tests/` (package `cw-tests`) on
-//! the image it built: on `scenarios/figure7.txt`, `scenarios/faults.txt` and
-//! `scenarios/no-communication.txt` the image
+//! the image it built: on `scenarios/figure7.txt`, `scenarios/faults.txt`,
+//! `scenarios/no-communication.txt` and `scenarios/shutdown.txt` the image
 //! and the host simulation must give the same CAN frames the ECU sent (id and payload, in
 //! order) and the same levels of each LED, in order, with times within one OS tick.
 
@@ -41,22 +44,26 @@ pub struct Options {
     compare: bool,
     live: bool,
     events: bool,
+    profile: bool,
     serial: Option<String>,
 }
 
 impl Options {
-    /// The options of the check command's `qemu` stage: the comparison, then the live test.
+    /// The options of the check command's `qemu` stage: the extended-task demo, the
+    /// per-function profile of Figure 7, the comparison, then the live test.
     pub fn ci() -> Self {
         Self {
             scenarios: Vec::new(),
             compare: true,
             live: true,
             events: true,
+            profile: true,
             serial: None,
         }
     }
 
-    /// Parses `[--scenario FILE]... [--compare] [--live] [--events] [--serial tcp:PORT]`.
+    /// Parses `[--scenario FILE]... [--compare] [--live] [--events] [--profile]
+    /// [--serial tcp:PORT]`.
     pub fn parse(args: &[String]) -> Result<Self> {
         let mut options = Self::default();
         let mut it = args.iter();
@@ -69,6 +76,7 @@ impl Options {
                 }
                 "--live" => options.live = true,
                 "--events" => options.events = true,
+                "--profile" => options.profile = true,
                 "--serial" => {
                     let Some(port) = it.next().and_then(|a| a.strip_prefix("tcp:")) else {
                         return Err("qemu: --serial takes tcp:PORT".into());
@@ -180,7 +188,7 @@ pub fn run(options: &Options) -> Result {
         }
     }
     let image = build()?;
-    if !options.scenarios.is_empty() || !(options.compare || options.live) {
+    if !options.scenarios.is_empty() || options.profile || !(options.compare || options.live) {
         let default = [root().join(FIGURE7)];
         let scenarios = if options.scenarios.is_empty() {
             &default[..]
@@ -192,6 +200,17 @@ pub fn run(options: &Options) -> Result {
                 .file_stem()
                 .map_or_else(|| "scenario".into(), |s| s.to_string_lossy().to_string());
             println!("qemu: scenario {}", scenario.display());
+            if options.profile {
+                let dir = out.join(&name);
+                std::fs::create_dir_all(&dir)
+                    .map_err(|e| format!("creating {}: {e}", dir.display()))?;
+                crate::profile::run(
+                    &image,
+                    &qemu_machine(Some(scenario), false),
+                    &dir.join("profile.txt"),
+                )?;
+                continue;
+            }
             run_image(
                 &image,
                 &out.join(&name),

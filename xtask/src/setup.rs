@@ -48,6 +48,7 @@ pub fn run() -> Result {
     cargo_bolero()?;
     valgrind()?;
     qemu()?;
+    debian_tool("llvm-symbolizer", &["--version"], "llvm")?;
     python_venv()?;
     Ok(())
 }

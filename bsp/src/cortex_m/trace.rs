@@ -14,6 +14,15 @@
 //! - named spans the application marks ([`span_start`], [`span_end`]): count, sum,
 //!   shortest and longest, for the instruction counts of the ECU's own paths.
 //!
+//! Spans and jobs are net of the ISRs that interrupt them: the application names the
+//! spans that are ISRs ([`set_isr_spans`]), the trace sums what each ISR span took
+//! itself (its nested ISRs taken off in turn), and every span or job subtracts what ISRs
+//! took while it was open. A path's figure is then its own instructions, not its own
+//! plus whichever interrupt happened to arrive (an ISR's row counts those). Only the
+//! few instructions of an exception's entry before its span starts (the handler's
+//! prologue, the vector's call) stay in the span it interrupted; so does an ISR the
+//! application marks no span for (the category-1 `SensorRxIsr`).
+//!
 //! Times are SysTick counts since the OS started (the OS tick count times the counts per
 //! tick, plus SysTick's progress into the current tick), so they need no peripheral beyond
 //! the core's own (DWT's cycle counter reads 0 in QEMU). On QEMU's mps2-an386 under
@@ -64,7 +73,8 @@ pub struct TaskRecord {
     pub jobs: u32,
     /// Jobs of this task that another task's job preempted (counted once per preemption).
     pub preempted: u32,
-    /// The time from a job's first line to its last (preemptions included), counts.
+    /// The time from a job's first line to its last (preempting jobs included, ISRs
+    /// not), counts.
     pub span: SpanRecord,
 }
 
@@ -121,11 +131,15 @@ pub struct Trace {
     /// SysTick counts per OS tick (ms), to convert.
     pub counts_per_ms: u32,
     /// The start of each span under way.
-    open: [Option<u32>; SPANS],
-    /// The jobs in progress, innermost last (basic tasks nest in LIFO order), and their
-    /// start times.
-    stack: [(u8, u32); MAX_TASKS],
+    open: [Option<(u32, u32)>; SPANS],
+    /// The jobs in progress, innermost last (basic tasks nest in LIFO order), with their
+    /// start times and `isr_counts` then.
+    stack: [(u8, u32, u32); MAX_TASKS],
     depth: usize,
+    /// Bit `id`: span `id` is an ISR's.
+    isr_spans: u32,
+    /// Counts spent in ISR spans so far, each net of the ISRs nested in it (wrapping).
+    isr_counts: u32,
 }
 
 /// An unused slot: all zero bits, so the trace starts in `.bss` (no flash image).
@@ -150,8 +164,10 @@ impl Trace {
             spans: [SpanRecord::EMPTY; SPANS],
             counts_per_ms: 0,
             open: [None; SPANS],
-            stack: [(0, 0); MAX_TASKS],
+            stack: [(0, 0, 0); MAX_TASKS],
             depth: 0,
+            isr_spans: 0,
+            isr_counts: 0,
         }
     }
 
@@ -170,7 +186,7 @@ impl Trace {
         self.depth
             .checked_sub(1)
             .and_then(|i| self.stack.get(i))
-            .map(|&(t, _)| t)
+            .map(|&(t, _, _)| t)
     }
 
     fn job_started(&mut self, task: u8, at_us: u32) {
@@ -188,7 +204,7 @@ impl Trace {
             r.jobs = r.jobs.saturating_add(1);
         }
         if let Some(slot) = self.stack.get_mut(self.depth) {
-            *slot = (task, at_us);
+            *slot = (task, at_us, self.isr_counts);
             self.depth += 1;
         }
         self.log(at_us, EventKind::JobStart(task));
@@ -197,12 +213,36 @@ impl Trace {
     fn job_finished(&mut self, task: u8, at_us: u32) {
         if self.running() == Some(task) {
             self.depth -= 1;
-            let start = self.stack.get(self.depth).map_or(at_us, |&(_, s)| s);
+            let (start, isr_before) = self
+                .stack
+                .get(self.depth)
+                .map_or((at_us, self.isr_counts), |&(_, s, i)| (s, i));
+            let length = self.net(start, isr_before, at_us);
             if let Some(r) = self.tasks.get_mut(usize::from(task)) {
-                r.span.add(at_us.wrapping_sub(start));
+                r.span.add(length);
             }
         }
         self.log(at_us, EventKind::JobEnd(task));
+    }
+
+    /// The counts from `start` to `end`, less what ISRs took meanwhile (`isr_before`:
+    /// `isr_counts` at `start`).
+    fn net(&self, start: u32, isr_before: u32, end: u32) -> u32 {
+        let gross = end.wrapping_sub(start);
+        gross.saturating_sub(self.isr_counts.wrapping_sub(isr_before))
+    }
+
+    fn span_end(&mut self, id: usize, at: u32) {
+        let Some((start, isr_before)) = self.open.get_mut(id).and_then(Option::take) else {
+            return;
+        };
+        let length = self.net(start, isr_before, at);
+        if let Some(record) = self.spans.get_mut(id) {
+            record.add(length);
+        }
+        if self.isr_spans & (1 << id) != 0 {
+            self.isr_counts = self.isr_counts.wrapping_add(length);
+        }
     }
 
     fn isr_entered(&mut self, isr: u8, at_us: u32) {
@@ -272,23 +312,26 @@ pub(crate) fn set_counts_per_ms(counts: u32) {
     with(|t| t.counts_per_ms = counts);
 }
 
+/// Names the spans that are ISRs (bit `id` for span `id`): what they take is taken off
+/// every span and job they interrupt.
+pub fn set_isr_spans(mask: u32) {
+    with(|t| t.isr_spans = mask);
+}
+
 /// Span `id` starts at `at` (a start while one is open restarts it).
 pub fn span_start(id: usize, at: u32) {
     with(|t| {
+        let isr_counts = t.isr_counts;
         if let Some(slot) = t.open.get_mut(id) {
-            *slot = Some(at);
+            *slot = Some((at, isr_counts));
         }
     });
 }
 
-/// Span `id` ends at `at` (nothing if it was not started).
+/// Span `id` ends at `at` (nothing if it was not started), net of the ISRs that
+/// interrupted it.
 pub fn span_end(id: usize, at: u32) {
-    with(|t| {
-        let start = t.open.get_mut(id).and_then(Option::take);
-        if let (Some(start), Some(record)) = (start, t.spans.get_mut(id)) {
-            record.add(at.wrapping_sub(start));
-        }
-    });
+    with(|t| t.span_end(id, at));
 }
 
 /// A job of `task` starts, at `at` (counts).

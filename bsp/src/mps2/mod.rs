@@ -397,9 +397,9 @@ impl Deferred {
     }
 }
 
-/// The trace span (`cortex_m::trace`) the driver's `Can_Write` is measured in: the SLCAN
-/// encoding and the characters the UART takes at once (the ECU names it
-/// `span::DRIVER_WRITE`).
+/// The trace span (`cortex_m::trace`) the driver's `Can_Write` is measured in: the
+/// bus-fault check, the frame into the mailbox and the transmit interrupt requested (the
+/// ECU names it `span::DRIVER_WRITE`).
 pub const DRIVER_WRITE_SPAN: usize = 5;
 
 /// Received frames waiting for `CanIsr`.
@@ -425,7 +425,10 @@ enum TxSource {
 pub struct SlcanCan {
     uart: Uart,
     mode: ControllerMode,
-    /// The mailbox: the line being sent and how far.
+    /// The mailbox: a frame `Can_Write` accepted, with its time stamp, that the transmit
+    /// interrupt has not yet turned into a line.
+    mailbox: Option<(CanFrame, Option<u32>)>,
+    /// The line being sent and how far.
     line: [u8; slcan::FRAME_LINE_MAX],
     len: usize,
     sent: usize,
@@ -461,6 +464,7 @@ impl SlcanCan {
         Self {
             uart,
             mode: ControllerMode::Stopped,
+            mailbox: None,
             line: [0; slcan::FRAME_LINE_MAX],
             len: 0,
             sent: 0,
@@ -583,21 +587,16 @@ impl SlcanCan {
         Some(byte)
     }
 
-    /// Moves characters: received ones into the decoder, queued lines into the UART while
-    /// it takes them. A frame line sent completely frees the mailbox and leaves its
-    /// Puts `frame`'s line into the mailbox, time-stamped now, and starts sending it; a
-    /// line the UART took at once is confirmed from the TX interrupt all the same.
+    /// Puts `frame` into the mailbox, time-stamped now, and requests the transmit
+    /// interrupt, which encodes its line and hands it to the UART: as a FlexCAN message
+    /// buffer is written and its code set to transmit, and the controller does the rest.
     fn start_line(&mut self, frame: &CanFrame) {
-        self.load_line(frame);
-        self.pump();
-        if self.confirmed.is_some() {
-            cortex_m::peripheral::NVIC::pend(Irq(1));
-        }
+        self.mailbox = Some((*frame, self.timestamps.then(now_ms)));
+        cortex_m::peripheral::NVIC::pend(Irq(1));
     }
 
-    /// Puts `frame`'s line into the mailbox, time-stamped now.
-    fn load_line(&mut self, frame: &CanFrame) {
-        let at_ms = self.timestamps.then(now_ms);
+    /// Puts `frame`'s line (time-stamped `at_ms`) where the transmitter takes it from.
+    fn load_line(&mut self, frame: &CanFrame, at_ms: Option<u32>) {
         self.len = slcan::encode_frame_at(frame, at_ms, &mut self.line);
         self.sent = 0;
     }
@@ -641,7 +640,11 @@ impl SlcanCan {
         })
     }
 
-    /// confirmation for `CanIsr`.
+    /// The controller's interrupt work: received characters into the decoder, tester
+    /// frames into the receive queue, a held-back transmission or bus-off when due, the
+    /// mailbox's frame encoded as a line, and lines into the UART while it takes them. A
+    /// frame line sent completely frees the transmitter and leaves its confirmation for
+    /// `CanIsr`.
     fn pump(&mut self) {
         self.uart.clear_interrupts();
         while let Some(byte) = self.uart.rx_byte() {
@@ -669,7 +672,9 @@ impl SlcanCan {
             match deferred {
                 // The transmitter below sends it; its confirmation follows in this
                 // interrupt.
-                Deferred::Send { frame, .. } => self.load_line(&frame),
+                Deferred::Send { frame, .. } => {
+                    self.load_line(&frame, self.timestamps.then(now_ms));
+                }
                 Deferred::BusOff { .. } => {
                     self.pdu = None;
                     self.mode = ControllerMode::Stopped;
@@ -679,11 +684,23 @@ impl SlcanCan {
                 }
             }
         }
+        // The mailbox's frame becomes the next line once the last one is out.
+        if self.sent >= self.len {
+            if let Some((frame, at_ms)) = self.mailbox.take() {
+                self.load_line(&frame, at_ms);
+            }
+        }
         while self.uart.tx_ready() {
             let Some(byte) = self.next_tx_byte() else {
                 break;
             };
             self.uart.write(Uart::DATA, u32::from(byte));
+        }
+        if self.source == TxSource::Idle && self.sent >= self.len && self.reply_len == 0 {
+            // Nothing left to send: the TX-empty interrupt the characters just written
+            // raised would only enter `CanIsr` again for nothing.
+            self.uart.write(Uart::INTSTATUS, Uart::INT_TX);
+            cortex_m::peripheral::NVIC::unpend(Irq(1));
         }
     }
 
@@ -708,6 +725,7 @@ impl CanDriver for SlcanCan {
         // Busy while a line is waiting or on its way (also one a stop let finish), or its
         // confirmation is not yet taken.
         if self.mode != ControllerMode::Started
+            || self.mailbox.is_some()
             || self.sent < self.len
             || self.confirmed.is_some()
             || self.deferred.is_some()
@@ -739,6 +757,7 @@ impl CanDriver for SlcanCan {
             // The pending transmission is cancelled: no confirmation. A line already on
             // the wire is finished, so the other end never sees half a line.
             self.pdu = None;
+            self.mailbox = None;
             self.deferred = None;
             DEFERRED_DUE_MS.store(u32::MAX, Ordering::Relaxed);
             if self.source != TxSource::Frame {

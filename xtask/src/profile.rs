@@ -1,0 +1,244 @@
+//! `cargo xtask qemu --profile`: where the image's instructions go, function by function.
+//!
+//! QEMU runs the image one instruction per translation block (`-singlestep`) and logs
+//! every block it executes (`-d exec,nochain`): one line per executed instruction, with
+//! its address. The addresses are counted as the log streams in, then `llvm-symbolizer`
+//! names each distinct one with its chain of inlined functions (the release image keeps
+//! line tables and inlining records, `debug = 1`). Two views follow:
+//!
+//! - **self**: the innermost source function of each instruction (where the work is, even
+//!   inside code LLVM inlined into a task's body);
+//! - **inclusive**: every function on an instruction's inline chain (a layer's whole cost
+//!   where it was inlined; a function called out of line counts only in itself).
+//!
+//! The counts are of the whole run, start-up and the end-of-run report included; a
+//! function's share per call follows from the run's job and ISR counts in the report.
+
+use std::collections::HashMap;
+use std::io::{BufRead, BufReader, Write};
+use std::path::Path;
+use std::process::{Command, Stdio};
+
+use crate::Result;
+
+/// How many functions each view prints (all of them go to the file).
+const SHOWN: usize = 40;
+
+/// The address of an executed instruction in one `-d exec` line (`Trace 0: 0xHOST
+/// [0000000a/PC/flags/cflags] symbol`), `None` for a line of another kind.
+///
+/// # Errors
+/// A trace line whose address is not hexadecimal.
+fn executed_pc(line: &str) -> std::result::Result<Option<u32>, String> {
+    if !line.starts_with("Trace ") {
+        return Ok(None);
+    }
+    let fields = line
+        .split_once('[')
+        .and_then(|(_, rest)| rest.split_once(']'))
+        .map(|(inside, _)| inside);
+    let pc = fields.and_then(|f| f.split('/').nth(1));
+    match pc.map(|pc| u32::from_str_radix(pc, 16)) {
+        Some(Ok(pc)) => Ok(Some(pc)),
+        _ => Err(format!("not an executed block's address: `{line}`")),
+    }
+}
+
+/// A symbol as rustc's legacy mangling leaves it after LLVM's demangler: `$LT$` and the
+/// other escapes decoded, `..` as `::`, the hash suffix dropped.
+fn readable(name: &str) -> String {
+    let name = match name.rsplit_once("::h") {
+        Some((head, hash)) if hash.len() == 16 && hash.bytes().all(|b| b.is_ascii_hexdigit()) => {
+            head
+        }
+        _ => name,
+    };
+    let mut out = name
+        .replace("$LT$", "<")
+        .replace("$GT$", ">")
+        .replace("$u20$", " ")
+        .replace("$C$", ",")
+        .replace("$RF$", "&")
+        .replace("$BP$", "*")
+        .replace("$u7b$", "{")
+        .replace("$u7d$", "}")
+        .replace("$u27$", "'")
+        .replace("..", "::");
+    if out.starts_with("_<") {
+        out.remove(0);
+    }
+    out
+}
+
+/// The inline chains of `pcs` (innermost function first), from `llvm-symbolizer`.
+///
+/// # Errors
+/// The symbolizer cannot run, or answers with fewer chains than addresses asked.
+fn inline_chains(image: &Path, pcs: &[u32]) -> Result<Vec<Vec<String>>> {
+    let mut child = Command::new("llvm-symbolizer")
+        .arg(format!("--obj={}", image.display()))
+        .args(["--inlining", "--functions=linkage"])
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .spawn()
+        .map_err(|e| format!("llvm-symbolizer: {e} (`cargo xtask setup` installs it)"))?;
+    let input: String = pcs.iter().map(|pc| format!("{pc:#x}\n")).collect();
+    let mut stdin = child.stdin.take().ok_or("llvm-symbolizer: no stdin")?;
+    // The answers for a few thousand addresses fit the pipe only in part: write from a
+    // thread while the answers are read here.
+    let writer = std::thread::spawn(move || stdin.write_all(input.as_bytes()));
+    let out = child
+        .wait_with_output()
+        .map_err(|e| format!("llvm-symbolizer: {e}"))?;
+    writer
+        .join()
+        .map_err(|_| "llvm-symbolizer: the writer thread failed")?
+        .map_err(|e| format!("llvm-symbolizer: {e}"))?;
+    if !out.status.success() {
+        return Err(format!("llvm-symbolizer failed: {}", out.status));
+    }
+    let text = String::from_utf8_lossy(&out.stdout);
+    // One block per address: (function, file:line:col) pairs, then an empty line.
+    let chains: Vec<Vec<String>> = text
+        .split("\n\n")
+        .filter(|block| !block.trim().is_empty())
+        .map(|block| block.lines().step_by(2).map(readable).collect())
+        .collect();
+    if chains.len() != pcs.len() {
+        return Err(format!(
+            "llvm-symbolizer named {} of {} addresses",
+            chains.len(),
+            pcs.len()
+        ));
+    }
+    Ok(chains)
+}
+
+/// Runs `image` on `machine` (QEMU's arguments before the image's) instruction by
+/// instruction, and writes the two views to `out` (and their heads to the terminal).
+pub fn run(image: &Path, machine: &[String], out: &Path) -> Result {
+    let report_path = out.with_extension("report.txt");
+    let report = std::fs::File::create(&report_path)
+        .map_err(|e| format!("creating {}: {e}", report_path.display()))?;
+    let mut qemu = Command::new("qemu-system-arm")
+        .args(machine)
+        .args(["-icount", "shift=0,sleep=off", "-serial", "null"])
+        .args(["-singlestep", "-d", "exec,nochain"])
+        .arg("-kernel")
+        .arg(image)
+        .stdout(report)
+        .stderr(Stdio::piped())
+        .spawn()
+        .map_err(|e| format!("qemu-system-arm: {e}"))?;
+    let log = qemu.stderr.take().ok_or("qemu-system-arm: no log pipe")?;
+    let mut counts: HashMap<u32, u64> = HashMap::new();
+    let mut reader = BufReader::with_capacity(1 << 20, log);
+    let mut line = String::new();
+    let mut number = 0u64;
+    loop {
+        line.clear();
+        let n = reader
+            .read_line(&mut line)
+            .map_err(|e| format!("reading QEMU's log: {e}"))?;
+        if n == 0 {
+            break;
+        }
+        number += 1;
+        let pc =
+            executed_pc(line.trim_end()).map_err(|e| format!("QEMU log line {number}: {e}"))?;
+        if let Some(pc) = pc {
+            *counts.entry(pc).or_default() += 1;
+        }
+    }
+    let status = qemu.wait().map_err(|e| format!("qemu-system-arm: {e}"))?;
+    if !status.success() {
+        return Err(format!(
+            "the profiled run failed ({status}); its report is {}",
+            report_path.display()
+        ));
+    }
+    let mut pcs: Vec<u32> = counts.keys().copied().collect();
+    pcs.sort_unstable();
+    let chains = inline_chains(image, &pcs)?;
+    let mut own: HashMap<&str, u64> = HashMap::new();
+    let mut inclusive: HashMap<&str, u64> = HashMap::new();
+    for (pc, chain) in pcs.iter().zip(&chains) {
+        let n = counts.get(pc).copied().unwrap_or(0);
+        if let Some(innermost) = chain.first() {
+            *own.entry(innermost).or_default() += n;
+        }
+        let mut seen: Vec<&str> = Vec::new();
+        for f in chain {
+            if !seen.contains(&f.as_str()) {
+                seen.push(f);
+                *inclusive.entry(f).or_default() += n;
+            }
+        }
+    }
+    let total: u64 = counts.values().sum();
+    let ranked = |map: &HashMap<&str, u64>| {
+        let mut rows: Vec<(u64, String)> = map.iter().map(|(f, n)| (*n, f.to_string())).collect();
+        rows.sort_by(|a, b| b.0.cmp(&a.0).then(a.1.cmp(&b.1)));
+        rows
+    };
+    let table = |title: &str, rows: &[(u64, String)], limit: usize| {
+        let mut t = format!("{title}\n");
+        for (n, f) in rows.iter().take(limit) {
+            let share = *n as f64 * 100.0 / total.max(1) as f64;
+            t.push_str(&format!("{n:>12} {share:>6.2}%  {f}\n"));
+        }
+        t
+    };
+    let (own, inclusive) = (ranked(&own), ranked(&inclusive));
+    let head = format!(
+        "profile: {total} instructions executed at {} addresses (the whole run: start-up, \
+         the OS, the end-of-run report)\n",
+        pcs.len()
+    );
+    let own_title = "self: instructions whose innermost (inlined) function is";
+    let inclusive_title = "inclusive: instructions with the function on their inline chain";
+    print!(
+        "{head}{}{}",
+        table(own_title, &own, SHOWN),
+        table(inclusive_title, &inclusive, SHOWN)
+    );
+    let all = format!(
+        "{head}{}{}",
+        table(own_title, &own, usize::MAX),
+        table(inclusive_title, &inclusive, usize::MAX)
+    );
+    std::fs::write(out, all).map_err(|e| format!("writing {}: {e}", out.display()))?;
+    println!(
+        "profile: every function in {}; the image's report in {}",
+        out.display(),
+        report_path.display()
+    );
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn trace_lines_give_their_address_and_other_lines_none() {
+        let line = "Trace 0: 0x7fd900000100 [00800408/0000273c/00000110/ff020201] DefaultPreInit";
+        assert_eq!(executed_pc(line), Ok(Some(0x273c)));
+        assert_eq!(executed_pc("Linking TBs"), Ok(None));
+        assert!(executed_pc("Trace 0: 0x7fd9 [00800408/zz/00000110]").is_err());
+        assert!(executed_pc("Trace 0: cut").is_err());
+    }
+
+    #[test]
+    fn mangled_names_become_readable() {
+        assert_eq!(
+            readable("_$LT$cw_firmware..mps2..Mps2App$u20$as$u20$cw_bsp..cortex_m..App$GT$::run_job::hf5ad753ee5adbad8"),
+            "<cw_firmware::mps2::Mps2App as cw_bsp::cortex_m::App>::run_job"
+        );
+        assert_eq!(
+            readable("<core::fmt::Formatter>::pad"),
+            "<core::fmt::Formatter>::pad"
+        );
+        assert_eq!(readable("cw_port_switch"), "cw_port_switch");
+    }
+}
