@@ -187,6 +187,7 @@ impl<C: cw_core::can::CanDriver + CanEvents> ComStack<C> {
     }
 
     /// CanTranslate's signals through Com, PduR and CanIf to the controller.
+    #[inline(never)]
     fn send(&mut self, distance: Option<u64>, level: u64) {
         let (canif, can, frames) = (&mut self.canif, &mut self.can, &mut self.frames);
         let mut transmit = |ipdu, sdu: &[u8]| frames.transmit(canif, can, ipdu, sdu);
@@ -563,6 +564,8 @@ impl<P: Port<Kernel = Kernel>, B: Board> Ecu<P, B> {
     }
 
     /// `CanIsr`: the CAN controller's pending events, in order, into CanIf and upwards.
+    /// Out of line, as an ISR's body is (`ISR(CanIsr)`).
+    #[inline(never)]
     pub fn can_isr(&self) {
         self.isr(config::CAN_ISR, span::CAN_ISR, |ecu| {
             let _ = ecu.com.lock(&ecu.port, |stack| {
@@ -700,7 +703,10 @@ impl<P: Port<Kernel = Kernel>, B: Board> Ecu<P, B> {
         }
     }
 
-    /// `OsComTask`: CanTranslate.
+    /// `OsComTask`: CanTranslate. Out of line, as a task body is (`TASK(OsComTask)`): the
+    /// job's instructions are measured on this symbol on the host (callgrind), as the
+    /// image's trace measures them between the job's marks.
+    #[inline(never)]
     fn com_task(&self) {
         let input = self.rte.lock(&self.port, |rte| {
             rte.sonar_to_can

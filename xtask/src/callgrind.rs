@@ -115,6 +115,28 @@ pub const STACK_PROBES: &[(&str, &str)] = &[
     ("rx_com_read", "RX: Com_ReceiveSignal alone (unpack)"),
 ];
 
+/// The ECU's own paths in the host build (`cw-ecu`), measured on Figure 7: (the function
+/// callgrind collects in, inclusive of its callees, what it does). Each is out of line in
+/// the ECU itself, so its instructions per call are the whole Ir collected inside it
+/// divided by the calls callgrind counted into it.
+pub const ECU_PATHS: &[(&str, &str)] = &[
+    (
+        "cw_firmware::ecu::Ecu<P,B>::com_task",
+        "OsComTask job: RTE read under RES_RTE, CanTranslate, RES_COM, the send",
+    ),
+    (
+        "cw_firmware::ecu::ComStack<C>::send",
+        "its send: Com_SendSignal (level, distance) -> PduR -> CanIf -> host controller's write",
+    ),
+    (
+        "cw_firmware::ecu::Ecu<P,B>::can_isr",
+        "CanIsr: kernel entry/return, RES_COM, the controller's event, CanIf/PduR/Com",
+    ),
+];
+
+/// The scenario the ECU paths are measured on.
+const ECU_SCENARIO: &str = "scenarios/figure7.txt";
+
 /// Iteration counts of the two runs per probe.
 const LOW: u64 = 1000;
 const HIGH: u64 = 2000;
@@ -184,6 +206,21 @@ pub fn run(options: &Options) -> Result {
 
     let mut rows = Vec::new();
     let mut errors = Vec::new();
+    Cmd::new("cargo")
+        .args(["build", "--release", "-p", "cw-firmware", "--bin", "cw-ecu"])
+        .run()?;
+    let ecu = target_dir().join("release").join("cw-ecu");
+    for (i, &(function, description)) in ECU_PATHS.iter().enumerate() {
+        match measure_ecu(&ecu, &out_dir, i, function) {
+            Ok((per_call, calls)) => {
+                rows.push(("ecu", description, format!("{per_call:.1} ({calls} calls)")))
+            }
+            Err(e) => {
+                rows.push(("ecu", description, "ERROR".into()));
+                errors.push(format!("{function}: {e}"));
+            }
+        }
+    }
     for (binary, &(op, description)) in probes {
         let measured = measure(binary, &out_dir, op, LOW).and_then(|low| {
             let high = measure(binary, &out_dir, op, HIGH)?;
@@ -256,6 +293,84 @@ fn measure(binary: &Path, out_dir: &Path, op: &str, iterations: u64) -> Result<u
         .ok_or_else(|| format!("no `totals:` or `summary:` line in {}", out_file.display()))
 }
 
+/// Runs the ECU on Figure 7 collecting only inside `function` (and what it calls);
+/// returns its instructions per call and the calls.
+fn measure_ecu(binary: &Path, out_dir: &Path, index: usize, function: &str) -> Result<(f64, u64)> {
+    let out_file = out_dir.join(format!("callgrind.out.ecu.{index}"));
+    let _ = std::fs::remove_file(&out_file);
+    let mut out_arg = std::ffi::OsString::from("--callgrind-out-file=");
+    out_arg.push(&out_file);
+    let run = Cmd::new("valgrind")
+        .args(["--tool=callgrind", "--collect-atstart=no"])
+        .arg(out_arg)
+        .arg(format!("--toggle-collect={function}"))
+        .arg(binary)
+        .arg("--scenario")
+        .arg(crate::process::root().join(ECU_SCENARIO))
+        .capture()?;
+    if !run.success {
+        return Err(format!(
+            "the ECU run failed:\n{}{}",
+            run.stdout,
+            tail(&run.stderr, 20)
+        ));
+    }
+    let text = std::fs::read_to_string(&out_file)
+        .map_err(|e| format!("reading {}: {e}", out_file.display()))?;
+    let total = read_total(&text)
+        .ok_or_else(|| format!("no `totals:` or `summary:` line in {}", out_file.display()))?;
+    let calls = calls_into(&text, function);
+    if calls == 0 || total == 0 {
+        return Err(format!(
+            "callgrind counted {calls} calls into `{function}` and {total} instructions: is it \
+             in the binary (`nm -C` lists it) and #[inline(never)]?"
+        ));
+    }
+    Ok((total as f64 / calls as f64, calls))
+}
+
+/// The calls into `function` that a callgrind output file records: every `calls=N` line
+/// after a `cfn=` naming it (by name, or by the id its first mention gave it, in a `fn=`
+/// or a `cfn=` line).
+fn calls_into(text: &str, function: &str) -> u64 {
+    let mut id: Option<&str> = None;
+    let mut current = false;
+    let mut calls = 0u64;
+    for line in text.lines() {
+        if let Some(rest) = line.strip_prefix("fn=") {
+            if let (tag, Some(name)) = split_tag(rest) {
+                if name == function {
+                    id = Some(tag);
+                }
+            }
+        } else if let Some(rest) = line.strip_prefix("cfn=") {
+            let (tag, name) = split_tag(rest);
+            if name == Some(function) {
+                id = Some(tag);
+            }
+            current = name == Some(function) || (name.is_none() && Some(tag) == id);
+        } else if let Some(rest) = line.strip_prefix("calls=") {
+            if current {
+                calls += rest
+                    .split_whitespace()
+                    .next()
+                    .and_then(|n| n.parse::<u64>().ok())
+                    .unwrap_or(0);
+            }
+            current = false;
+        }
+    }
+    calls
+}
+
+/// `(id) name` or `(id)`: the id and the name if given.
+fn split_tag(rest: &str) -> (&str, Option<&str>) {
+    match rest.split_once(' ') {
+        Some((tag, name)) => (tag, Some(name)),
+        None => (rest, None),
+    }
+}
+
 /// The instruction count of a callgrind output file: its `totals:` line, else `summary:`
 /// (first event, which is `Ir` with the default options).
 fn read_total(text: &str) -> Option<u64> {
@@ -286,6 +401,16 @@ fn tail(text: &str, lines: usize) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn counts_calls_by_name_and_by_id() {
+        let file = "fn=(1) main\ncfn=(2) a::job\ncalls=3 10\n5 9\ncfn=(3) b\ncalls=7 1\n\
+                    fn=(4) other\ncfn=(2)\ncalls=4 12\nfn=(5) c\n1 1\nfn=(1)\ncfn=(5)\ncalls=2 3\n";
+        assert_eq!(calls_into(file, "a::job"), 7);
+        assert_eq!(calls_into(file, "b"), 7);
+        assert_eq!(calls_into(file, "c"), 2);
+        assert_eq!(calls_into(file, "d"), 0);
+    }
 
     #[test]
     fn reads_totals_then_summary() {

@@ -714,7 +714,11 @@ where
     ///
     /// # Errors
     /// [`ComError::UnknownSignal`] or [`ComError::OutOfRange`]; nothing changes then.
-    #[inline]
+    ///
+    /// Always inlined: a call that names its signal by a constant (as generated RTE code
+    /// does) folds the lookup, the layout and the transfer property with a constant
+    /// table (`Tables`), leaving the pack and the I-PDU's update.
+    #[inline(always)]
     pub fn send_signal(
         &mut self,
         signal: SignalId,
@@ -764,6 +768,7 @@ where
     ///
     /// # Errors
     /// [`ComError::UnknownSignal`] or [`ComError::NoInvalidValue`].
+    #[inline(always)]
     pub fn invalidate_signal(
         &mut self,
         signal: SignalId,
