@@ -52,18 +52,18 @@ pub const STAGES: &[&str] = &[
 /// valgrind, the Python venv); it takes seconds once those are there.
 const BUDGET_S: &[(&str, u32)] = &[
     ("setup", 360),
-    ("fmt", 30),
-    ("clippy", 150),
-    ("test", 240),
-    ("cross", 65),
-    ("miri", 580),
+    ("fmt", 10),
+    ("clippy", 120),
+    ("test", 200),
+    ("cross", 40),
+    ("miri", 640),
     ("model", 60),
-    ("mutants", 120),
+    ("mutants", 100),
     ("qemu", 110),
     ("differential", 15),
     ("interop", 45),
     ("fuzz", 240),
-    ("bench", 130),
+    ("bench", 100),
 ];
 
 fn budget_s(stage: &str) -> u32 {
