@@ -269,54 +269,48 @@ pub fn run(options: &Options) -> Result {
 /// Runs one probe under callgrind and returns the collected instruction count.
 fn measure(binary: &Path, out_dir: &Path, op: &str, iterations: u64) -> Result<u64> {
     let out_file = out_dir.join(format!("callgrind.out.{op}.{iterations}"));
-    let _ = std::fs::remove_file(&out_file);
+    let iterations = iterations.to_string();
+    let text = collect(
+        binary,
+        &[op, &iterations],
+        &format!("*probe_{op}*"),
+        &out_file,
+    )?;
+    read_total(&text)
+        .ok_or_else(|| format!("no `totals:` or `summary:` line in {}", out_file.display()))
+}
+
+/// Runs `binary args..` under callgrind collecting only inside functions matching
+/// `toggle` (and what they call); returns the output file's text.
+fn collect(binary: &Path, args: &[&str], toggle: &str, out_file: &Path) -> Result<String> {
+    let _ = std::fs::remove_file(out_file);
     let mut out_arg = std::ffi::OsString::from("--callgrind-out-file=");
-    out_arg.push(&out_file);
+    out_arg.push(out_file);
     let run = Cmd::new("valgrind")
         .args(["--tool=callgrind", "--collect-atstart=no"])
         .arg(out_arg)
-        .arg(format!("--toggle-collect=*probe_{op}*"))
+        .arg(format!("--toggle-collect={toggle}"))
         .arg(binary)
-        .arg(op)
-        .arg(iterations.to_string())
+        .args(args)
         .capture()?;
     if !run.success {
         return Err(format!(
-            "the probe run failed:\n{}{}",
+            "the run of {} failed:\n{}{}",
+            binary.display(),
             run.stdout,
             tail(&run.stderr, 20)
         ));
     }
-    let text = std::fs::read_to_string(&out_file)
-        .map_err(|e| format!("reading {}: {e}", out_file.display()))?;
-    read_total(&text)
-        .ok_or_else(|| format!("no `totals:` or `summary:` line in {}", out_file.display()))
+    std::fs::read_to_string(out_file).map_err(|e| format!("reading {}: {e}", out_file.display()))
 }
 
 /// Runs the ECU on Figure 7 collecting only inside `function` (and what it calls);
 /// returns its instructions per call and the calls.
 fn measure_ecu(binary: &Path, out_dir: &Path, index: usize, function: &str) -> Result<(f64, u64)> {
     let out_file = out_dir.join(format!("callgrind.out.ecu.{index}"));
-    let _ = std::fs::remove_file(&out_file);
-    let mut out_arg = std::ffi::OsString::from("--callgrind-out-file=");
-    out_arg.push(&out_file);
-    let run = Cmd::new("valgrind")
-        .args(["--tool=callgrind", "--collect-atstart=no"])
-        .arg(out_arg)
-        .arg(format!("--toggle-collect={function}"))
-        .arg(binary)
-        .arg("--scenario")
-        .arg(crate::process::root().join(ECU_SCENARIO))
-        .capture()?;
-    if !run.success {
-        return Err(format!(
-            "the ECU run failed:\n{}{}",
-            run.stdout,
-            tail(&run.stderr, 20)
-        ));
-    }
-    let text = std::fs::read_to_string(&out_file)
-        .map_err(|e| format!("reading {}: {e}", out_file.display()))?;
+    let scenario = crate::process::root().join(ECU_SCENARIO);
+    let scenario = scenario.to_string_lossy();
+    let text = collect(binary, &["--scenario", &scenario], function, &out_file)?;
     let total = read_total(&text)
         .ok_or_else(|| format!("no `totals:` or `summary:` line in {}", out_file.display()))?;
     let calls = calls_into(&text, function);
