@@ -184,7 +184,7 @@ pub fn load() -> Start {
         Some("uart") => true,
         Some(_) => {
             mps2::leds_safe();
-            cw_bsp::mps2_log!("FATAL: --sensor takes `scenario` or `uart`\n");
+            defmt::println!("FATAL: --sensor takes `scenario` or `uart`");
             mps2::exit(false)
         }
     };
@@ -205,8 +205,8 @@ pub fn load() -> Start {
     };
     match scenario {
         Ok(s) => {
-            cw_bsp::mps2_log!(
-                "cw-qemu: scenario {}: {} movements, {} dropouts, {} CAN error bursts, {} tester frames, {} ms\n",
+            defmt::println!(
+                "cw-qemu: scenario {}: {} movements, {} dropouts, {} CAN error bursts, {} tester frames, {} ms",
                 name,
                 s.segments.len(),
                 s.dropouts.len(),
@@ -215,7 +215,7 @@ pub fn load() -> Start {
                 s.duration_ms()
             );
             if uart_sensor {
-                mps2::log("cw-qemu: sensor: the UART ranging module on UART1 (the scenario's movements and dropouts are not played)\n");
+                defmt::println!("cw-qemu: sensor: the UART ranging module on UART1 (the scenario's movements and dropouts are not played)");
             }
             Start {
                 scenario: s,
@@ -224,7 +224,7 @@ pub fn load() -> Start {
         }
         Err(e) => {
             mps2::leds_safe();
-            cw_bsp::mps2_log!("FATAL: scenario {}: {}\n", name, e);
+            defmt::println!("FATAL: scenario {}: {}", name, defmt::Display2Format(&e));
             mps2::exit(false)
         }
     }
@@ -387,8 +387,8 @@ impl App for Mps2App {
 
     fn stack_fault(&self, task: Option<TaskId>) -> ! {
         mps2::leds_safe();
-        cw_bsp::mps2_log!(
-            "FATAL: stack overflow on the {} stack: ShutdownOS(E_OS_STACKFAULT)\n",
+        defmt::println!(
+            "FATAL: stack overflow on the {} stack: ShutdownOS(E_OS_STACKFAULT)",
             task.map_or("shared task", |t| task_name(usize::from(t.0)))
         );
         // The port hands the end to `shut_down`.
@@ -403,8 +403,8 @@ impl App for Mps2App {
         // already on a normal shutdown).
         mps2::leds_safe();
         let status = self.ecu.hooks().shutdown.unwrap_or(E_OK);
-        cw_bsp::mps2_log!(
-            "cw-qemu: ShutdownOS at {} ms: ShutdownHook saw {}; no task or interrupt runs from here on\n",
+        defmt::println!(
+            "cw-qemu: ShutdownOS at {} ms: ShutdownHook saw {}; no task or interrupt runs from here on",
             mps2::now_ms(),
             status_name(status).unwrap_or("an application's code")
         );
@@ -421,16 +421,16 @@ impl Mps2App {
         let main_stack = cw_bsp::cortex_m::main_stack_use();
         let schedule_ok = report_trace();
         let link = mps2::slcan_stats();
-        cw_bsp::mps2_log!(
-            "cw-qemu: slcan received {} frames, {} commands, {} malformed lines; {} overruns, {} replies dropped\n",
+        defmt::println!(
+            "cw-qemu: slcan received {} frames, {} commands, {} malformed lines; {} overruns, {} replies dropped",
             link.rx_frames,
             link.rx_commands,
             link.rx_malformed,
             link.rx_overruns,
             link.replies_dropped
         );
-        cw_bsp::mps2_log!(
-            "cw-qemu: bus {} tester frames received, {} failed attempts, {} bus-offs\n",
+        defmt::println!(
+            "cw-qemu: bus {} tester frames received, {} failed attempts, {} bus-offs",
             link.bus_frames,
             link.tx_errors,
             link.bus_offs
@@ -442,8 +442,8 @@ impl Mps2App {
                 Mps2Sensor::Scenario(_) => Default::default(),
             });
             let c = counts.unwrap_or_default();
-            cw_bsp::mps2_log!(
-                "cw-qemu: sensor received {} bytes: {} frames, {} bad checksums, {} in the blind zone, {} stray bytes; {} overruns, {} silent samples\n",
+            defmt::println!(
+                "cw-qemu: sensor received {} bytes: {} frames, {} bad checksums, {} in the blind zone, {} stray bytes; {} overruns, {} silent samples",
                 uart.received,
                 c.frames,
                 c.bad_checksums,
@@ -453,8 +453,8 @@ impl Mps2App {
                 c.silent_samples
             );
         }
-        cw_bsp::mps2_log!(
-            "cw-qemu: end at {} ms; kernel errors {}, port errors {}; task stack used {} of {} bytes, main stack (ISRs) {} bytes\n",
+        defmt::println!(
+            "cw-qemu: end at {} ms; kernel errors {}, port errors {}; task stack used {} of {} bytes, main stack (ISRs) {} bytes",
             mps2::now_ms(),
             hooks.errors,
             hooks.port_errors,
@@ -500,10 +500,10 @@ fn task_name(t: usize) -> &'static str {
 fn report_trace() -> bool {
     use cw_bsp::cortex_m::trace::{self, EventKind, SpanRecord, IDLE_ROW};
     let dropped = mps2::led_changes(|at, bits| {
-        cw_bsp::mps2_log!("cw-qemu: led {} {} {}\n", at, bits & 1, (bits >> 1) & 1);
+        defmt::println!("cw-qemu: led {} {} {}", at, bits & 1, (bits >> 1) & 1);
     });
     if dropped > 0 {
-        cw_bsp::mps2_log!("cw-qemu: led changes not logged {}\n", dropped);
+        defmt::println!("cw-qemu: led changes not logged {}", dropped);
     }
     let isr_name = |i: usize| config::OS.isrs().get(i).map_or("?", |c| c.name);
     trace::read(|t| {
@@ -524,18 +524,18 @@ fn report_trace() -> bool {
                 scale(r.max),
             )
         };
-        cw_bsp::mps2_log!(
-            "cw-qemu: instructions below are SysTick counts x 40: exact under -icount shift=0 only\n"
+        defmt::println!(
+            "cw-qemu: instructions below are SysTick counts x 40: exact under -icount shift=0 only"
         );
-        cw_bsp::mps2_log!(
-            "cw-qemu: measuring costs {} instructions per span, {} per job (calibration, taken off below)\n",
+        defmt::println!(
+            "cw-qemu: measuring costs {} instructions per span, {} per job (calibration, taken off below)",
             instructions(&span_cal, &SpanRecord::default()).0,
             instructions(&job_cal, &SpanRecord::default()).0
         );
         for (i, r) in t.tasks.iter().enumerate().take(config::OS.tasks().len()) {
             let (mean, min, max) = instructions(&r.span, &job_cal);
-            cw_bsp::mps2_log!(
-                "cw-qemu: task {} jobs {} preempted {} instructions mean {} min {} max {}\n",
+            defmt::println!(
+                "cw-qemu: task {} jobs {} preempted {} instructions mean {} min {} max {}",
                 task_name(i),
                 r.jobs,
                 r.preempted,
@@ -546,8 +546,8 @@ fn report_trace() -> bool {
         }
         for (name, r) in span::NAMES.iter().zip(&t.spans) {
             let (mean, min, max) = instructions(r, &span_cal);
-            cw_bsp::mps2_log!(
-                "cw-qemu: span {}: {} times, instructions mean {} min {} max {}\n",
+            defmt::println!(
+                "cw-qemu: span {}: {} times, instructions mean {} min {} max {}",
                 name,
                 r.count,
                 mean,
@@ -557,8 +557,8 @@ fn report_trace() -> bool {
         }
         for (by, row) in t.preemptions.iter().enumerate() {
             for (over, &n) in row.iter().enumerate().filter(|(_, &n)| n > 0) {
-                cw_bsp::mps2_log!(
-                    "cw-qemu: preempt {} {} {}\n",
+                defmt::println!(
+                    "cw-qemu: preempt {} {} {}",
                     task_name(by),
                     task_name(over),
                     n
@@ -572,7 +572,7 @@ fn report_trace() -> bool {
                 } else {
                     task_name(over)
                 };
-                cw_bsp::mps2_log!("cw-qemu: isr {} {} {}\n", isr_name(isr), over, n);
+                defmt::println!("cw-qemu: isr {} {} {}", isr_name(isr), over, n);
             }
         }
         let mut preemptions = 0u32;
@@ -594,8 +594,8 @@ fn report_trace() -> bool {
                 *period > 0 && r.span.max >= period.saturating_mul(t.counts_per_ms)
             })
             .count();
-        cw_bsp::mps2_log!(
-            "cw-qemu: schedule {} preemptions, {} not by a higher priority; {} periodic tasks with a job longer than the period\n",
+        defmt::println!(
+            "cw-qemu: schedule {} preemptions, {} not by a higher priority; {} periodic tasks with a job longer than the period",
             preemptions,
             wrong,
             late
@@ -607,7 +607,7 @@ fn report_trace() -> bool {
                 EventKind::Isr(isr) => ("isr", isr_name(usize::from(isr))),
             };
             let at_us = u64::from(e.at) * 1000 / u64::from(t.counts_per_ms.max(1));
-            cw_bsp::mps2_log!("cw-qemu: event {} {} {}\n", at_us, what, name);
+            defmt::println!("cw-qemu: event {} {} {}", at_us, what, name);
         }
         wrong == 0 && late == 0
     })

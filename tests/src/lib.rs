@@ -3,7 +3,8 @@
 //!
 //! - [`run_image`] runs the image (`-icount shift=0`: one instruction per ns, so its
 //!   milliseconds are its own) with the scenario on its semihosting command line; UART0
-//!   (the SLCAN CAN controller) goes to a file, the image's report to stdout.
+//!   (the SLCAN CAN controller) goes to a file, the image's report (its `defmt` log,
+//!   decoded: [`qemu`]) to the caller.
 //! - [`simulate`] runs the host simulation in-process on the same file.
 //! - [`compare`] requires the same frames the ECU sent (id and payload, in order) and the
 //!   same levels of each LED, in order, with times within one OS tick.
@@ -18,6 +19,8 @@
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
+
+pub mod qemu;
 
 use cw_core::can::{slcan, text, CanFrame};
 use cw_firmware::host::{Scenario, Simulation};
@@ -47,7 +50,7 @@ pub struct Trace {
 pub struct ImageRun {
     /// Whether the image ended with success (semihosting `SYS_EXIT`).
     pub success: bool,
-    /// Its semihosting output.
+    /// Its log, decoded.
     pub report: String,
     /// Its UART0 output (SLCAN).
     pub slcan: String,
@@ -76,23 +79,19 @@ pub fn run_image(image: &Path, scenario: Option<&Path>, dir: &Path) -> Result<Im
     std::fs::create_dir_all(dir).map_err(|e| format!("creating {}: {e}", dir.display()))?;
     let uart = dir.join("slcan.txt");
     let _ = std::fs::remove_file(&uart);
-    let mut semihosting = String::from("enable=on,target=native,arg=cw-qemu");
-    if let Some(file) = scenario {
-        // QEMU's option syntax doubles a comma inside a value.
-        let file = file.display().to_string().replace(',', ",,");
-        semihosting.push_str(&format!(",arg=--scenario,arg={file}"));
-    }
-    let out = Command::new("qemu-system-arm")
-        .args(["-machine", "mps2-an386", "-nographic", "-monitor", "none"])
-        .args(["-semihosting-config", &semihosting])
+    let scenario = scenario.map(|file| file.display().to_string());
+    let args: Vec<&str> = scenario
+        .as_deref()
+        .map_or_else(Vec::new, |file| vec!["--scenario", file]);
+    let mut command = Command::new("qemu-system-arm");
+    command
+        .args(qemu::machine("cw-qemu", &args))
         .args(["-icount", "shift=0,sleep=off"])
         .arg("-serial")
         .arg(format!("file:{}", uart.display()))
         .arg("-kernel")
-        .arg(image)
-        .output()
-        .map_err(|e| format!("qemu-system-arm: {e}"))?;
-    let report = String::from_utf8_lossy(&out.stdout).into_owned();
+        .arg(image);
+    let (success, report) = qemu::run(command, image)?;
     std::fs::write(dir.join("image.txt"), &report)
         .map_err(|e| format!("writing {}: {e}", dir.display()))?;
     let slcan = std::fs::read(&uart).map_or_else(
@@ -100,7 +99,7 @@ pub fn run_image(image: &Path, scenario: Option<&Path>, dir: &Path) -> Result<Im
         |b| String::from_utf8_lossy(&b).into_owned(),
     );
     Ok(ImageRun {
-        success: out.status.success(),
+        success,
         report,
         slcan,
     })

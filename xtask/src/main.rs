@@ -8,7 +8,10 @@
 //! - `cargo xtask mutants`: kernel mutants the OSEK conformance suite must catch;
 //! - `cargo xtask qemu [--scenario FILE].. [--compare] [--live] [--events] [--serial tcp:PORT]`:
 //!   the ECU's Cortex-M4 image on QEMU's mps2-an386, the emulator-in-the-loop tests against
-//!   the host simulation (`tests/`), and python-can against it live.
+//!   the host simulation (`tests/`), and python-can against it live;
+//! - `cargo xtask qemu-runner IMAGE [ARGS]..`: cargo's runner for the board's target
+//!   (`cargo run` on an image): QEMU with `ARGS` as the image's command line, its defmt
+//!   log decoded as it comes.
 //!
 //! Every command the runner starts is printed first, prefixed with `$`. Child processes get
 //! no stdin, so the runner behaves the same in a terminal and under `CI=true`.
@@ -55,6 +58,9 @@ commands:
         --live: run it in real time on a TCP port and test it with python-can (slcan)
         --events: run the extended-task and stack-guard demo image (cw-qemu-events)
         --serial: serve the SLCAN UART on a TCP port (python-can: slcan, socket://)
+  qemu-runner IMAGE [ARGS]..
+        cargo's runner for thumbv7em-none-eabihf: IMAGE on QEMU's mps2-an386 with ARGS on
+        its semihosting command line, its defmt log decoded by defmt-print as it comes
   setup
         same as `ci --only setup`: install or check every tool the checks need
   help
@@ -86,6 +92,7 @@ fn run(args: &[String]) -> Result {
         "differential" => differential::run(&differential::Options::parse(rest)?),
         "callgrind" => callgrind::run(&callgrind::Options::parse(rest)?),
         "qemu" => qemu::run(&qemu::Options::parse(rest)?),
+        "qemu-runner" => qemu::runner(rest),
         "mutants" => {
             no_options(rest)?;
             mutants::run()

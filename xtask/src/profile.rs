@@ -117,7 +117,9 @@ fn inline_chains(image: &Path, pcs: &[u32]) -> Result<Vec<Vec<String>>> {
 /// Runs `image` on `machine` (QEMU's arguments before the image's) instruction by
 /// instruction, and writes the two views to `out` (and their heads to the terminal).
 pub fn run(image: &Path, machine: &[String], out: &Path) -> Result {
-    let report_path = out.with_extension("report.txt");
+    // The image's log, as it left QEMU (defmt frames): read it with
+    // `defmt-print -e IMAGE < FILE` when the run failed.
+    let report_path = out.with_extension("log.defmt");
     let report = std::fs::File::create(&report_path)
         .map_err(|e| format!("creating {}: {e}", report_path.display()))?;
     let mut qemu = Command::new("qemu-system-arm")
@@ -153,7 +155,10 @@ pub fn run(image: &Path, machine: &[String], out: &Path) -> Result {
     let status = qemu.wait().map_err(|e| format!("qemu-system-arm: {e}"))?;
     if !status.success() {
         return Err(format!(
-            "the profiled run failed ({status}); its report is {}",
+            "the profiled run failed ({status}); its log is {} (`{} -e {} < {}` reads it)",
+            report_path.display(),
+            cw_tests::qemu::DECODER,
+            image.display(),
             report_path.display()
         ));
     }

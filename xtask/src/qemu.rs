@@ -121,26 +121,15 @@ fn build_bin(bin: &str) -> Result<PathBuf> {
 /// The machine and the image's log, exit and files (semihosting), for every run; the
 /// image's command line names `scenario` if given, and the UART sensor if `uart_sensor`.
 fn qemu_machine(scenario: Option<&Path>, uart_sensor: bool) -> Vec<String> {
-    let mut semihosting = String::from("enable=on,target=native,arg=cw-qemu");
-    if let Some(file) = scenario {
-        // QEMU's option syntax doubles a comma inside a value.
-        let file = file.display().to_string().replace(',', ",,");
-        semihosting.push_str(&format!(",arg=--scenario,arg={file}"));
+    let scenario = scenario.map(|file| file.display().to_string());
+    let mut args = Vec::new();
+    if let Some(file) = scenario.as_deref() {
+        args.extend(["--scenario", file]);
     }
     if uart_sensor {
-        semihosting.push_str(",arg=--sensor,arg=uart");
+        args.extend(["--sensor", "uart"]);
     }
-    [
-        "-machine",
-        "mps2-an386",
-        "-nographic",
-        "-monitor",
-        "none",
-        "-semihosting-config",
-        &semihosting,
-    ]
-    .map(str::to_string)
-    .to_vec()
+    cw_tests::qemu::machine("cw-qemu", &args)
 }
 
 /// Prints the image's report without its event lines and keeps it whole in `path`.
@@ -166,16 +155,72 @@ fn run_image(image: &Path, out: &Path, serial: Option<&str>, scenario: Option<&P
         let _ = std::fs::remove_file(f);
     }
     let serial = serial.map_or_else(|| format!("file:{}", slcan.display()), str::to_string);
-    let report = Cmd::new("qemu-system-arm")
-        .args(qemu_machine(scenario, false))
+    let mut qemu = std::process::Command::new("qemu-system-arm");
+    qemu.args(qemu_machine(scenario, false))
         .args(["-icount", "shift=0,sleep=off"])
         .args(["-serial", &serial])
         .args(["-d", "trace:mps2_fpgaio_write", "-D"])
         .arg(&leds)
         .arg("-kernel")
-        .arg(image)
-        .read()?;
+        .arg(image);
+    let report = decoded_run(qemu, image)?;
     keep_report(&report, &out.join("image.txt"))
+}
+
+/// Runs `qemu` (a QEMU command running `image`) to its end, showing the command; returns
+/// the image's decoded log, or an error with it if the image did not exit with success.
+fn decoded_run(qemu: std::process::Command, image: &Path) -> Result<String> {
+    let shown: Vec<String> = std::iter::once(qemu.get_program())
+        .chain(qemu.get_args())
+        .map(|a| a.to_string_lossy().into_owned())
+        .collect();
+    println!(
+        "$ {} | {} -e {} --log-format '{{s}}'",
+        shown.join(" "),
+        cw_tests::qemu::DECODER,
+        image.display()
+    );
+    let (success, log) = cw_tests::qemu::run(qemu, image)?;
+    if success {
+        Ok(log)
+    } else {
+        Err(format!("the image on QEMU failed:\n{log}"))
+    }
+}
+
+/// `cargo xtask qemu-runner IMAGE [ARGS]..`, cargo's runner for the board's target: the
+/// image on QEMU (`-icount shift=0`, UART0's SLCAN output to `target/qemu/runner-slcan.txt`)
+/// with `ARGS` on its command line, its log decoded on the terminal as it comes; fails if
+/// the image exits with failure.
+pub fn runner(args: &[String]) -> Result {
+    let Some((image, args)) = args.split_first() else {
+        return Err("qemu-runner: no image given (cargo passes it: `cargo run --target thumbv7em-none-eabihf ...`)".into());
+    };
+    let image = Path::new(image);
+    let program = image
+        .file_name()
+        .map_or_else(|| "image".into(), |n| n.to_string_lossy().into_owned());
+    let args: Vec<&str> = args.iter().map(String::as_str).collect();
+    let out = target_dir().join("qemu");
+    std::fs::create_dir_all(&out).map_err(|e| format!("creating {}: {e}", out.display()))?;
+    let slcan = out.join("runner-slcan.txt");
+    let mut qemu = std::process::Command::new("qemu-system-arm");
+    qemu.args(cw_tests::qemu::machine(&program, &args))
+        .args(["-icount", "shift=0,sleep=off"])
+        .arg("-serial")
+        .arg(format!("file:{}", slcan.display()))
+        .arg("-kernel")
+        .arg(image);
+    let (success, _) = cw_tests::qemu::Decoded::shown(qemu, image)?.finish()?;
+    println!(
+        "qemu-runner: the ECU's CAN frames (SLCAN) are in {}",
+        slcan.display()
+    );
+    if success {
+        Ok(())
+    } else {
+        Err(format!("{} exited with failure", image.display()))
+    }
 }
 
 /// Runs `cargo xtask qemu`.
@@ -234,13 +279,13 @@ pub fn run(options: &Options) -> Result {
 fn events(out: &Path) -> Result {
     let image = build_bin("cw-qemu-events")?;
     std::fs::create_dir_all(out).map_err(|e| format!("creating {}: {e}", out.display()))?;
-    let report = Cmd::new("qemu-system-arm")
-        .args(qemu_machine(None, false))
+    let mut qemu = std::process::Command::new("qemu-system-arm");
+    qemu.args(cw_tests::qemu::machine("cw-qemu-events", &[]))
         .args(["-icount", "shift=0,sleep=off"])
         .args(["-serial", "null"])
         .arg("-kernel")
-        .arg(&image)
-        .read()?;
+        .arg(&image);
+    let report = decoded_run(qemu, &image)?;
     print!("{report}");
     if !report.lines().any(|l| l == "cw-qemu-events: ok") {
         return Err("qemu: the extended-task demo did not end with `ok`".into());
@@ -261,8 +306,7 @@ fn free_port() -> Result<u16> {
 /// `tests/live.py` against them; the image's report (with the receive path's instruction
 /// counts) goes to `out/image-live.txt`.
 fn live(image: &Path, out: &Path) -> Result {
-    use std::io::Read;
-    use std::process::{Command, Stdio};
+    use std::process::Command;
     std::fs::create_dir_all(out).map_err(|e| format!("creating {}: {e}", out.display()))?;
     let (can_port, sensor_port) = (free_port()?, free_port()?);
     let can_serial = format!("tcp:127.0.0.1:{can_port},server=on,wait=on");
@@ -272,7 +316,8 @@ fn live(image: &Path, out: &Path) -> Result {
         "$ qemu-system-arm -machine mps2-an386 -icount shift=0,sleep=on -serial {can_serial} -serial {sensor_serial} -kernel {} (semihosting: --sensor uart)",
         image.display()
     );
-    let mut qemu = Command::new("qemu-system-arm")
+    let mut command = Command::new("qemu-system-arm");
+    command
         .args(qemu_machine(None, true))
         // One instruction per ns while the core runs, real time while it sleeps (WFI):
         // the run keeps pace with the test, and the image's spans are instructions.
@@ -282,10 +327,8 @@ fn live(image: &Path, out: &Path) -> Result {
         .args(["-d", "trace:mps2_fpgaio_write", "-D"])
         .arg(&leds)
         .arg("-kernel")
-        .arg(image)
-        .stdout(Stdio::piped())
-        .spawn()
-        .map_err(|e| format!("qemu-system-arm: {e}"))?;
+        .arg(image);
+    let mut qemu = cw_tests::qemu::Decoded::spawn(command, image)?;
     let test = Cmd::new(crate::setup::venv_python())
         .arg(root().join("tests").join("live.py"))
         .arg(can_port.to_string())
@@ -295,22 +338,16 @@ fn live(image: &Path, out: &Path) -> Result {
     let test = match test {
         Ok(output) => output,
         Err(e) => {
-            let _ = qemu.kill();
-            let _ = qemu.wait();
+            qemu.kill();
+            let _ = qemu.finish();
             return Err(e);
         }
     };
     print!("{test}");
-    let mut image_out = String::new();
-    if let Some(mut stdout) = qemu.stdout.take() {
-        stdout
-            .read_to_string(&mut image_out)
-            .map_err(|e| format!("reading QEMU's output: {e}"))?;
-    }
-    let status = qemu.wait().map_err(|e| format!("qemu-system-arm: {e}"))?;
+    let (success, image_out) = qemu.finish()?;
     keep_report(&image_out, &out.join("image-live.txt"))?;
-    if !status.success() {
-        return Err(format!("qemu: the live image ended with {status}"));
+    if !success {
+        return Err("qemu: the live image ended with a failure".into());
     }
     let sent = counts_after(&test, "live: sent ", &[" malformed lines and ", " frames"])?;
     let got = counts_after(

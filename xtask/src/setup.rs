@@ -30,6 +30,9 @@ pub const TARGETS: &[&str] = &[
 /// The cargo-bolero version the fuzz stage is written against.
 pub const CARGO_BOLERO_VERSION: &str = "0.13.5";
 
+/// The defmt-print version that decodes the image's log (defmt 1.x, wire format 4).
+pub const DEFMT_PRINT_VERSION: &str = "1.2.0";
+
 /// Python virtual environment for the cantools / python-can tools (gitignored).
 pub fn venv_dir() -> PathBuf {
     root().join(".venv")
@@ -46,6 +49,7 @@ pub fn run() -> Result {
     rustup_targets()?;
     rustup_nightly()?;
     cargo_bolero()?;
+    defmt_print()?;
     valgrind()?;
     qemu()?;
     debian_tool("llvm-symbolizer", &["--version"], "llvm")?;
@@ -144,38 +148,52 @@ fn rustup_nightly() -> Result {
 }
 
 fn cargo_bolero() -> Result {
-    let wanted = format!("cargo-bolero {CARGO_BOLERO_VERSION}");
-    let out = Cmd::new("cargo").args(["bolero", "--version"]).capture()?;
-    let found = out.stdout.trim();
-    if out.success && found == wanted {
-        println!("ok: {found}");
+    cargo_tool(
+        "cargo",
+        &["bolero", "--version"],
+        "cargo-bolero",
+        CARGO_BOLERO_VERSION,
+    )
+}
+
+/// The decoder of the image's defmt log (`cw_tests::qemu`).
+fn defmt_print() -> Result {
+    cargo_tool(
+        "defmt-print",
+        &["--version"],
+        "defmt-print",
+        DEFMT_PRINT_VERSION,
+    )
+}
+
+/// Checks that `program probe..` names crate `krate` at `version` on its first line; if
+/// not, installs that version with `cargo install --locked` and checks again.
+fn cargo_tool(program: &str, probe: &[&str], krate: &str, version: &str) -> Result {
+    let wanted = format!("{krate} {version}");
+    let first_line = |out: &str| out.lines().next().unwrap_or("").trim().to_string();
+    let found = match Cmd::new(program).args(probe).capture() {
+        Ok(out) if out.success => Some(first_line(&out.stdout)),
+        _ => None,
+    };
+    if found.as_deref() == Some(wanted.as_str()) {
+        println!("ok: {wanted}");
         return Ok(());
     }
     println!(
-        "cargo-bolero: wanted `{wanted}`, found {}",
-        if out.success {
-            format!("`{found}`")
-        } else {
-            "none".into()
-        }
+        "{krate}: wanted `{wanted}`, found {}",
+        found.map_or_else(|| "none".into(), |f| format!("`{f}`"))
     );
     Cmd::new("cargo")
-        .args([
-            "install",
-            "--locked",
-            "cargo-bolero",
-            "--version",
-            CARGO_BOLERO_VERSION,
-        ])
+        .args(["install", "--locked", krate, "--version", version])
         .run()?;
-    let found = Cmd::new("cargo").args(["bolero", "--version"]).read()?;
-    if found.trim() == wanted {
+    let found = first_line(&Cmd::new(program).args(probe).read()?);
+    if found == wanted {
         Ok(())
     } else {
         Err(format!(
-            "cargo-bolero: installed version {CARGO_BOLERO_VERSION} but `cargo bolero --version` says `{}` \
-             (is another cargo-bolero earlier on PATH?)",
-            found.trim()
+            "{krate}: installed version {version} but `{program} {}` says `{found}` \
+             (is another {krate} earlier on PATH?)",
+            probe.join(" ")
         ))
     }
 }

@@ -788,66 +788,12 @@ unsafe impl cortex_m::interrupt::InterruptNumber for Irq {
     }
 }
 
-/// Writes to the host's standard output over semihosting.
-pub fn log(text: &str) {
-    let _ = cortex_m_semihosting::hio::hstdout().map(|mut out| out.write_all(text.as_bytes()));
-}
-
-/// Formats to the host's standard output over semihosting.
-#[macro_export]
-macro_rules! mps2_log {
-    ($($arg:tt)*) => {{
-        let mut line = $crate::mps2::LogLine::new();
-        let _ = core::fmt::Write::write_fmt(&mut line, format_args!($($arg)*));
-        line.flush();
-    }};
-}
-
-/// A line buffer for [`mps2_log!`].
-pub struct LogLine {
-    buf: [u8; 160],
-    len: usize,
-}
-
-impl LogLine {
-    /// An empty line.
-    pub const fn new() -> Self {
-        Self {
-            buf: [0; 160],
-            len: 0,
-        }
-    }
-    /// Writes the line out.
-    pub fn flush(&mut self) {
-        if let Some(bytes) = self.buf.get(..self.len) {
-            if let Ok(text) = core::str::from_utf8(bytes) {
-                log(text);
-            }
-        }
-        self.len = 0;
-    }
-}
-
-impl Default for LogLine {
-    fn default() -> Self {
-        Self::new()
-    }
-}
-
-impl core::fmt::Write for LogLine {
-    fn write_str(&mut self, s: &str) -> core::fmt::Result {
-        for b in s.bytes() {
-            if self.len == self.buf.len() {
-                self.flush();
-            }
-            if let Some(slot) = self.buf.get_mut(self.len) {
-                *slot = b;
-                self.len += 1;
-            }
-        }
-        Ok(())
-    }
-}
+// The log: `defmt` frames, written to the host's standard output over semihosting by
+// defmt-semihosting's global logger (its critical section is cortex-m's single-core one:
+// PRIMASK, restored after the frame). The format strings stay in the ELF's `.defmt`
+// section, not in flash; the host decodes the frames with the ELF (`defmt-print -e ELF`,
+// which `cargo xtask qemu` and the emulator tests run on QEMU's output).
+use defmt_semihosting as _;
 
 /// Ends the QEMU run (semihosting `SYS_EXIT`), successfully or not.
 pub fn exit(success: bool) -> ! {
@@ -865,7 +811,7 @@ pub fn exit(success: bool) -> ! {
 /// A fatal error: LEDs to their safe state, the reason on the log, the run ends failed.
 pub fn fatal(what: &str) -> ! {
     leds_safe();
-    mps2_log!("FATAL: {what}\n");
+    last_words(|| defmt::println!("FATAL: {=str}", what));
     exit(false)
 }
 
@@ -896,7 +842,7 @@ unsafe fn HardFault(frame: &cortex_m_rt::ExceptionFrame) -> ! {
         crate::cortex_m::memory_fault();
     }
     leds_safe();
-    mps2_log!("FATAL: HardFault at pc {:#010x}\n", frame.pc());
+    last_words(|| defmt::println!("FATAL: HardFault at pc {=u32:#010x}", frame.pc()));
     exit(false)
 }
 
@@ -904,9 +850,24 @@ unsafe fn HardFault(frame: &cortex_m_rt::ExceptionFrame) -> ! {
 fn panic(info: &core::panic::PanicInfo) -> ! {
     leds_safe();
     if let Some(location) = info.location() {
-        mps2_log!("FATAL: panic at {}:{}\n", location.file(), location.line());
+        last_words(|| {
+            defmt::println!(
+                "FATAL: panic at {=str}:{=u32}",
+                location.file(),
+                location.line()
+            )
+        });
     }
     report_fatal("panic")
+}
+
+/// Logs a fatal error's report the first time only: a fault or panic inside the log
+/// itself (defmt's logger refuses to be taken twice, by panicking) must not recurse.
+fn last_words(log: impl FnOnce()) {
+    static SPOKEN: AtomicBool = AtomicBool::new(false);
+    if !SPOKEN.swap(true, Ordering::Relaxed) {
+        log();
+    }
 }
 
 extern "C" fn uart0_rx() {

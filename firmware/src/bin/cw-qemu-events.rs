@@ -21,8 +21,8 @@
 use core::sync::atomic::{AtomicU32, Ordering};
 
 use cw_bsp::cortex_m::{self as port, App, CortexMPort, TaskStack};
+use cw_bsp::mps2;
 use cw_bsp::port::{Port, Slot};
-use cw_bsp::{mps2, mps2_log};
 use cw_core::os::{
     status_name, AlarmAction, AlarmConfig, ConformanceClass, CounterConfig, CounterId, Dialect,
     EventMask, HookSet, Hooks, IsrConfig, IsrId, Os, OsConfig, OsDescription, OsError, Status,
@@ -169,8 +169,8 @@ impl Demo {
 
     fn report(&self) {
         let hooks = self.port.inspect(|os| *os.hooks());
-        mps2_log!(
-            "cw-qemu-events: Waiter woke {} times by WakeAlarm ({} late), {} times by PingIsr; Worker ran {} jobs, Pinger {}; kernel errors {}; Waiter's stack used {} bytes, the shared stack {}\n",
+        defmt::println!(
+            "cw-qemu-events: Waiter woke {} times by WakeAlarm ({} late), {} times by PingIsr; Worker ran {} jobs, Pinger {}; kernel errors {}; Waiter's stack used {} bytes, the shared stack {}",
             ALARM_WAKES.load(Ordering::Relaxed),
             LATE_WAKES.load(Ordering::Relaxed),
             ISR_WAKES.load(Ordering::Relaxed),
@@ -184,8 +184,8 @@ impl Demo {
             for (by, row) in t.preemptions.iter().enumerate().take(3) {
                 for (over, &n) in row.iter().enumerate().filter(|(_, &n)| n > 0) {
                     // The port's trace sees jobs nest; the one below is the waiting Waiter.
-                    mps2_log!(
-                        "cw-qemu-events: {} jobs ran on the shared stack while {} waited on its own: {}\n",
+                    defmt::println!(
+                        "cw-qemu-events: {} jobs ran on the shared stack while {} waited on its own: {}",
                         OS.tasks()[by].name,
                         OS.tasks()[over].name,
                         n
@@ -193,7 +193,7 @@ impl Demo {
                 }
             }
         });
-        mps2_log!("cw-qemu-events: now overflowing the Waiter's stack on purpose\n");
+        defmt::println!("cw-qemu-events: now overflowing the Waiter's stack on purpose");
     }
 }
 
@@ -260,8 +260,8 @@ impl App for Demo {
 
     fn stack_fault(&self, task: Option<TaskId>) -> ! {
         let who = task.map_or("the shared", |t| OS.tasks()[usize::from(t.0)].name);
-        mps2_log!(
-            "cw-qemu-events: stack overflow caught by the MPU guard on {} stack; ShutdownOS(E_OS_STACKFAULT)\n",
+        defmt::println!(
+            "cw-qemu-events: stack overflow caught by the MPU guard on {} stack; ShutdownOS(E_OS_STACKFAULT)",
             who
         );
         FAULT_ON_WAITER.store(u32::from(task == Some(WAITER)), Ordering::Relaxed);
@@ -274,8 +274,8 @@ impl App for Demo {
     fn shut_down(&self) -> ! {
         mps2::leds_safe();
         let hooks = self.port.inspect(|os| *os.hooks());
-        mps2_log!(
-            "cw-qemu-events: ShutdownHook saw {}\n",
+        defmt::println!(
+            "cw-qemu-events: ShutdownHook saw {}",
             hooks
                 .shutdown
                 .map_or("nothing", |s| status_name(s).unwrap_or("an unknown code"))
@@ -288,7 +288,7 @@ impl App for Demo {
             && LATE_WAKES.load(Ordering::Relaxed) == 0
             && ALARM_WAKES.load(Ordering::Relaxed) == WAKES
             && ISR_WAKES.load(Ordering::Relaxed) > 0;
-        mps2_log!("cw-qemu-events: {}\n", if ok { "ok" } else { "FAILED" });
+        defmt::println!("cw-qemu-events: {}", if ok { "ok" } else { "FAILED" });
         mps2::exit(ok)
     }
 }
@@ -306,6 +306,6 @@ fn main() -> ! {
     }) else {
         mps2::fatal("started twice")
     };
-    mps2::log("cw-qemu-events: extended tasks and the stack guard on mps2-an386\n");
+    defmt::println!("cw-qemu-events: extended tasks and the stack guard on mps2-an386");
     port::start(demo, mps2::fatal)
 }

@@ -23,7 +23,7 @@ fn main() -> ! {
     let Ok(kernel) = config::kernel() else {
         mps2::fatal("the OS configuration is inconsistent")
     };
-    mps2::log("cw-qemu: collision-warning ECU on mps2-an386\n");
+    defmt::println!("cw-qemu: collision-warning ECU on mps2-an386");
     let start = load();
     let uart_sensor = start.uart_sensor;
     let Some(scenario) = SCENARIO.init(start.scenario) else {
