@@ -332,16 +332,10 @@ impl App for Mps2App {
         // would be an ISR the kernel cannot accept yet (a port error), and the calibration
         // may take longer than a tick when QEMU runs in real time.
         cortex_m::interrupt::disable();
-        mps2::start_tick(config::OS.isrs()[config::SYSTICK_ISR.0 as usize].priority);
+        mps2::start_tick(isr_priority(config::SYSTICK_ISR));
         calibrate(self.ecu.port());
         cw_bsp::cortex_m::trace::set_isr_spans(span::ISR_SPANS);
-        SlcanCan::enable_interrupts(config::OS.isrs()[config::CAN_ISR.0 as usize].priority);
-        if self.uart_sensor {
-            SensorUart::enable_interrupt(
-                config::OS.isrs()[config::SENSOR_RX_ISR.0 as usize].priority,
-            );
-        }
-        self.ecu.start_os();
+        start_os_with_devices(&self.ecu, self.uart_sensor);
     }
 
     fn run_job(&self, task: TaskId) {
@@ -361,54 +355,164 @@ impl App for Mps2App {
         // The scenario's bus events, before the OS tick, as the host simulation orders
         // them: errors injected at their ms; a tester's frame, which takes a fraction of
         // a ms on the bus, received in the ms after it was sent.
-        let now = mps2::now_ms();
-        for &(_, count) in self.scenario.can_errors.iter().filter(|(at, _)| *at == now) {
-            mps2::inject_tx_errors(count);
-        }
-        for &(_, frame) in self
-            .scenario
-            .frames
-            .iter()
-            .filter(|(at, _)| at.checked_add(1) == Some(now))
+        // (The controller's bus-fault model is the `scenario` feature's, which `cw-qemu`
+        // requires.)
+        #[cfg(feature = "scenario")]
         {
-            mps2::put_frame_on_bus(frame);
+            let now = mps2::now_ms();
+            for &(_, count) in self.scenario.can_errors.iter().filter(|(at, _)| *at == now) {
+                mps2::inject_tx_errors(count);
+            }
+            for &(_, frame) in self
+                .scenario
+                .frames
+                .iter()
+                .filter(|(at, _)| at.checked_add(1) == Some(now))
+            {
+                mps2::put_frame_on_bus(frame);
+            }
         }
         self.ecu.port().advance_ms();
         self.ecu.tick();
     }
 
     fn irq(&self, line: u16) {
-        match line {
-            // UART0 RX and TX: the CAN controller.
-            0 | 1 => self.ecu.can_isr(),
-            _ => mps2::fatal("an interrupt line the ECU does not use"),
-        }
+        board_irq(&self.ecu, line);
     }
 
     fn stack_fault(&self, task: Option<TaskId>) -> ! {
-        mps2::leds_safe();
-        defmt::println!(
-            "FATAL: stack overflow on the {} stack: ShutdownOS(E_OS_STACKFAULT)",
-            task.map_or("shared task", |t| task_name(usize::from(t.0)))
-        );
-        // The port hands the end to `shut_down`.
-        self.ecu
-            .port()
-            .kernel(|os| os.shutdown_on_fault(OsError::StackFault));
-        mps2::fatal("the OS did not shut down on a stack overflow")
+        stack_overflow(&self.ecu, task)
     }
 
     fn shut_down(&self) -> ! {
-        // The outputs' safe state, whatever shut the OS down (EcuM's post-run has set it
-        // already on a normal shutdown).
-        mps2::leds_safe();
-        let status = self.ecu.hooks().shutdown.unwrap_or(E_OK);
-        defmt::println!(
-            "cw-qemu: ShutdownOS at {} ms: ShutdownHook saw {}; no task or interrupt runs from here on",
-            mps2::now_ms(),
-            status_name(status).unwrap_or("an application's code")
-        );
-        self.end_run(status == E_OK)
+        let ok = shutdown_report("cw-qemu", &self.ecu);
+        self.end_run(ok)
+    }
+}
+
+/// The OSEK priority of ISR `isr` in the configuration.
+fn isr_priority(isr: cw_core::os::IsrId) -> u8 {
+    config::OS
+        .isrs()
+        .get(usize::from(isr.0))
+        .map_or(1, |c| c.priority)
+}
+
+/// The end of `App::start_os` on this board: the CAN controller's interrupts, the sensor
+/// UART's (if the sensor is the UART module), then StartOS (interrupts are off until its
+/// kernel call ends).
+fn start_os_with_devices<B: Board>(ecu: &Ecu<CortexMPort<Kernel>, B>, uart_sensor: bool) {
+    SlcanCan::enable_interrupts(isr_priority(config::CAN_ISR));
+    if uart_sensor {
+        SensorUart::enable_interrupt(isr_priority(config::SENSOR_RX_ISR));
+    }
+    ecu.start_os();
+}
+
+/// External interrupt `line`: UART0's RX and TX are the CAN controller (`CanIsr`); the
+/// ECU uses no other line through the port.
+fn board_irq<B: Board>(ecu: &Ecu<CortexMPort<Kernel>, B>, line: u16) {
+    match line {
+        0 | 1 => ecu.can_isr(),
+        _ => mps2::fatal("an interrupt line the ECU does not use"),
+    }
+}
+
+/// A stack overflowed: logged, then the OS shuts down with `E_OS_STACKFAULT` (the port
+/// hands the end to `App::shut_down`).
+fn stack_overflow<B: Board>(ecu: &Ecu<CortexMPort<Kernel>, B>, task: Option<TaskId>) -> ! {
+    mps2::leds_safe();
+    defmt::println!(
+        "FATAL: stack overflow on the {} stack: ShutdownOS(E_OS_STACKFAULT)",
+        task.map_or("shared task", |t| task_name(usize::from(t.0)))
+    );
+    ecu.port()
+        .kernel(|os| os.shutdown_on_fault(OsError::StackFault));
+    mps2::fatal("the OS did not shut down on a stack overflow")
+}
+
+/// `App::shut_down` on this board: the LEDs' safe state (whatever shut the OS down; EcuM's
+/// post-run has set it already on a normal shutdown) and the log line `NAME: ShutdownOS at
+/// MS ms: ShutdownHook saw STATUS`. Returns whether the status was `E_OK`.
+fn shutdown_report<B: Board>(name: &str, ecu: &Ecu<CortexMPort<Kernel>, B>) -> bool {
+    mps2::leds_safe();
+    let status = ecu.hooks().shutdown.unwrap_or(E_OK);
+    defmt::println!(
+        "{=str}: ShutdownOS at {} ms: ShutdownHook saw {}; no task or interrupt runs from here on",
+        name,
+        mps2::now_ms(),
+        status_name(status).unwrap_or("an application's code")
+    );
+    status == E_OK
+}
+
+/// The mps2-an386 board as the production image (`cw-mps2`) wires it: the ranging module
+/// on UART1 is the sensor, and the mode inputs are tied on (the board has no ignition or
+/// bus-enable line: ignition on, communication enabled; a vehicle's ECU reads pins).
+pub struct Mps2FlashBoard;
+
+impl Board for Mps2FlashBoard {
+    type Can = SlcanCan;
+    type Led = Led;
+    type Sensor = SerialSensor<SensorUart>;
+    type ModeInput = TiedOn;
+    type Port = Mps2PortDriver;
+}
+
+/// A mode input the board ties on.
+pub struct TiedOn;
+
+impl embedded_hal::digital::ErrorType for TiedOn {
+    type Error = core::convert::Infallible;
+}
+
+impl embedded_hal::digital::InputPin for TiedOn {
+    fn is_high(&mut self) -> Result<bool, Self::Error> {
+        Ok(true)
+    }
+
+    fn is_low(&mut self) -> Result<bool, Self::Error> {
+        Ok(false)
+    }
+}
+
+/// The production image's entry points: the ECU and nothing else. No scenario, no task
+/// trace or spans (cw-bsp without `trace`), no end-of-run report: it runs until the OS
+/// shuts down (a stack fault), logging its start and its faults.
+pub struct Mps2FlashApp {
+    /// The ECU.
+    pub ecu: Ecu<CortexMPort<Kernel>, Mps2FlashBoard>,
+}
+
+impl App for Mps2FlashApp {
+    fn start_os(&self) {
+        cortex_m::interrupt::disable();
+        mps2::start_tick(isr_priority(config::SYSTICK_ISR));
+        start_os_with_devices(&self.ecu, true);
+    }
+
+    fn run_job(&self, task: TaskId) {
+        self.ecu.run_job(task);
+    }
+
+    fn idle(&self) {}
+
+    fn tick(&self) {
+        self.ecu.port().advance_ms();
+        self.ecu.tick();
+    }
+
+    fn irq(&self, line: u16) {
+        board_irq(&self.ecu, line);
+    }
+
+    fn stack_fault(&self, task: Option<TaskId>) -> ! {
+        stack_overflow(&self.ecu, task)
+    }
+
+    fn shut_down(&self) -> ! {
+        // On silicon EcuM would power off or reset here; QEMU exits.
+        mps2::exit(shutdown_report("cw-mps2", &self.ecu))
     }
 }
 

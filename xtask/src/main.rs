@@ -6,7 +6,8 @@
 //!   cantools on random layouts, values and PDU lengths;
 //! - `cargo xtask callgrind`: instructions per call of the codec and scheduler probes;
 //! - `cargo xtask mutants`: kernel mutants the OSEK conformance suite must catch;
-//! - `cargo xtask qemu [--scenario FILE].. [--compare] [--live] [--events] [--serial tcp:PORT]`:
+//! - `cargo xtask qemu [--scenario FILE].. [--compare] [--live] [--events] [--profile]
+//!   [--flash] [--serial tcp:PORT]`:
 //!   the ECU's Cortex-M4 image on QEMU's mps2-an386, the emulator-in-the-loop tests against
 //!   the host simulation (`tests/`), and python-can against it live;
 //! - `cargo xtask qemu-runner IMAGE [ARGS]..`: cargo's runner for the board's target
@@ -50,13 +51,16 @@ commands:
   mutants
         plant each kernel mutant in a copy of the workspace and require the OSEK
         conformance sequences named for it to fail
-  qemu [--scenario FILE].. [--compare] [--live] [--events] [--serial tcp:PORT]
+  qemu [--scenario FILE].. [--compare] [--live] [--events] [--profile] [--flash]
+       [--serial tcp:PORT]
         build the ECU's Cortex-M4 image and run it on QEMU's mps2-an386 on each scenario
         file (default scenarios/figure7.txt; the image reads it over semihosting);
         --compare: the emulator-in-the-loop tests (tests/, cw-tests): figure7 and faults
         give the host simulation's CAN frames and LED levels, bad scenarios are refused;
         --live: run it in real time on a TCP port and test it with python-can (slcan)
         --events: run the extended-task and stack-guard demo image (cw-qemu-events)
+        --profile: count where the image's instructions go, per function
+        --flash: the production image (cw-mps2): its flash and RAM, then live
         --serial: serve the SLCAN UART on a TCP port (python-can: slcan, socket://)
   qemu-runner IMAGE [ARGS]..
         cargo's runner for thumbv7em-none-eabihf: IMAGE on QEMU's mps2-an386 with ARGS on

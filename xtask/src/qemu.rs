@@ -45,12 +45,14 @@ pub struct Options {
     live: bool,
     events: bool,
     profile: bool,
+    flash: bool,
     serial: Option<String>,
 }
 
 impl Options {
     /// The options of the check command's `qemu` stage: the extended-task demo, the
-    /// per-function profile of Figure 7, the comparison, then the live test.
+    /// production image live, the per-function profile of Figure 7, the comparison, then
+    /// the live test.
     pub fn ci() -> Self {
         Self {
             scenarios: Vec::new(),
@@ -58,11 +60,12 @@ impl Options {
             live: true,
             events: true,
             profile: true,
+            flash: true,
             serial: None,
         }
     }
 
-    /// Parses `[--scenario FILE]... [--compare] [--live] [--events] [--profile]
+    /// Parses `[--scenario FILE]... [--compare] [--live] [--events] [--profile] [--flash]
     /// [--serial tcp:PORT]`.
     pub fn parse(args: &[String]) -> Result<Self> {
         let mut options = Self::default();
@@ -77,6 +80,7 @@ impl Options {
                 "--live" => options.live = true,
                 "--events" => options.events = true,
                 "--profile" => options.profile = true,
+                "--flash" => options.flash = true,
                 "--serial" => {
                     let Some(port) = it.next().and_then(|a| a.strip_prefix("tcp:")) else {
                         return Err("qemu: --serial takes tcp:PORT".into());
@@ -93,29 +97,87 @@ impl Options {
     }
 }
 
-/// Builds the ECU's image; returns its path.
+/// Builds the ECU's scenario image; returns its path.
 pub fn build() -> Result<PathBuf> {
-    build_bin("cw-qemu")
+    build_bin("cw-qemu", "scenario", "release")
 }
 
-/// Builds image `bin` of cw-firmware for the board; returns its path.
-fn build_bin(bin: &str) -> Result<PathBuf> {
+/// Builds image `bin` of cw-firmware for the board with `features` and cargo `profile`;
+/// returns its path. (Each image is built on its own: its features are its own.)
+fn build_bin(bin: &str, features: &str, profile: &str) -> Result<PathBuf> {
     Cmd::new("cargo")
         .args([
             "build",
-            "--release",
+            "--profile",
+            profile,
             "-p",
             "cw-firmware",
             "--no-default-features",
             "--features",
-            "mps2",
+            features,
             "--bin",
             bin,
             "--target",
             TARGET,
         ])
         .run()?;
-    Ok(target_dir().join(TARGET).join("release").join(bin))
+    Ok(target_dir().join(TARGET).join(profile).join(bin))
+}
+
+/// Flash (vector table, code, read-only data, `.data`'s initial values) and RAM (`.data`,
+/// `.bss`, `.uninit`: the task stack) of `image`, in bytes, from `llvm-size -A`.
+pub fn footprint(image: &Path) -> Result<(u64, u64)> {
+    let out = Cmd::new("llvm-size").arg("-A").arg(image).read()?;
+    let size = |name: &str| {
+        out.lines()
+            .find_map(|l| {
+                let mut words = l.split_whitespace();
+                (words.next() == Some(name)).then(|| words.next()?.parse::<u64>().ok())?
+            })
+            .unwrap_or(0)
+    };
+    let flash = [".vector_table", ".text", ".rodata", ".data"]
+        .map(size)
+        .iter()
+        .sum();
+    let ram = [".data", ".bss", ".uninit"].map(size).iter().sum();
+    Ok((flash, ram))
+}
+
+/// The production image (`cw-mps2`, profile `flash`): its flash and RAM against the goals
+/// (24 KiB, 8 KiB), then live against python-can and the simulated UART sensor
+/// (`tests/live.py`, which checks the frames itself); its log must hold its start line
+/// and no fatal error.
+fn flash(out: &Path) -> Result {
+    let image = build_bin("cw-mps2", "mps2", "flash")?;
+    let (flash, ram) = footprint(&image)?;
+    println!(
+        "qemu: cw-mps2 (production image, opt-level z): flash {flash} B = {:.1} KiB (goal 24 KiB), RAM {ram} B = {:.1} KiB (goal 8 KiB)",
+        flash as f64 / 1024.0,
+        ram as f64 / 1024.0
+    );
+    std::fs::create_dir_all(out).map_err(|e| format!("creating {}: {e}", out.display()))?;
+    let session = live_session(
+        &image,
+        cw_tests::qemu::machine("cw-mps2", &[]),
+        &out.join("fpgaio-flash.log"),
+        true,
+    )?;
+    std::fs::write(out.join("image-flash.txt"), &session.log)
+        .map_err(|e| format!("writing {}: {e}", out.display()))?;
+    print!("{}", session.log);
+    let started = session
+        .log
+        .lines()
+        .any(|l| l.starts_with("cw-mps2: collision-warning ECU"));
+    if !started || session.log.contains("FATAL") {
+        return Err(format!(
+            "qemu: the production image's log is not a clean start:\n{}",
+            session.log
+        ));
+    }
+    println!("qemu: the production image passed the live test (python-can over SLCAN both ways, the UART sensor)");
+    Ok(())
 }
 
 /// The machine and the image's log, exit and files (semihosting), for every run; the
@@ -228,9 +290,14 @@ pub fn run(options: &Options) -> Result {
     let out = target_dir().join("qemu");
     if options.events {
         events(&out)?;
-        if !options.compare && !options.live && options.serial.is_none() {
-            return Ok(());
-        }
+    }
+    if options.flash {
+        flash(&out)?;
+    }
+    let only_others =
+        (options.events || options.flash) && options.scenarios.is_empty() && !options.profile;
+    if only_others && !options.compare && !options.live && options.serial.is_none() {
+        return Ok(());
     }
     let image = build()?;
     if !options.scenarios.is_empty() || options.profile || !(options.compare || options.live) {
@@ -277,7 +344,7 @@ pub fn run(options: &Options) -> Result {
 /// every alarm to the millisecond and on the ISR's events, then its deliberate stack
 /// overflow was caught by the MPU guard and shut the OS down with `E_OS_STACKFAULT`).
 fn events(out: &Path) -> Result {
-    let image = build_bin("cw-qemu-events")?;
+    let image = build_bin("cw-qemu-events", "trace", "release")?;
     std::fs::create_dir_all(out).map_err(|e| format!("creating {}: {e}", out.display()))?;
     let mut qemu = std::process::Command::new("qemu-system-arm");
     qemu.args(cw_tests::qemu::machine("cw-qemu-events", &[]))
@@ -302,30 +369,39 @@ fn free_port() -> Result<u16> {
         .map_err(|e| format!("qemu: no free TCP port: {e}"))
 }
 
-/// The image in real time with UART0 (CAN) and UART1 (the sensor) on TCP ports,
-/// `tests/live.py` against them; the image's report (with the receive path's instruction
-/// counts) goes to `out/image-live.txt`.
-fn live(image: &Path, out: &Path) -> Result {
-    use std::process::Command;
-    std::fs::create_dir_all(out).map_err(|e| format!("creating {}: {e}", out.display()))?;
+/// What a live session gave: the test's output and the image's decoded log.
+struct LiveSession {
+    test: String,
+    log: String,
+}
+
+/// Runs `image` in real time with UART0 (CAN) and UART1 (the sensor) on TCP ports and
+/// `tests/live.py` against them, the LED register's writes going to `leds`. An image
+/// that `runs_forever` is stopped when the test ends; one that ends by itself (its
+/// scenario's length) must exit with success.
+fn live_session(
+    image: &Path,
+    machine: Vec<String>,
+    leds: &Path,
+    runs_forever: bool,
+) -> Result<LiveSession> {
     let (can_port, sensor_port) = (free_port()?, free_port()?);
     let can_serial = format!("tcp:127.0.0.1:{can_port},server=on,wait=on");
     let sensor_serial = format!("tcp:127.0.0.1:{sensor_port},server=on,wait=on");
-    let leds = out.join("fpgaio-live.log");
     println!(
-        "$ qemu-system-arm -machine mps2-an386 -icount shift=0,sleep=on -serial {can_serial} -serial {sensor_serial} -kernel {} (semihosting: --sensor uart)",
+        "$ qemu-system-arm -machine mps2-an386 -icount shift=0,sleep=on -serial {can_serial} -serial {sensor_serial} -kernel {}",
         image.display()
     );
-    let mut command = Command::new("qemu-system-arm");
+    let mut command = std::process::Command::new("qemu-system-arm");
     command
-        .args(qemu_machine(None, true))
+        .args(machine)
         // One instruction per ns while the core runs, real time while it sleeps (WFI):
         // the run keeps pace with the test, and the image's spans are instructions.
         .args(["-icount", "shift=0,sleep=on"])
         .args(["-serial", &can_serial])
         .args(["-serial", &sensor_serial])
         .args(["-d", "trace:mps2_fpgaio_write", "-D"])
-        .arg(&leds)
+        .arg(leds)
         .arg("-kernel")
         .arg(image);
     let mut qemu = cw_tests::qemu::Decoded::spawn(command, image)?;
@@ -335,20 +411,33 @@ fn live(image: &Path, out: &Path) -> Result {
         .arg(sensor_port.to_string())
         .arg(root().join("firmware").join("ecu.dbc"))
         .read();
-    let test = match test {
-        Ok(output) => output,
-        Err(e) => {
-            qemu.kill();
-            let _ = qemu.finish();
-            return Err(e);
-        }
-    };
-    print!("{test}");
-    let (success, image_out) = qemu.finish()?;
-    keep_report(&image_out, &out.join("image-live.txt"))?;
-    if !success {
-        return Err("qemu: the live image ended with a failure".into());
+    if test.is_err() || runs_forever {
+        qemu.kill();
     }
+    let finished = qemu.finish();
+    let test = test?;
+    print!("{test}");
+    let (success, log) = finished?;
+    if !runs_forever && !success {
+        return Err(format!("qemu: the live image ended with a failure:\n{log}"));
+    }
+    Ok(LiveSession { test, log })
+}
+
+/// The scenario image live (`--sensor uart`): its report (with the receive path's
+/// instruction counts) goes to `out/image-live.txt`, and its counts of malformed lines,
+/// received frames, sensor frames, bad checksums, blind-zone readings and stray bytes
+/// must equal what the test sent.
+fn live(image: &Path, out: &Path) -> Result {
+    std::fs::create_dir_all(out).map_err(|e| format!("creating {}: {e}", out.display()))?;
+    let session = live_session(
+        image,
+        qemu_machine(None, true),
+        &out.join("fpgaio-live.log"),
+        false,
+    )?;
+    let (test, image_out) = (session.test, session.log);
+    keep_report(&image_out, &out.join("image-live.txt"))?;
     let sent = counts_after(&test, "live: sent ", &[" malformed lines and ", " frames"])?;
     let got = counts_after(
         &image_out,

@@ -377,18 +377,27 @@ impl<K: OsKernel> Port for CortexMPort<K> {
     }
 
     fn job_started(&self, task: TaskId) {
-        trace::job_started(task.0, self.now_counts());
+        if trace::ENABLED {
+            trace::job_started(task.0, self.now_counts());
+        }
     }
 
     fn job_finished(&self, task: TaskId) {
-        trace::job_finished(task.0, self.now_counts());
+        if trace::ENABLED {
+            trace::job_finished(task.0, self.now_counts());
+        }
     }
 
     fn isr_entered(&self, isr: IsrId) {
-        trace::isr_entered(isr.0, self.now_counts());
+        if trace::ENABLED {
+            trace::isr_entered(isr.0, self.now_counts());
+        }
     }
 
     fn span(&self, id: usize, start: bool) {
+        if !trace::ENABLED {
+            return;
+        }
         let at = self.now_counts();
         if start {
             trace::span_start(id, at);

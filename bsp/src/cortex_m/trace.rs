@@ -36,6 +36,11 @@ use cortex_m::peripheral::{SCB, SYST};
 
 use super::MAX_TASKS;
 
+/// Whether the trace records: cw-bsp's feature `trace` (the measuring images). Without it
+/// the port's and the drivers' marks are nothing (they test this constant before reading
+/// the time), so a production image carries neither the trace's code nor its RAM.
+pub const ENABLED: bool = cfg!(feature = "trace");
+
 /// Events kept in order from the start of the run.
 pub const EVENTS: usize = 64;
 /// ISRs traced (by `IsrId`).

@@ -326,6 +326,12 @@ pub fn slcan_stats() -> SlcanStats {
     }
 }
 
+/// Whether the controller plays the bus's faults (cw-bsp's feature `bus-faults`, for the
+/// scenario images): injected transmit errors with their error counter, bus-off and its
+/// recovery time, and tester frames put on the bus. A UART has no bus to fail, so the
+/// production image leaves the model out; the ECU's own handling (CanSM) stays.
+const BUS_FAULTS: bool = cfg!(feature = "bus-faults");
+
 /// The bus's bit time, ns: 500 kbit/s, the ECU's CAN bitrate (as on the host's simulated
 /// bus). Failed attempts, error frames and bus-off recovery take bus time in bits.
 const BIT_NS: u64 = 2000;
@@ -348,6 +354,7 @@ static DEFERRED_DUE_MS: AtomicU32 = AtomicU32::new(u32::MAX);
 /// Fault injection (a scenario's `can-errors`): the controller's next `count`
 /// transmission attempts fail, each raising its transmit error counter by 8 and taking
 /// the bus up to the ACK slot plus an error frame, before the automatic retransmission.
+#[cfg(feature = "bus-faults")]
 pub fn inject_tx_errors(count: u32) {
     let _ = INJECTED_TX_ERRORS.fetch_update(Ordering::Relaxed, Ordering::Relaxed, |n| {
         Some(n.saturating_add(count))
@@ -363,6 +370,7 @@ fn take_injected_error() -> bool {
 
 /// A tester's frame on the bus (a scenario's `frame`): the controller receives it and
 /// raises its interrupt. A frame that finds the queue full is an overrun.
+#[cfg(feature = "bus-faults")]
 pub fn put_frame_on_bus(frame: CanFrame) {
     let queued = cortex_m::interrupt::free(|cs| {
         let mut frames = BUS_FRAMES.borrow(cs).borrow_mut();
@@ -608,7 +616,9 @@ impl SlcanCan {
     /// passes 255 and the controller goes bus-off.
     fn attempts(&mut self, frame: &CanFrame) -> Option<Deferred> {
         // The common case costs two loads: no recovery under way, no error injected.
-        if self.recovery_end_us == 0 && INJECTED_TX_ERRORS.load(Ordering::Relaxed) == 0 {
+        if !BUS_FAULTS
+            || (self.recovery_end_us == 0 && INJECTED_TX_ERRORS.load(Ordering::Relaxed) == 0)
+        {
             return None;
         }
         let now_us = now_us();
@@ -650,7 +660,7 @@ impl SlcanCan {
         while let Some(byte) = self.uart.rx_byte() {
             self.receive(byte);
         }
-        while BUS_FRAMES_WAITING.load(Ordering::Acquire) {
+        while BUS_FAULTS && BUS_FRAMES_WAITING.load(Ordering::Acquire) {
             let Some(frame) = cortex_m::interrupt::free(|cs| {
                 let mut frames = BUS_FRAMES.borrow(cs).borrow_mut();
                 let first = frames.first_mut().and_then(Option::take);
@@ -666,7 +676,10 @@ impl SlcanCan {
                 count(&SLCAN_COUNTERS.bus_frames);
             }
         }
-        if let Some(deferred) = self.deferred.filter(|d| now_us() >= d.due_us()) {
+        if let Some(deferred) = self
+            .deferred
+            .filter(|d| BUS_FAULTS && now_us() >= d.due_us())
+        {
             self.deferred = None;
             DEFERRED_DUE_MS.store(u32::MAX, Ordering::Relaxed);
             match deferred {
@@ -732,10 +745,12 @@ impl CanDriver for SlcanCan {
         {
             return Err(CanBusy);
         }
-        crate::cortex_m::trace::span_start(
-            DRIVER_WRITE_SPAN,
-            crate::cortex_m::trace::now(now_ms()),
-        );
+        if crate::cortex_m::trace::ENABLED {
+            crate::cortex_m::trace::span_start(
+                DRIVER_WRITE_SPAN,
+                crate::cortex_m::trace::now(now_ms()),
+            );
+        }
         self.pdu = Some(pdu);
         match self.attempts(frame) {
             None => self.start_line(frame),
@@ -745,7 +760,12 @@ impl CanDriver for SlcanCan {
                 DEFERRED_DUE_MS.store(u32::try_from(due_ms).unwrap_or(u32::MAX), Ordering::Relaxed);
             }
         }
-        crate::cortex_m::trace::span_end(DRIVER_WRITE_SPAN, crate::cortex_m::trace::now(now_ms()));
+        if crate::cortex_m::trace::ENABLED {
+            crate::cortex_m::trace::span_end(
+                DRIVER_WRITE_SPAN,
+                crate::cortex_m::trace::now(now_ms()),
+            );
+        }
         Ok(())
     }
 
@@ -764,7 +784,7 @@ impl CanDriver for SlcanCan {
                 self.len = 0;
                 self.sent = 0;
             }
-        } else if self.mode != ControllerMode::Started && self.bus_off {
+        } else if BUS_FAULTS && self.mode != ControllerMode::Started && self.bus_off {
             // Restart after bus-off: 128 x 11 recessive bits before the next attempt,
             // with the counter at 0.
             self.bus_off = false;

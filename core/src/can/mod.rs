@@ -110,7 +110,9 @@ impl CanFrame {
             return None;
         }
         let mut bytes = [0u8; 8];
-        bytes[..data.len()].copy_from_slice(data);
+        for (slot, &byte) in bytes.iter_mut().zip(data) {
+            *slot = byte;
+        }
         Some(Self {
             id,
             dlc: data.len() as u8,

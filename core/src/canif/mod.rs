@@ -374,19 +374,21 @@ impl<const TX: usize, const RX: usize, C: Tables<CanIfConfig<TX, RX>>> CanIf<TX,
 
     /// Sends the buffered PDU of `hth` with the lowest CAN id, if any.
     fn flush<D: CanDriver>(&mut self, driver: &mut D, hth: Hth) {
-        let mut best: Option<usize> = None;
+        // The buffered PDU of `hth` with the lowest CAN id: (index, its id).
+        let mut best: Option<(usize, CanId)> = None;
         for (p, cfg) in self.config().tx.iter().enumerate() {
-            if cfg.hth == hth && self.buffered_len[p] != EMPTY {
-                let better = best.is_none_or(|b| cfg.id.key() < self.config().tx[b].id.key());
-                if better {
-                    best = Some(p);
-                }
+            let buffered = self.buffered_len.get(p).is_some_and(|&n| n != EMPTY);
+            if cfg.hth == hth && buffered && best.is_none_or(|(_, id)| cfg.id.key() < id.key()) {
+                best = Some((p, cfg.id));
             }
         }
-        let Some(p) = best else { return };
-        let len = usize::from(self.buffered_len[p]);
-        let Some(frame) =
-            CanFrame::from_parts(self.config().tx[p].id, &self.buffered_data[p][..len])
+        let Some((p, id)) = best else { return };
+        let len = self.buffered_len.get(p).map_or(0, |&n| usize::from(n));
+        let Some(frame) = self
+            .buffered_data
+            .get(p)
+            .and_then(|data| data.get(..len))
+            .and_then(|data| CanFrame::from_parts(id, data))
         else {
             return;
         };

@@ -679,7 +679,9 @@ where
     }
 
     fn write_init(&mut self, s: usize) {
-        let sig = self.cfg().signals[s];
+        let Some(&sig) = self.cfg().signals.get(s) else {
+            return;
+        };
         match sig.direction {
             SignalDirection::Tx(id, _) => {
                 if let Some(buf) = self.tx_buf.get_mut(usize::from(id.0)) {
@@ -914,16 +916,24 @@ where
             return;
         };
         let len = usize::from(cfg.len).min(data.len());
-        if self.cfg().rx_update_bits[i] {
-            self.merge_updated(i, &data[..len]);
-        } else {
-            self.rx_buf[i][..len].copy_from_slice(&data[..len]);
+        let Some(data) = data.get(..len) else {
+            return;
+        };
+        if self.cfg().rx_update_bits.get(i).copied().unwrap_or(false) {
+            self.merge_updated(i, data);
+        } else if let Some(buf) = self.rx_buf.get_mut(i).and_then(|b| b.get_mut(..len)) {
+            buf.copy_from_slice(data);
         }
-        self.rx_timed_out[i] = false;
-        let deadline = self.cfg().rx_deadline[i];
+        if let Some(timed_out) = self.rx_timed_out.get_mut(i) {
+            *timed_out = false;
+        }
+        let deadline = self.cfg().rx_deadline.get(i).copied().unwrap_or(0);
         if deadline > 0 {
             // The wheel entry stays where it is; its slot re-files it (lazy reset).
-            self.rx_due[i] = self.rx_now + deadline;
+            let now = self.rx_now;
+            if let Some(due) = self.rx_due.get_mut(i) {
+                *due = now + deadline;
+            }
         }
     }
 

@@ -230,7 +230,11 @@ impl<I: SenderReceiverInterface, const N: usize> Queued<I, N> {
         if self.len == 0 {
             return Err(RteError::NoData);
         }
-        let value = self.slots[self.head].take().ok_or(RteError::NoData)?;
+        let value = self
+            .slots
+            .get_mut(self.head)
+            .and_then(Option::take)
+            .ok_or(RteError::NoData)?;
         self.head = (self.head + 1) % N;
         self.len -= 1;
         Ok(value)

@@ -61,8 +61,13 @@ where
     /// Ticks from now until the counter of `c` next shows `start` (a full revolution if it
     /// shows it now).
     fn abs_delay(&self, c: usize, start: TickType) -> u64 {
-        let modulus = u64::from(self.cfg().counters[c].max_allowed_value) + 1;
-        let now = u64::from(self.counter_value[c]);
+        // (`c` is a configured counter: the configuration's checks tie every alarm to one.)
+        let modulus = self
+            .cfg()
+            .counters
+            .get(c)
+            .map_or(1, |k| u64::from(k.max_allowed_value) + 1);
+        let now = self.counter_value.get(c).map_or(0, |&v| u64::from(v));
         let delay = (u64::from(start) + modulus - now % modulus) % modulus;
         if delay == 0 {
             modulus
@@ -96,8 +101,11 @@ where
     /// Inserts alarm `a` into counter `c`'s delta list, `delay >= 1` ticks from now, after
     /// any alarm due at the same tick.
     fn arm(&mut self, a: usize, c: usize, delay: u64, cycle: TickType) {
+        if a >= A {
+            return;
+        }
         let mut prev = NONE;
-        let mut node = self.counter_head[c];
+        let mut node = self.counter_head.get(c).copied().unwrap_or(NONE);
         let mut rest = delay;
         while (node as usize) < A && rest >= self.alarm_delta[node as usize] {
             rest -= self.alarm_delta[node as usize];
@@ -108,8 +116,8 @@ where
         self.alarm_next[a] = node;
         if (prev as usize) < A {
             self.alarm_next[prev as usize] = a as u8;
-        } else {
-            self.counter_head[c] = a as u8;
+        } else if let Some(head) = self.counter_head.get_mut(c) {
+            *head = a as u8;
         }
         if (node as usize) < A {
             self.alarm_delta[node as usize] -= rest;

@@ -530,12 +530,13 @@ where
 
     #[inline(always)]
     fn base_prio(&self, t: usize) -> u8 {
-        self.cfg().priority[t]
+        // (`t` is a task index: the ready queue and the services hold only those.)
+        self.cfg().priority.get(t).copied().unwrap_or(0)
     }
 
     #[inline(always)]
     fn internal_prio(&self, t: usize) -> u8 {
-        self.cfg().dispatch_priority[t]
+        self.cfg().dispatch_priority.get(t).copied().unwrap_or(0)
     }
 
     #[inline(always)]
@@ -743,7 +744,9 @@ where
                 }
             }
             let r = self.running as usize;
-            self.saved_prio[r] = self.running_prio;
+            if let Some(saved) = self.saved_prio.get_mut(r) {
+                *saved = self.running_prio;
+            }
             // The running task's own record returns to the pool, so there is room for it.
             let _ = self.ready.push_front(self.running_prio, r as u8);
             self.running = NONE;
@@ -779,16 +782,15 @@ where
         let ti = t as usize;
         self.running = t;
         let internal = self.internal_prio(ti);
-        self.running_prio = if self.started[ti] {
+        let saved = self.saved_prio.get(ti).copied().unwrap_or(0);
+        self.running_prio = match self.started.get_mut(ti) {
             // Resuming: keep the ceiling it was preempted at.
-            if self.saved_prio[ti] > internal {
-                self.saved_prio[ti]
-            } else {
+            Some(true) => saved.max(internal),
+            Some(started) => {
+                *started = true;
                 internal
             }
-        } else {
-            self.started[ti] = true;
-            internal
+            None => internal,
         };
     }
 

@@ -131,14 +131,18 @@ where
 
     fn holder_top(&self, holder: Holder) -> u8 {
         match holder {
-            Holder::Task(t) => self.res_top[t],
+            Holder::Task(t) => self.res_top.get(t).copied().unwrap_or(NO_RES),
             Holder::Isr(depth) => self.isr_stack.get(depth).map_or(NO_RES, |f| f.res_top),
         }
     }
 
     fn set_holder_top(&mut self, holder: Holder, top: u8) {
         match holder {
-            Holder::Task(t) => self.res_top[t] = top,
+            Holder::Task(t) => {
+                if let Some(slot) = self.res_top.get_mut(t) {
+                    *slot = top;
+                }
+            }
             Holder::Isr(depth) => {
                 if let Some(frame) = self.isr_stack.get_mut(depth) {
                     frame.res_top = top;
