@@ -17,6 +17,7 @@
 
 use crate::warning::Measurement;
 
+pub mod model;
 pub mod uart;
 
 /// What the board observed on the echo line for one trigger.

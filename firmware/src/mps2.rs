@@ -2,10 +2,11 @@
 //! the ECU's entry points for the Cortex-M port (`cw_bsp::cortex_m::App`).
 //!
 //! The sensor is one of two ([`Mps2Sensor`]):
-//! - by default deterministic: QEMU cannot time an HC-SR04 echo, so the Gpt capture
+//! - by default the scenario's: QEMU cannot time an HC-SR04 echo, so the Gpt capture
 //!   returns the echo width the scenario's obstacle distance gives at the current OS
-//!   time, converted by the same `SonarConfig::distance_to_echo_us` as the host
-//!   simulation's sensor model, and no echo in the scenario's dropouts;
+//!   time through the host simulation's own sensor model (`cw_core::sonar::model`: the
+//!   scenario's `noise` and `dropout-rate` drawn from the same generator with the same
+//!   seed, `--seed N`, default 1), and no echo in the scenario's `dropout` windows;
 //! - with `--sensor uart` on the semihosting command line, a UART ranging module
 //!   (A02YYUW protocol, `cw_core::sonar::uart`) on UART1, QEMU's second `-serial`: what
 //!   a live run's test program sends there is what the ECU measures. The scenario's
@@ -19,17 +20,16 @@
 //! does on the host's bus), and `no-communication` and `shutdown` through the mode inputs
 //! ([`ScenarioInput`]) that the ModeManager SWC samples, as on the host board. A
 //! `shutdown` ends the run at `ShutdownOS` (the port's [`App::shut_down`]): interrupts
-//! stay off, the report follows. It refuses, with the line's command named, what it
-//! cannot play the way the host does: sensor noise and random dropouts (the host draws
-//! them from its own generator).
+//! stay off, the report follows. It plays every command the host simulation does.
 
 use cw_bsp::cortex_m::{App, CortexMPort};
 use cw_bsp::mps2::{self, CoreDelay, Led, SensorUart, SlcanCan, SlcanEvent, Unconnected};
 use cw_bsp::port::Port;
 use cw_core::can::Hrh;
 use cw_core::os::{status_name, OsError, TaskId, E_OK};
-use cw_core::scenario::{NoiseSpec, Scenario};
-use cw_core::sonar::SonarConfig;
+use cw_core::scenario::Scenario;
+use cw_core::sonar::model::{EchoModel, Noise};
+use cw_core::sonar::{Echo, SonarConfig};
 use cw_core::warning::Measurement;
 
 use crate::board::{
@@ -61,8 +61,8 @@ pub enum Mps2Sensor {
 
 impl Mps2Sensor {
     /// The sensor a run asked for: the module on UART1 if `uart`, else the scenario's
-    /// obstacle.
-    pub fn new(uart: bool, scenario: &'static ImageScenario) -> Self {
+    /// obstacle, its noise and dropouts drawn with generator seed `seed`.
+    pub fn new(uart: bool, scenario: &'static ImageScenario, seed: u64) -> Self {
         if uart {
             Self::Uart(SerialSensor::new(
                 SensorUart::uart1(),
@@ -73,7 +73,7 @@ impl Mps2Sensor {
                 trigger: Unconnected,
                 echo: Unconnected,
                 delay: CoreDelay,
-                capture: ScenarioEcho::new(SonarConfig::HC_SR04, scenario),
+                capture: ScenarioEcho::new(SonarConfig::HC_SR04, scenario, seed),
             })
         }
     }
@@ -137,8 +137,6 @@ enum Refused<'a> {
     NotText,
     /// A malformed line.
     Parse(cw_core::scenario::ScenarioError<'a>),
-    /// A command the image does not play.
-    Unsupported(&'static str),
 }
 
 impl core::fmt::Display for Refused<'_> {
@@ -147,10 +145,6 @@ impl core::fmt::Display for Refused<'_> {
             Self::File(e) => write!(f, "{e}"),
             Self::NotText => write!(f, "it is not UTF-8 text"),
             Self::Parse(e) => write!(f, "{e}"),
-            Self::Unsupported(what) => write!(
-                f,
-                "the image does not play `{what}` (the host simulation does)"
-            ),
         }
     }
 }
@@ -162,13 +156,17 @@ pub struct Start {
     pub scenario: ImageScenario,
     /// The sensor is the UART ranging module on UART1 (`--sensor uart`).
     pub uart_sensor: bool,
+    /// The seed of the scenario sensor's noise and dropouts (`--seed N`, default 1, as
+    /// the host simulation's).
+    pub seed: u64,
 }
 
 /// The run the command line asks for: the scenario file named by `--scenario PATH`, read
 /// from the host (at most [`SCENARIO_FILE_MAX`] bytes), or Figure 7; the sensor named
-/// by `--sensor scenario|uart` (default `scenario`). The scenario's name goes to the
-/// log; a file that cannot be read or parsed, or asks for what the image does not play,
-/// or an unknown sensor, is a fatal error naming the file, the line and the fault.
+/// by `--sensor scenario|uart` (default `scenario`); the sensor model's seed by `--seed N`
+/// (default 1). The scenario's name goes to the log; a file that cannot be read or
+/// parsed, an unknown sensor or a bad seed is a fatal error naming the file, the line and
+/// the fault.
 /// Never inlined: its buffers leave the main stack before the OS starts.
 #[inline(never)]
 pub fn load() -> Start {
@@ -185,6 +183,15 @@ pub fn load() -> Start {
         Some(_) => {
             mps2::leds_safe();
             defmt::println!("FATAL: --sensor takes `scenario` or `uart`");
+            mps2::exit(false)
+        }
+    };
+    let seed = match option("--seed").map(str::parse::<u64>) {
+        None => 1,
+        Some(Ok(seed)) => seed,
+        Some(Err(_)) => {
+            mps2::leds_safe();
+            defmt::println!("FATAL: --seed takes a whole number");
             mps2::exit(false)
         }
     };
@@ -220,6 +227,7 @@ pub fn load() -> Start {
             Start {
                 scenario: s,
                 uart_sensor,
+                seed,
             }
         }
         Err(e) => {
@@ -232,14 +240,7 @@ pub fn load() -> Start {
 
 /// Reads and checks a scenario for the image.
 fn parse(text: &str) -> Result<ImageScenario, Refused<'_>> {
-    let s = ImageScenario::parse(text).map_err(Refused::Parse)?;
-    if s.noise != NoiseSpec::Off {
-        return Err(Refused::Unsupported("noise"));
-    }
-    if s.dropout_ppm != 0 {
-        return Err(Refused::Unsupported("dropout-rate"));
-    }
-    Ok(s)
+    ImageScenario::parse(text).map_err(Refused::Parse)
 }
 
 /// A mode input the scenario drives (the board has no such lines): its level at the
@@ -283,34 +284,39 @@ impl embedded_hal::digital::InputPin for ScenarioInput {
     }
 }
 
-/// The echo a scenario's obstacle gives, on the Gpt capture.
+/// The echo a scenario's obstacle gives, on the Gpt capture: the host simulation's sensor
+/// model ([`EchoModel`]) with the scenario's noise and random dropouts, drawn from the
+/// same generator with the same seed, so the image measures what the host does.
 pub struct ScenarioEcho {
-    sensor: SonarConfig,
+    model: EchoModel,
     scenario: &'static ImageScenario,
 }
 
 impl ScenarioEcho {
-    /// The sensor `sensor` seeing the obstacle move as `scenario` says.
-    pub const fn new(sensor: SonarConfig, scenario: &'static ImageScenario) -> Self {
-        Self { sensor, scenario }
+    /// The sensor `sensor` seeing the obstacle move as `scenario` says, its generator
+    /// seeded with `seed`.
+    pub fn new(sensor: SonarConfig, scenario: &'static ImageScenario, seed: u64) -> Self {
+        Self {
+            model: EchoModel::new(sensor, seed)
+                .with_noise(Noise::from(scenario.noise))
+                .with_dropout_ppm(scenario.dropout_ppm),
+            scenario,
+        }
     }
 }
 
 impl PulseCapture for ScenarioEcho {
     fn high_time_us(&mut self, timeout_us: u32) -> Option<u32> {
         let now = u64::from(mps2::now_ms());
+        // A `dropout` window is an unplugged sensor: no echo, nothing drawn (as the
+        // host's forced dropout).
         if self.scenario.in_dropout(now) {
             return None;
         }
-        let distance = self.scenario.distance_at(now);
-        let width = if distance > self.sensor.max_range_mm() {
-            self.sensor.echo_timeout_us()
-        } else {
-            self.sensor
-                .distance_to_echo_us(distance)
-                .min(self.sensor.echo_timeout_us())
-        };
-        (width <= timeout_us).then_some(width)
+        match self.model.echo(self.scenario.distance_at(now)) {
+            Echo::Missing => None,
+            Echo::Pulse { width_us } => (width_us <= timeout_us).then_some(width_us),
+        }
     }
 }
 

@@ -1,6 +1,6 @@
 //! Emulator in the loop: the Cortex-M4 image on QEMU is the same ECU as the host
 //! simulation (same frames, same LED levels, times within one OS tick, the schedule as
-//! configured), and it refuses a scenario it cannot play, naming why.
+//! configured), and it refuses a scenario file it cannot read, naming why.
 //!
 //! Run with `cargo xtask qemu --compare`: it builds the image and sets `CW_QEMU_IMAGE`.
 
@@ -114,18 +114,12 @@ fn a_malformed_scenario_is_refused_with_its_line() {
     );
 }
 
+/// Sensor noise and random dropouts: the image draws them from the host simulation's own
+/// sensor model, with the same generator and seed, so it measures what the host does.
 #[test]
-fn a_scenario_the_image_cannot_play_is_refused() {
-    refused(
-        "dropout-rate.txt",
-        Some("hold 500 1000\ndropout-rate 20000\n"),
-        "the image does not play `dropout-rate` (the host simulation does)",
-    );
-    refused(
-        "noise.txt",
-        Some("hold 500 1000\nnoise uniform 20\n"),
-        "the image does not play `noise` (the host simulation does)",
-    );
+fn noisy_and_unreliable_sensors_are_the_same_ecu_on_the_image() {
+    same_ecu("approach.txt");
+    same_ecu("unreliable.txt");
 }
 
 #[test]

@@ -27,75 +27,15 @@
 
 use cw_core::sonar::{Echo, SonarConfig};
 
-/// A tiny deterministic PRNG (Marsaglia xorshift64). Not for cryptography.
-#[derive(Debug, Clone, PartialEq, Eq, Hash)]
-pub struct XorShift64 {
-    state: u64,
-}
+use cw_core::sonar::model::EchoModel;
+pub use cw_core::sonar::model::{Noise, XorShift64};
 
-impl XorShift64 {
-    /// Used in place of a zero seed, which would make xorshift emit zeros forever.
-    const NONZERO_SEED: u64 = 0x9E37_79B9_7F4A_7C15;
-
-    /// A generator from `seed`; seed 0 is replaced by a fixed non-zero constant.
-    pub const fn new(seed: u64) -> Self {
-        Self {
-            state: if seed == 0 { Self::NONZERO_SEED } else { seed },
-        }
-    }
-
-    /// The next 64 random bits.
-    pub fn next_u64(&mut self) -> u64 {
-        let mut x = self.state;
-        x ^= x << 13;
-        x ^= x >> 7;
-        x ^= x << 17;
-        self.state = x;
-        x
-    }
-
-    /// A number in `0..bound` (`0` when `bound` is 0). The modulo bias is below 2^-32 for
-    /// the bounds used here.
-    pub fn next_below(&mut self, bound: u64) -> u64 {
-        if bound == 0 {
-            return 0;
-        }
-        self.next_u64() % bound
-    }
-
-    /// A number in `[0, 1)` with 53 random bits.
-    pub fn next_unit(&mut self) -> f64 {
-        (self.next_u64() >> 11) as f64 / (1u64 << 53) as f64
-    }
-}
-
-/// Measurement noise added to the true distance.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
-pub enum Noise {
-    /// Exact measurements.
-    #[default]
-    None,
-    /// Uniform in `-amplitude_mm..=amplitude_mm`.
-    Uniform {
-        /// Largest deviation, mm.
-        amplitude_mm: u32,
-    },
-    /// Approximately normal with standard deviation `sigma_mm` (sum of 12 uniforms,
-    /// so never beyond ±6 sigma).
-    Gaussian {
-        /// Standard deviation, mm.
-        sigma_mm: u32,
-    },
-}
-
-/// The simulated HC-SR04.
+/// The simulated HC-SR04: the shared sensor model ([`EchoModel`], which the image's
+/// scenario sensor uses too) and a forced dropout.
 #[derive(Debug, Clone)]
 pub struct HcSr04 {
-    config: SonarConfig,
-    noise: Noise,
-    dropout_ppm: u32,
+    model: EchoModel,
     forced_dropout: bool,
-    rng: XorShift64,
 }
 
 impl Default for HcSr04 {
@@ -109,34 +49,31 @@ impl HcSr04 {
     pub const TRIGGER_US: u32 = 10;
 
     /// One part per million, the unit of [`Self::with_dropout_ppm`].
-    pub const PPM: u32 = 1_000_000;
+    pub const PPM: u32 = EchoModel::PPM;
 
     /// An exact sensor (no noise, no dropouts) with the given parameters, PRNG seed 1.
     pub fn new(config: SonarConfig) -> Self {
         Self {
-            config,
-            noise: Noise::None,
-            dropout_ppm: 0,
+            model: EchoModel::new(config, 1),
             forced_dropout: false,
-            rng: XorShift64::new(1),
         }
     }
 
     /// Sets the noise model.
     pub fn with_noise(mut self, noise: Noise) -> Self {
-        self.noise = noise;
+        self.model = self.model.with_noise(noise);
         self
     }
 
     /// Sets the probability of a missing echo, parts per million (clamped to 1 000 000).
     pub fn with_dropout_ppm(mut self, dropout_ppm: u32) -> Self {
-        self.dropout_ppm = dropout_ppm.min(Self::PPM);
+        self.model = self.model.with_dropout_ppm(dropout_ppm);
         self
     }
 
     /// Reseeds the PRNG: the same seed gives the same sequence of measurements.
     pub fn with_seed(mut self, seed: u64) -> Self {
-        self.rng = XorShift64::new(seed);
+        self.model = self.model.with_seed(seed);
         self
     }
 
@@ -152,7 +89,7 @@ impl HcSr04 {
 
     /// The sensor parameters.
     pub fn config(&self) -> &SonarConfig {
-        &self.config
+        &self.model.config
     }
 
     /// One measurement of an obstacle truly `true_distance_mm` away.
@@ -160,37 +97,7 @@ impl HcSr04 {
         if self.forced_dropout {
             return Echo::Missing;
         }
-        // Draw the dropout even when it is off, so changing the probability does not shift
-        // the noise sequence of the other measurements.
-        let roll = self.rng.next_below(u64::from(Self::PPM));
-        if roll < u64::from(self.dropout_ppm) {
-            return Echo::Missing;
-        }
-        let timeout_us = self.config.echo_timeout_us();
-        if true_distance_mm > self.config.max_range_mm() {
-            return Echo::Pulse {
-                width_us: timeout_us,
-            };
-        }
-        let noisy_mm = self.add_noise(true_distance_mm);
-        let width_us = self.config.distance_to_echo_us(noisy_mm).min(timeout_us);
-        Echo::Pulse { width_us }
-    }
-
-    fn add_noise(&mut self, distance_mm: u32) -> u32 {
-        let offset_mm: i64 = match self.noise {
-            Noise::None => 0,
-            Noise::Uniform { amplitude_mm } => {
-                let span = 2 * u64::from(amplitude_mm) + 1;
-                self.rng.next_below(span) as i64 - i64::from(amplitude_mm)
-            }
-            Noise::Gaussian { sigma_mm } => {
-                let sum: f64 = (0..12).map(|_| self.rng.next_unit()).sum();
-                ((sum - 6.0) * f64::from(sigma_mm)).round() as i64
-            }
-        };
-        let noisy = i64::from(distance_mm) + offset_mm;
-        noisy.clamp(0, i64::from(u32::MAX)) as u32
+        self.model.echo(true_distance_mm)
     }
 
     /// Virtual time one measurement takes, µs: the trigger pulse plus the echo pulse. With
@@ -198,7 +105,7 @@ impl HcSr04 {
     pub fn measurement_time_us(&self, echo: Echo) -> u32 {
         let echo_us = match echo {
             Echo::Pulse { width_us } => width_us,
-            Echo::Missing => self.config.echo_timeout_us(),
+            Echo::Missing => self.model.config.echo_timeout_us(),
         };
         Self::TRIGGER_US.saturating_add(echo_us)
     }

@@ -25,7 +25,7 @@ fn main() -> ! {
     };
     defmt::println!("cw-qemu: collision-warning ECU on mps2-an386");
     let start = load();
-    let uart_sensor = start.uart_sensor;
+    let (uart_sensor, seed) = (start.uart_sensor, start.seed);
     let Some(scenario) = SCENARIO.init(start.scenario) else {
         mps2::fatal("started twice")
     };
@@ -38,7 +38,7 @@ fn main() -> ! {
             red: Led::RED,
             yellow: Led::YELLOW,
         },
-        sonar: Mps2Sensor::new(uart_sensor, scenario),
+        sonar: Mps2Sensor::new(uart_sensor, scenario, seed),
         modes: ModeInputs {
             ignition: ScenarioInput::new(scenario, ModeLine::Ignition),
             com_enable: ScenarioInput::new(scenario, ModeLine::ComEnable),

@@ -12,7 +12,7 @@ use cw_core::os::TaskId;
 use cw_core::sonar::{Echo, SonarConfig};
 use cw_core::warning::{Measurement, WarningLevel};
 
-use super::scenario::{NoiseSpec, Scenario};
+use super::scenario::Scenario;
 use crate::board::{
     Board, BoardParts, CanEvents, CanInterrupt, EchoSensor, Leds, ModeInputs, PortDriver,
     PulseCapture,
@@ -204,13 +204,8 @@ impl Simulation {
             &HostCanConfig::new(&[(config::THRESHOLD_FRAME_ID, Hrh(0))]).with_catch_all(Hrh(0)),
         );
         let pc = bus.attach_tester();
-        let noise = match scenario.noise {
-            NoiseSpec::Off => Noise::None,
-            NoiseSpec::Uniform(amplitude_mm) => Noise::Uniform { amplitude_mm },
-            NoiseSpec::Gaussian(sigma_mm) => Noise::Gaussian { sigma_mm },
-        };
         let sensor = HcSr04::new(SonarConfig::HC_SR04)
-            .with_noise(noise)
+            .with_noise(Noise::from(scenario.noise))
             .with_dropout_ppm(scenario.dropout_ppm)
             .with_seed(seed);
         let red = SimPin::new("RedLED", &clock);
