@@ -75,14 +75,21 @@ pub fn image() -> Result<PathBuf, String> {
 ///
 /// # Errors
 /// QEMU cannot be started or its files cannot be written or read.
-pub fn run_image(image: &Path, scenario: Option<&Path>, dir: &Path) -> Result<ImageRun, String> {
+pub fn run_image(
+    image: &Path,
+    scenario: Option<&Path>,
+    seed: u64,
+    dir: &Path,
+) -> Result<ImageRun, String> {
     std::fs::create_dir_all(dir).map_err(|e| format!("creating {}: {e}", dir.display()))?;
     let uart = dir.join("slcan.txt");
     let _ = std::fs::remove_file(&uart);
     let scenario = scenario.map(|file| file.display().to_string());
-    let args: Vec<&str> = scenario
-        .as_deref()
-        .map_or_else(Vec::new, |file| vec!["--scenario", file]);
+    let seed = seed.to_string();
+    let mut args = vec!["--seed", seed.as_str()];
+    if let Some(file) = scenario.as_deref() {
+        args.extend(["--scenario", file]);
+    }
     let mut command = Command::new("qemu-system-arm");
     command
         .args(qemu::machine("cw-qemu", &args))
@@ -183,10 +190,10 @@ impl ImageRun {
 ///
 /// # Errors
 /// The file cannot be read or parsed, or the ECU's configuration is inconsistent.
-pub fn simulate(path: &Path) -> Result<Trace, String> {
+pub fn simulate(path: &Path, seed: u64) -> Result<Trace, String> {
     let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
     let scenario = Scenario::parse(&text).map_err(|e| format!("{}: {e}", path.display()))?;
-    let mut sim = Simulation::new(scenario, 1).map_err(|e| e.to_string())?;
+    let mut sim = Simulation::new(scenario, seed).map_err(|e| e.to_string())?;
     sim.run();
     let ecu = sim.ecu().com_stack().can.node();
     let ms = |us: u64| us as f64 / 1000.0;

@@ -18,11 +18,18 @@ fn out(name: &str) -> PathBuf {
         .join(name)
 }
 
-/// The image on `scenario` against the simulation; prints the counts compared.
+/// The image on `scenario` against the simulation, both with the sensor model's seed 1;
+/// prints the counts compared.
 fn same_ecu(scenario: &str) -> cw_tests::ImageRun {
+    same_ecu_seeded(scenario, 1)
+}
+
+/// The image on `scenario` against the simulation, both with sensor seed `seed`.
+fn same_ecu_seeded(scenario: &str, seed: u64) -> cw_tests::ImageRun {
     let image = image().unwrap_or_else(|e| panic!("{e}"));
     let path = root().join("scenarios").join(scenario);
-    let run = run_image(&image, Some(&path), &out(scenario)).unwrap_or_else(|e| panic!("{e}"));
+    let dir = out(&format!("{scenario}-seed{seed}"));
+    let run = run_image(&image, Some(&path), seed, &dir).unwrap_or_else(|e| panic!("{e}"));
     assert!(run.success, "the image failed:\n{}", run.report);
     let schedule = run
         .schedule()
@@ -32,10 +39,10 @@ fn same_ecu(scenario: &str) -> cw_tests::ImageRun {
         "the image's schedule check failed: {schedule}"
     );
     let image_trace = run.trace().unwrap_or_else(|e| panic!("{e}"));
-    let host = simulate(&path).unwrap_or_else(|e| panic!("{e}"));
+    let host = simulate(&path, seed).unwrap_or_else(|e| panic!("{e}"));
     let a = compare(&image_trace, &host).unwrap_or_else(|e| panic!("{scenario}: {e}"));
     println!(
-        "same ECU on scenarios/{scenario}: {} CAN frames compared (id and payload, in order; \
+        "same ECU on scenarios/{scenario} (seed {seed}): {} CAN frames compared (id and payload, in order; \
          the image sent {} more), times within {:.3} ms; {} red and {} yellow LED levels \
          compared in order, times within {:.3} ms; schedule: {schedule}",
         a.frames, a.image_extra, a.frame_skew_ms, a.red, a.yellow, a.led_skew_ms
@@ -94,7 +101,7 @@ fn refused(name: &str, text: Option<&str>, reason: &str) {
         std::fs::create_dir_all(&dir).unwrap_or_else(|e| panic!("{e}"));
         std::fs::write(&path, text).unwrap_or_else(|e| panic!("{e}"));
     }
-    let run = run_image(&image, Some(&path), &dir).unwrap_or_else(|e| panic!("{e}"));
+    let run = run_image(&image, Some(&path), 1, &dir).unwrap_or_else(|e| panic!("{e}"));
     assert!(!run.success, "the image accepted {name}:\n{}", run.report);
     let want = format!("FATAL: scenario {}: {reason}", path.display());
     assert!(
@@ -120,6 +127,27 @@ fn a_malformed_scenario_is_refused_with_its_line() {
 fn noisy_and_unreliable_sensors_are_the_same_ecu_on_the_image() {
     same_ecu("approach.txt");
     same_ecu("unreliable.txt");
+}
+
+/// The seed on the image's command line reaches its sensor model: another seed gives the
+/// host other frames, and the image the same ones as the host.
+#[test]
+fn the_sensor_seed_reaches_the_image() {
+    let path = root().join("scenarios").join("unreliable.txt");
+    let frames = |seed| {
+        simulate(&path, seed)
+            .unwrap_or_else(|e| panic!("{e}"))
+            .frames
+            .into_iter()
+            .map(|(_, frame)| frame)
+            .collect::<Vec<_>>()
+    };
+    assert_ne!(
+        frames(1),
+        frames(7),
+        "seeds 1 and 7 give the host the same frames"
+    );
+    same_ecu_seeded("unreliable.txt", 7);
 }
 
 #[test]
