@@ -160,15 +160,17 @@ impl<const N: usize> SignalLayout<N> {
                 }
             }
         }
-        // First byte the signal touches (for both orders, the start bit's byte): where the
-        // window starts, clamped for N > 8.
+        // First byte the signal touches (for both orders, the start bit's byte), and the
+        // window for N > 16: it starts at the multiple of 8 at or below that byte (the signal
+        // spans at most 9 bytes, so it ends inside the 16), clamped to the PDU's end. Aligned
+        // windows start at one of N / 8 places, which keeps the codec's proofs tractable.
         let first_byte = start / 8;
         let (window_len, window_byte) = if N <= 8 {
             (8, 0)
         } else if N < 16 {
             (16, 0)
         } else {
-            (16, min(first_byte, N - 16))
+            (16, min(first_byte - first_byte % 8, N - 16))
         };
         let shift = match order {
             ByteOrder::Intel => start - 8 * window_byte,
@@ -294,13 +296,13 @@ impl<const N: usize> SignalLayout<N> {
         }
     }
 
-    /// The 16-byte window for PDUs above 8 bytes: first byte and number of PDU bytes in it
-    /// (`N < 16` PDUs fill the window partly). Construction guarantees
-    /// `window_byte + len <= N`.
+    /// The 16-byte window for PDUs above 8 bytes: first byte and number of PDU bytes in it.
+    /// The number is fixed by `N` (`N < 16` PDUs fill the window partly, from byte 0), so
+    /// the copies have a constant length. Construction guarantees `window_byte + len <= N`:
+    /// the window starts at byte 0 when `N < 16` and at most at byte `N - 16` otherwise.
     #[inline(always)]
     fn window16(&self) -> (usize, usize) {
-        let start = self.window_byte as usize;
-        (start, min(N - start, 16))
+        (self.window_byte as usize, min(N, 16))
     }
 
     /// Packs an unsigned value.
@@ -412,6 +414,39 @@ pub mod spec {
                 (linear / 8) * 8 + (7 - linear % 8)
             }
         }
+    }
+
+    /// The inverse of [`bit_position`]: which signal bit (counted from the LSB) PDU bit `p`
+    /// holds, or `None` if `p` is not part of the signal. Written in closed form so a proof
+    /// can ask it for one symbolic `p` instead of walking the signal; the proofs check every
+    /// `Some(i)` against [`bit_position`], so a wrong answer here cannot hide a fault.
+    pub const fn signal_bit_at(
+        start_bit: u16,
+        length_bits: u8,
+        order: ByteOrder,
+        p: usize,
+    ) -> Option<u8> {
+        let start = start_bit as usize;
+        let len = length_bits as usize;
+        let from_lsb = match order {
+            ByteOrder::Intel => {
+                if p < start || p - start >= len {
+                    return None;
+                }
+                p - start
+            }
+            ByteOrder::Motorola => {
+                // Sawtooth (linear) index: byte 0 bit 7 is 0, byte 0 bit 0 is 7, byte 1 bit 7
+                // is 8. The signal occupies `len` linear positions from its MSB's.
+                let linear = (p / 8) * 8 + (7 - p % 8);
+                let msb_linear = (start / 8) * 8 + (7 - start % 8);
+                if linear < msb_linear || linear - msb_linear >= len {
+                    return None;
+                }
+                len - 1 - (linear - msb_linear)
+            }
+        };
+        Some(from_lsb as u8)
     }
 
     /// The layout is acceptable: PDU of 1..=64 bytes, length 1..=64, every bit inside.
