@@ -150,7 +150,11 @@ impl SonarConfig {
         // width_us * c / 2 / 1e6 (µs to s), with half-up rounding. The product is at most
         // (2^32 - 1) * 390_000 < 2^61, and the quotient below 2^32 - 1 since c < 2e6 / 2.
         let product = width_us as u64 * self.speed.mm_per_s as u64;
-        ((product + 1_000_000) / 2_000_000) as u32
+        let distance_mm = (product + 1_000_000) / 2_000_000;
+        // Exact, so the narrowing below loses nothing (proved for every input by the
+        // Kani harness `conversion_is_exact`).
+        debug_assert!(distance_mm <= u32::MAX as u64);
+        distance_mm as u32
     }
 
     /// Turns an echo observation into a measurement.
@@ -222,8 +226,24 @@ mod tests {
         }
     }
 
+    /// Any width at any admissible speed: the distance is `width_us * c / 2e6` rounded
+    /// half up (`spec::distance_is_rounded`).
+    ///
+    /// A bolero test, not a Kani proof (it timed out): the check relates a division of up
+    /// to 51 bits to multiplications, which CBMC's bit-level encoding cannot decide in the
+    /// time a proof may take (measured with Kani 0.60 and CBMC 6.4.1:
+    /// `q * 2e6 <= x < q * 2e6 + 2e6` for `q = x / 2e6` takes 0.6 s for a 32-bit `x`, 9 s
+    /// for 36 bits and over 100 s for 40; even the product `w * 343_000`, formed in `u64`
+    /// and in `u128`, is not shown to agree within a minute). The property is proved in
+    /// two parts instead:
+    /// - for every width and speed, [`conversion_is_exact`] (Kani) proves that nothing
+    ///   overflows and nothing is lost in the narrowing, so the result is the quotient
+    ///   `q = (w * c + 1e6) / 2e6` of exact unsigned division, and
+    ///   `spec::distance_is_rounded` is that division's definition
+    ///   (`2e6 * q <= w * c + 1e6 < 2e6 * (q + 1)`);
+    /// - [`conversion_is_rounded_for_every_echo_below_the_timeout`] checks the spec itself,
+    ///   by exhaustion, on every width the HC-SR04 configuration converts, at every speed.
     #[test]
-    #[cfg_attr(kani, kani::proof)]
     fn conversion_is_total_and_rounded() {
         bolero::check!()
             .with_type::<(u32, u32)>()
@@ -237,6 +257,47 @@ mod tests {
                 let d = cfg.echo_to_distance_mm(width_us);
                 assert!(spec::distance_is_rounded(width_us, speed.mm_per_s(), d));
             });
+    }
+
+    /// Any width at any admissible speed: the product and the rounding offset never
+    /// overflow `u64`, and the rounded quotient fits the `u32` it is narrowed to (the
+    /// `debug_assert!` in `echo_to_distance_mm`), so the conversion is exact.
+    #[test]
+    #[cfg_attr(kani, kani::proof)]
+    fn conversion_is_exact() {
+        bolero::check!()
+            .with_type::<(u32, u32)>()
+            .cloned()
+            .for_each(|(width_us, raw_speed)| {
+                let cfg = SonarConfig {
+                    speed: speed_from(raw_speed),
+                    ..SonarConfig::HC_SR04
+                };
+                let _ = cfg.echo_to_distance_mm(width_us);
+            });
+    }
+
+    /// Proof by exhaustion of `spec::distance_is_rounded` on every width the HC-SR04
+    /// configuration converts (below its 38 ms echo timeout), at every admissible speed:
+    /// 38,000 x 90,001 = 3.42e9 cases, split across threads by speed. Miri checks a
+    /// strided sample instead.
+    #[test]
+    fn conversion_is_rounded_for_every_echo_below_the_timeout() {
+        fn first_unrounded(
+            cfg: SonarConfig,
+            mut widths_us: impl Iterator<Item = u32>,
+        ) -> Option<u32> {
+            let c = cfg.speed().mm_per_s();
+            widths_us.find(|&w| !spec::distance_is_rounded(w, c, cfg.echo_to_distance_mm(w)))
+        }
+        let timeout_us = SonarConfig::HC_SR04.echo_timeout_us();
+        #[cfg(not(miri))]
+        let failure = first_failure_at_every_speed(move |cfg| first_unrounded(cfg, 0..timeout_us));
+        #[cfg(miri)]
+        let failure = sampled_speeds().find_map(|cfg| {
+            first_unrounded(cfg, (0..timeout_us).step_by(997)).map(|w| (cfg.speed().mm_per_s(), w))
+        });
+        assert_eq!(failure, None, "(speed mm/s, width us) not rounded");
     }
 
     #[test]
@@ -271,8 +332,15 @@ mod tests {
             });
     }
 
+    /// Any `u16` distance at any admissible speed comes back within a millimetre through
+    /// its echo width.
+    ///
+    /// A bolero test, not a Kani proof (it timed out): both conversions divide, one of
+    /// them by the symbolic speed, and the check relates the quotients to products, the
+    /// arithmetic CBMC decides worst (see [`conversion_is_total_and_rounded`]). Proved by
+    /// exhaustion instead, over the whole domain:
+    /// [`round_trip_for_every_u16_distance_and_speed`].
     #[test]
-    #[cfg_attr(kani, kani::proof)]
     fn round_trip_through_echo_width_is_within_a_millimetre() {
         bolero::check!()
             .with_type::<(u16, u32)>()
@@ -286,6 +354,83 @@ mod tests {
                 let back = cfg.echo_to_distance_mm(cfg.distance_to_echo_us(d));
                 assert!(back.abs_diff(d) <= 1, "{d} mm came back as {back} mm");
             });
+    }
+
+    /// Proof by exhaustion of the round trip: every `u16` distance at every admissible
+    /// speed, 65,536 x 90,001 = 5.9e9 cases (1.4 x 2^32; each is a hardware division by
+    /// the speed and one by a constant), split across threads by speed. Miri checks a
+    /// strided sample instead.
+    #[test]
+    fn round_trip_for_every_u16_distance_and_speed() {
+        fn first_astray(
+            cfg: SonarConfig,
+            mut distances_mm: impl Iterator<Item = u32>,
+        ) -> Option<u32> {
+            distances_mm.find(|&d| {
+                cfg.echo_to_distance_mm(cfg.distance_to_echo_us(d))
+                    .abs_diff(d)
+                    > 1
+            })
+        }
+        let distances_mm = 0..=u32::from(u16::MAX);
+        #[cfg(not(miri))]
+        let failure =
+            first_failure_at_every_speed(move |cfg| first_astray(cfg, distances_mm.clone()));
+        #[cfg(miri)]
+        let failure = sampled_speeds().find_map(|cfg| {
+            first_astray(cfg, distances_mm.clone().step_by(997))
+                .map(|d| (cfg.speed().mm_per_s(), d))
+        });
+        assert_eq!(
+            failure, None,
+            "(speed mm/s, distance mm) came back more than 1 mm off"
+        );
+    }
+
+    /// Runs `first_failure` on the HC-SR04 configuration at every admissible speed, split
+    /// across threads; the first failure found, as (speed in mm/s, its input).
+    #[cfg(not(miri))]
+    fn first_failure_at_every_speed(
+        first_failure: impl Fn(SonarConfig) -> Option<u32> + Clone + Send + 'static,
+    ) -> Option<(u32, u32)> {
+        extern crate std;
+        const PARTS: u32 = 4;
+        let span = (SpeedOfSound::MAX_MM_PER_S - SpeedOfSound::MIN_MM_PER_S) / PARTS + 1;
+        let handles: std::vec::Vec<_> = (0..PARTS)
+            .map(|p| {
+                let first_failure = first_failure.clone();
+                std::thread::spawn(move || {
+                    let from = SpeedOfSound::MIN_MM_PER_S + p * span;
+                    let to = (from + span).min(SpeedOfSound::MAX_MM_PER_S + 1);
+                    (from..to).find_map(|c| first_failure(config_at(c)).map(|x| (c, x)))
+                })
+            })
+            .collect();
+        let failures: std::vec::Vec<_> = handles
+            .into_iter()
+            .map(|h| h.join().expect("worker thread"))
+            .collect();
+        failures.into_iter().flatten().next()
+    }
+
+    /// The lowest, the design and the highest speed, and a stride through the rest.
+    #[cfg(miri)]
+    fn sampled_speeds() -> impl Iterator<Item = SonarConfig> {
+        (SpeedOfSound::MIN_MM_PER_S..=SpeedOfSound::MAX_MM_PER_S)
+            .step_by(9_001)
+            .chain([SpeedOfSound::AT_20_C.mm_per_s(), SpeedOfSound::MAX_MM_PER_S])
+            .map(config_at)
+    }
+
+    /// The HC-SR04 configuration at `mm_per_s`, which must be admissible.
+    fn config_at(mm_per_s: u32) -> SonarConfig {
+        match SpeedOfSound::new(mm_per_s) {
+            Ok(speed) => SonarConfig {
+                speed,
+                ..SonarConfig::HC_SR04
+            },
+            Err(e) => panic!("speed in range was refused: {e:?}"),
+        }
     }
 
     #[test]

@@ -165,11 +165,23 @@ fn hex_value(c: u8) -> Option<u32> {
     }
 }
 
-/// The number written by `digits` (at most 8 hex digits).
+/// The number written by `digits` (at most 8 hex digits: every caller passes 2, 3, 4 or
+/// 8). The loop reads every digit and the verdict follows it, with a bound Kani sees: the
+/// verdict of stopping at the first bad digit, in far fewer paths.
 fn hex_number(digits: &[u8]) -> Result<u32, LineError> {
-    digits.iter().try_fold(0u32, |n, &c| {
-        hex_value(c).map(|v| (n << 4) | v).ok_or(LineError::BadHex)
-    })
+    let mut n = 0u32;
+    let mut all_hex = true;
+    for &c in digits.iter().take(8) {
+        match hex_value(c) {
+            Some(v) => n = (n << 4) | v,
+            None => all_hex = false,
+        }
+    }
+    if all_hex {
+        Ok(n)
+    } else {
+        Err(LineError::BadHex)
+    }
 }
 
 /// Decodes one line without its terminator.
@@ -232,13 +244,26 @@ fn parse_frame(extended: bool, fields: &[u8]) -> Result<CanFrame, LineError> {
     if data_text.len() != 2 * dlc {
         return Err(LineError::BadLength);
     }
+    // Every pair is read, and the verdict follows (as in `hex_number`).
     let mut data = [0u8; 8];
+    let mut all_hex = true;
     for (byte, pair) in data.iter_mut().zip(data_text.chunks_exact(2)) {
-        *byte = hex_number(pair)? as u8;
+        let digit = |i| pair.get(i).copied().and_then(hex_value);
+        match (digit(0), digit(1)) {
+            (Some(hi), Some(lo)) => *byte = ((hi << 4) | lo) as u8,
+            _ => all_hex = false,
+        }
     }
-    data.get(..dlc)
-        .and_then(|bytes| CanFrame::from_parts(id, bytes))
-        .ok_or(LineError::BadDlc)
+    if !all_hex {
+        return Err(LineError::BadHex);
+    }
+    // `data` holds the `dlc` bytes, then zeros: what `CanFrame::from_parts` makes of
+    // them, built directly (its copy loop has a length Kani cannot see is at most 8).
+    Ok(CanFrame {
+        id,
+        dlc: dlc as u8,
+        data,
+    })
 }
 
 /// An upper-case hexadecimal digit.
@@ -301,17 +326,18 @@ pub fn encode_frame_at(
     };
     let mut n = 0;
     let mut put = |b: u8| {
-        if let Some(slot) = out.get_mut(n) {
-            *slot = b;
+        if n < FRAME_LINE_MAX {
+            out[n] = b;
             n += 1;
         }
     };
     put(command);
-    for i in (0..digits).rev() {
+    // At most 8 digits and 8 bytes: `take` makes the bounds plain to Kani.
+    for i in (0..digits).rev().take(8) {
         put(hex_digit(id.raw() >> (4 * i)));
     }
     put(hex_digit(u32::from(frame.len())));
-    for &b in frame.bytes() {
+    for &b in frame.bytes().iter().take(8) {
         put(hex_digit(u32::from(b) >> 4));
         put(hex_digit(u32::from(b)));
     }
@@ -327,17 +353,24 @@ pub fn encode_frame_at(
 
 /// The contract of the decoder, shared by the harnesses here and the fuzz target.
 pub mod spec {
-    use super::{encode_frame, Command, Decoder, FRAME_LINE_MAX};
+    use super::{encode_frame, Command, Decoder, FRAME_LINE_MAX, LINE_CAPACITY};
     use crate::can::CanFrame;
 
     /// A frame line the decoder accepted is the canonical line of its frame, up to the
     /// case of its hex digits: the decoder accepts exactly the well-formed frame lines.
     pub fn accepted_line_is_canonical(line: &[u8], frame: &CanFrame) -> bool {
         let mut canonical = [0u8; FRAME_LINE_MAX];
-        let n = encode_frame(frame, &mut canonical);
-        canonical
-            .get(..n.saturating_sub(1))
-            .is_some_and(|c| c.eq_ignore_ascii_case(line))
+        // The line without its `\r` (at most `LINE_CAPACITY` bytes: it has no time
+        // stamp), compared byte by byte over that many (a bound Kani sees):
+        // `eq_ignore_ascii_case` on the two slices.
+        let body = encode_frame(frame, &mut canonical).saturating_sub(1);
+        let mut same = line.len() == body && body <= LINE_CAPACITY;
+        for (k, c) in canonical.iter().enumerate().take(LINE_CAPACITY) {
+            if k < body {
+                same &= line.get(k).is_some_and(|l| l.eq_ignore_ascii_case(c));
+            }
+        }
+        same
     }
 
     /// Any bytes, then a line end, then the line of `frame`: every frame the decoder

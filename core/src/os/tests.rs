@@ -1143,8 +1143,11 @@ fn step(s: Step) -> spec::Service {
     }
 }
 
+/// Random sequences of up to 64 steps keep the invariants and transition rules (a bolero
+/// test and fuzz target). Not a Kani proof yet: one symbolic step of the kernel does not
+/// finish under Kani in 300 s (README, "Kani"); every reachable state of the model
+/// checker's configurations is explored exhaustively in `proofs/` instead.
 #[test]
-#[cfg_attr(kani, kani::proof, kani::unwind(9))]
 fn random_step_sequences_keep_the_invariants() {
     bolero::check!().with_type::<Vec<Step>>().for_each(|steps| {
         let mut os = os();

@@ -187,23 +187,29 @@ fn any_text_is_read_or_refused() {
         });
 }
 
-/// Any short line of bytes: read or refused, never a panic; what is read writes back to
-/// a line that reads as the same command.
+/// Any line of up to 12 bytes of text: read or refused, never a panic; what is read
+/// writes back to a line that reads as the same command.
+///
+/// The line is the valid UTF-8 that 12 arbitrary bytes begin with, so every string of up
+/// to 12 bytes is drawn (a shorter one followed by a byte that cannot continue it).
+/// `core::str::from_utf8` would draw only the strings of exactly 12 bytes.
+///
+/// A test and fuzz target, not a Kani proof: the reader splits words by Unicode
+/// whitespace, matches command names and parses numbers with `core`'s string routines,
+/// and even without the write-back, and with the bytes limited to ASCII, Kani 0.60 did
+/// not finish reading one symbolic 12-byte line in 300 s.
 #[test]
-#[cfg_attr(kani, kani::proof, kani::unwind(14))]
 fn any_short_line_is_read_or_refused() {
     bolero::check!()
         .with_type::<[u8; 12]>()
         .cloned()
         .for_each(|bytes| {
-            if let Ok(line) = core::str::from_utf8(&bytes) {
-                if let Ok(Some(command)) = parse_line(line) {
-                    // A written command is at most 57 characters.
-                    let mut again = FixedText::<64>::new();
-                    assert!(fmt::Write::write_fmt(&mut again, format_args!("{command}")).is_ok());
-                    let text = again.as_str();
-                    assert_eq!(text.map(parse_line), Ok(Ok(Some(command))));
-                }
+            let line = bytes.utf8_chunks().next().map_or("", |chunk| chunk.valid());
+            if let Ok(Some(command)) = parse_line(line) {
+                // A written command is at most 57 characters.
+                let mut again = FixedText::<64>::new();
+                assert!(fmt::Write::write_fmt(&mut again, format_args!("{command}")).is_ok());
+                assert_eq!(again.as_str().map(parse_line), Some(Ok(Some(command))));
             }
         });
 }

@@ -129,19 +129,31 @@ impl Decoder {
                     return Some(Frame::Distance { mm });
                 }
                 // Hunt again from the byte after the bad header: the bytes before the
-                // next 0xFF among them were part of no frame.
-                let rest = [hi, lo, byte];
-                let from = rest.iter().position(|&b| b == HEADER).unwrap_or(rest.len());
-                self.stray = self.stray.saturating_add(from as u32);
-                self.len = 0;
-                for (slot, &b) in self
-                    .window
-                    .iter_mut()
-                    .zip(rest.get(from..).unwrap_or_default())
-                {
-                    *slot = b;
-                    self.len += 1;
+                // next 0xFF among them were part of no frame, the bytes from it on are
+                // the new candidate, moved to the front of the window (the slots after
+                // it keep stale bytes, which `len` excludes). Spelt out rather than
+                // searched and copied by iterators, which Kani unwinds into a far
+                // larger program.
+                let from: u8 = if hi == HEADER {
+                    0
+                } else if lo == HEADER {
+                    1
+                } else if byte == HEADER {
+                    2
+                } else {
+                    3
+                };
+                self.stray = self.stray.saturating_add(u32::from(from));
+                match from {
+                    0 => self.window = [hi, lo, byte],
+                    1 => {
+                        self.window[0] = lo;
+                        self.window[1] = byte;
+                    }
+                    2 => self.window[0] = byte,
+                    _ => {}
                 }
+                self.len = FRAME_LEN as u8 - 1 - from;
                 Some(Frame::BadChecksum)
             }
         }

@@ -246,14 +246,14 @@ fn saturating_and_masking_variants_are_explicit() {
     assert_eq!(pdu, [0xF0, 0x0F, 0, 0, 0, 0, 0, 0]);
 }
 
-fn bolero_case<const N: usize>(
+/// The layout raw inputs name: start bits up to one byte past the PDU and lengths up to
+/// 65, so refused layouts are drawn as well.
+fn drawn<const N: usize>(
     start: u16,
     len: u8,
     moto: bool,
     signed: bool,
-    value: i128,
-    bg: [u8; N],
-) {
+) -> (u16, u8, ByteOrder, Signedness) {
     let order = if moto {
         ByteOrder::Motorola
     } else {
@@ -264,8 +264,18 @@ fn bolero_case<const N: usize>(
     } else {
         Signedness::Unsigned
     };
-    let start = start % (8 * N as u16 + 8);
-    let len = len % 66;
+    (start % (8 * N as u16 + 8), len % 66, order, sign)
+}
+
+fn bolero_case<const N: usize>(
+    start: u16,
+    len: u8,
+    moto: bool,
+    signed: bool,
+    value: i128,
+    bg: [u8; N],
+) {
+    let (start, len, order, sign) = drawn::<N>(start, len, moto, signed);
     match SignalLayout::<N>::new(start, len, order, sign) {
         Ok(layout) => {
             assert!(spec::layout_fits(N, start, len, order));
@@ -336,27 +346,6 @@ mod proofs {
     /// Bit `p` of a PDU, as the DBC numbers bits.
     fn bit_at(pdu: &[u8], p: usize) -> u8 {
         (pdu[p / 8] >> (p % 8)) & 1
-    }
-
-    /// The layout raw inputs name: start bits up to one byte past the PDU and lengths up to
-    /// 65, so refused layouts are drawn as well.
-    fn drawn<const N: usize>(
-        start: u16,
-        len: u8,
-        moto: bool,
-        signed: bool,
-    ) -> (u16, u8, ByteOrder, Signedness) {
-        let order = if moto {
-            ByteOrder::Motorola
-        } else {
-            ByteOrder::Intel
-        };
-        let sign = if signed {
-            Signedness::Signed
-        } else {
-            Signedness::Unsigned
-        };
-        (start % (8 * N as u16 + 8), len % 66, order, sign)
     }
 
     /// The in-range value whose low `len` bits (two's complement) are those of `raw`: each
@@ -437,14 +426,24 @@ mod proofs {
         SignalLayout::<N>::new(start, len, order, sign).ok()
     }
 
-    /// The value drawn for a layout, and its two's complement bits.
-    fn value_of<const N: usize>(layout: &SignalLayout<N>, raw: u64) -> (SignalValue, u64) {
+    /// The in-range value `raw` names, packed into `background` with the layout drawn for
+    /// one byte order: the layout, the value's two's complement bits and the PDU, or `None`
+    /// for a refused layout (those are [`layout_case`]'s). Packing it must succeed.
+    fn packed<const N: usize>(
+        (start, len, signed): (u16, u8, bool),
+        order: ByteOrder,
+        raw: u64,
+        background: [u8; N],
+    ) -> Option<(SignalLayout<N>, u64, [u8; N])> {
+        let layout = layout_of::<N>(start, len, order, signed)?;
         let value = in_range_value(raw, layout.length_bits(), layout.signedness());
         let bits = match value {
             SignalValue::Unsigned(v) => v,
             SignalValue::Signed(v) => v as u64,
         };
-        (value, bits)
+        let mut pdu = background;
+        assert_eq!(layout.pack(&mut pdu, value), Ok(()));
+        Some((layout, bits, pdu))
     }
 
     /// Packing an in-range value puts its bit `i` (one symbolic bit) where the reference
@@ -456,12 +455,9 @@ mod proofs {
         background: [u8; N],
         i: u8,
     ) {
-        let Some(layout) = layout_of::<N>(start, len, order, signed) else {
+        let Some((layout, bits, pdu)) = packed((start, len, signed), order, raw, background) else {
             return;
         };
-        let (value, bits) = value_of(&layout, raw);
-        let mut pdu = background;
-        assert_eq!(layout.pack(&mut pdu, value), Ok(()));
         let (start, len) = (layout.start_bit(), layout.length_bits());
         let i = i % len;
         let q = spec::bit_position(start, len, order, i);
@@ -477,12 +473,9 @@ mod proofs {
         background: [u8; N],
         p: u16,
     ) {
-        let Some(layout) = layout_of::<N>(start, len, order, signed) else {
+        let Some((layout, _, pdu)) = packed((start, len, signed), order, raw, background) else {
             return;
         };
-        let (value, _) = value_of(&layout, raw);
-        let mut pdu = background;
-        assert_eq!(layout.pack(&mut pdu, value), Ok(()));
         let (start, len) = (layout.start_bit(), layout.length_bits());
         let p = usize::from(p) % (8 * N);
         match spec::signal_bit_at(start, len, order, p) {
@@ -573,11 +566,7 @@ mod proofs {
         as_signed: bool,
         background: [u8; N],
     ) {
-        let order = if moto {
-            ByteOrder::Motorola
-        } else {
-            ByteOrder::Intel
-        };
+        let (_, _, order, _) = drawn::<N>(start, len, moto, signed);
         let Some(layout) = layout_of::<N>(start, len, order, signed) else {
             return;
         };
