@@ -476,6 +476,26 @@ mod tests {
             SpeedOfSound::at_temperature(-500).map(|s| s.mm_per_s()),
             Ok(301_000)
         );
+        // The range's ends are accepted: +85.0 °C and -50.0 °C, and the speeds' limits.
+        assert_eq!(
+            SpeedOfSound::at_temperature(850).map(|s| s.mm_per_s()),
+            Ok(382_810)
+        );
+        assert_eq!(
+            SpeedOfSound::at_temperature(-501),
+            Err(SonarConfigError::TemperatureOutOfRange {
+                temp_decicelsius: -501
+            })
+        );
+        for limit in [SpeedOfSound::MIN_MM_PER_S, SpeedOfSound::MAX_MM_PER_S] {
+            assert_eq!(SpeedOfSound::new(limit).map(|s| s.mm_per_s()), Ok(limit));
+        }
+        assert_eq!(
+            SpeedOfSound::new(SpeedOfSound::MAX_MM_PER_S + 1),
+            Err(SonarConfigError::SpeedOutOfRange {
+                mm_per_s: SpeedOfSound::MAX_MM_PER_S + 1
+            })
+        );
         assert_eq!(
             SpeedOfSound::at_temperature(851),
             Err(SonarConfigError::TemperatureOutOfRange {
@@ -489,6 +509,31 @@ mod tests {
         assert_eq!(
             SonarConfig::new(SpeedOfSound::AT_20_C, 0, 4000),
             Err(SonarConfigError::BadLimits)
+        );
+        assert_eq!(
+            SonarConfig::new(SpeedOfSound::AT_20_C, 38_000, 0),
+            Err(SonarConfigError::BadLimits)
+        );
+    }
+
+    /// A valid custom configuration is accepted and keeps what it was given (a module
+    /// with a 1 ms timeout and a 150 mm range at 0 °C).
+    #[test]
+    fn a_valid_custom_configuration_is_kept() {
+        let speed = match SpeedOfSound::at_temperature(0) {
+            Ok(speed) => speed,
+            Err(e) => panic!("0 °C refused: {e:?}"),
+        };
+        let cfg = match SonarConfig::new(speed, 1_000, 150) {
+            Ok(cfg) => cfg,
+            Err(e) => panic!("a valid configuration refused: {e:?}"),
+        };
+        assert_eq!(cfg.speed(), speed);
+        assert_eq!((cfg.echo_timeout_us(), cfg.max_range_mm()), (1_000, 150));
+        assert_eq!(cfg.echo_to_distance_mm(1_000), 166);
+        assert_eq!(
+            SonarConfig::new(speed, 1, 1).map(|c| (c.echo_timeout_us(), c.max_range_mm())),
+            Ok((1, 1))
         );
     }
 }

@@ -304,3 +304,48 @@ fn any_frame_is_accepted_or_dropped_and_counted() {
             }
         });
 }
+
+/// The transmit buffers survive exactly the transitions that keep the channel sending
+/// (controller started, PDU mode online) and are discarded, each counted once, by every
+/// other controller and PDU mode.
+#[test]
+fn buffers_are_discarded_exactly_when_the_channel_stops_sending() {
+    let buffered = || {
+        let (mut canif, mut can) = online();
+        can.busy = true;
+        assert_eq!(canif.transmit(&mut can, TxPduId(0), &[1; 8]), Ok(()));
+        assert_eq!(canif.transmit(&mut can, TxPduId(2), &[2; 8]), Ok(()));
+        (canif, can)
+    };
+    for (mode, kept) in [
+        (ControllerMode::Started, true),
+        (ControllerMode::Stopped, false),
+        (ControllerMode::Sleep, false),
+    ] {
+        let (mut canif, mut can) = buffered();
+        assert_eq!(canif.set_controller_mode(&mut can, mode), Ok(()));
+        assert_eq!(canif.controller_mode(), mode);
+        assert_eq!(canif.is_buffered(TxPduId(0)), kept, "{mode:?}");
+        assert_eq!(canif.is_buffered(TxPduId(2)), kept, "{mode:?}");
+        assert_eq!(
+            canif.stats().tx_discarded,
+            if kept { 0 } else { 2 },
+            "{mode:?}"
+        );
+    }
+    for (mode, kept) in [
+        (PduMode::Online, true),
+        (PduMode::TxOffline, false),
+        (PduMode::Offline, false),
+    ] {
+        let (mut canif, _can) = buffered();
+        canif.set_pdu_mode(mode);
+        assert_eq!(canif.is_buffered(TxPduId(0)), kept, "{mode:?}");
+        assert_eq!(canif.is_buffered(TxPduId(2)), kept, "{mode:?}");
+        assert_eq!(
+            canif.stats().tx_discarded,
+            if kept { 0 } else { 2 },
+            "{mode:?}"
+        );
+    }
+}

@@ -190,3 +190,107 @@ impl<const Q: usize> Hash for ReadyQueue<Q> {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    extern crate std;
+
+    use super::*;
+    use core::hash::BuildHasher;
+    use std::collections::hash_map::RandomState;
+    use std::vec::Vec;
+
+    fn tasks<const Q: usize>(q: &ReadyQueue<Q>, prio: u8) -> Vec<u8> {
+        q.iter(prio).collect()
+    }
+
+    /// Equal (and hashed alike) exactly when every priority holds the same tasks in the
+    /// same order, whichever pool slots hold them.
+    #[test]
+    fn equal_exactly_when_every_priority_holds_the_same_tasks() {
+        let hash = RandomState::new();
+        let mut a = ReadyQueue::<8>::new();
+        let mut b = ReadyQueue::<8>::new();
+        assert_eq!(a.push_back(3, 1), Ok(()));
+        assert_eq!(a.push_back(3, 2), Ok(()));
+        // `b` reaches the same content through other slots.
+        assert_eq!(b.push_back(5, 7), Ok(()));
+        assert_eq!(b.push_back(3, 1), Ok(()));
+        assert_eq!(b.pop_front(5), Some(7));
+        assert_eq!(b.push_back(3, 2), Ok(()));
+        assert!(a == b);
+        assert_eq!(hash.hash_one(a), hash.hash_one(b));
+        let mut other_order = ReadyQueue::<8>::new();
+        assert_eq!(other_order.push_back(3, 2), Ok(()));
+        assert_eq!(other_order.push_back(3, 1), Ok(()));
+        let mut other_task = ReadyQueue::<8>::new();
+        assert_eq!(other_task.push_back(3, 1), Ok(()));
+        assert_eq!(other_task.push_back(3, 4), Ok(()));
+        let mut other_priority = ReadyQueue::<8>::new();
+        assert_eq!(other_priority.push_back(3, 1), Ok(()));
+        assert_eq!(other_priority.push_back(4, 2), Ok(()));
+        let mut shorter = ReadyQueue::<8>::new();
+        assert_eq!(shorter.push_back(3, 1), Ok(()));
+        for differing in [other_order, other_task, other_priority, shorter] {
+            assert!(a != differing, "{differing:?}");
+            assert!(differing != a, "{differing:?}");
+        }
+        assert!(ReadyQueue::<8>::new() == ReadyQueue::<8>::new());
+        assert!(a != ReadyQueue::<8>::new());
+    }
+
+    /// A pool of `Q` records takes exactly `Q` (from either end), refuses the next one
+    /// with `QueueFull` and stays as it was; at the largest pool a `u8` slot can address
+    /// (255) too.
+    fn full_pool_refuses_the_next_record<const Q: usize>() {
+        let mut q = ReadyQueue::<Q>::new();
+        for i in 0..Q {
+            let (prio, task) = ((i % 64) as u8, (i % 251) as u8);
+            let pushed = if i % 2 == 0 {
+                q.push_back(prio, task)
+            } else {
+                q.push_front(prio, task)
+            };
+            assert_eq!(pushed, Ok(()), "record {i} of {Q}");
+        }
+        let full = q;
+        assert_eq!(q.push_back(0, 1), Err(QueueFull));
+        assert_eq!(q.push_front(63, 1), Err(QueueFull));
+        assert!(q == full);
+        let popped: usize = (0..64u8)
+            .map(|p| core::iter::from_fn(|| q.pop_front(p)).count())
+            .sum();
+        assert_eq!(popped, Q);
+        assert_eq!((q.bitmap(), q.highest()), (0, None));
+        assert_eq!(q.push_back(9, 3), Ok(()));
+        assert_eq!(tasks(&q, 9), [3]);
+    }
+
+    #[test]
+    fn a_full_pool_refuses_the_next_record() {
+        full_pool_refuses_the_next_record::<1>();
+        full_pool_refuses_the_next_record::<8>();
+        full_pool_refuses_the_next_record::<255>();
+    }
+
+    /// FIFO per priority, a preempted task back at the head, the highest priority first.
+    #[test]
+    fn fifo_per_priority_and_preempted_tasks_first() {
+        let mut q = ReadyQueue::<4>::new();
+        assert_eq!(q.highest(), None);
+        assert_eq!(q.push_back(2, 1), Ok(()));
+        assert_eq!(q.push_back(2, 2), Ok(()));
+        assert_eq!(q.push_front(2, 3), Ok(()));
+        assert_eq!(q.push_back(40, 4), Ok(()));
+        assert_eq!((q.highest(), q.bitmap()), (Some(40), (1 << 40) | (1 << 2)));
+        assert_eq!(tasks(&q, 2), [3, 1, 2]);
+        assert_eq!(q.pop_front(40), Some(4));
+        assert_eq!(q.pop_front(40), None);
+        assert_eq!(q.highest(), Some(2));
+        assert_eq!(
+            [q.pop_front(2), q.pop_front(2), q.pop_front(2)],
+            [Some(3), Some(1), Some(2)]
+        );
+        assert_eq!(q.highest(), None);
+    }
+}

@@ -1086,3 +1086,54 @@ fn wheel_takes_the_entries_of_one_cycle_last_filed_first() {
     let expected: Vec<(u32, usize)> = [5, 4, 3, 2, 1, 0].iter().map(|&k| (due, k)).collect();
     assert_eq!(order, expected);
 }
+
+/// An update bit anywhere in the I-PDU outside its signal: sending the signal sets exactly
+/// that bit (byte `bit / 8`, bit `bit % 8`), the transmission carries it, and it is
+/// cleared afterwards with nothing else changed.
+#[test]
+fn tx_update_bits_are_set_in_their_own_byte_and_cleared_after_sending() {
+    for bit in 8u16..64 {
+        let cfg = ComConfig::<8, 1, 0, 1>::new(
+            10,
+            [TxIpduConfig {
+                name: "t",
+                len: 8,
+                mode: TxMode::Periodic {
+                    period_ms: 10,
+                    offset_ms: 0,
+                },
+                mdt_ms: 0,
+            }],
+            [],
+            [SignalConfig {
+                name: "s",
+                direction: SignalDirection::Tx(TxIpduId(0), TransferProperty::Pending),
+                layout: layout(0, 8),
+                init: 0,
+                invalid: None,
+                update_bit: Some(bit),
+            }],
+        );
+        let cfg: &'static ComConfig<8, 1, 0, 1> = match cfg {
+            Ok(cfg) => std::boxed::Box::leak(std::boxed::Box::new(cfg)),
+            Err(e) => panic!("update bit {bit}: {}", e.describe()),
+        };
+        let mut com = Com::new(cfg);
+        let mut expected = [0x5A, 0, 0, 0, 0, 0, 0, 0];
+        expected[usize::from(bit / 8)] |= 1 << (bit % 8);
+        let sent = com.send_signal(SignalId(0), SignalValue::Unsigned(0x5A), |_, _| true);
+        assert_eq!(sent, Ok(()));
+        assert_eq!(com.tx_ipdu(TxIpduId(0)), Some(&expected[..]), "bit {bit}");
+        let mut carried = Vec::new();
+        com.main_function_tx(|_, data| {
+            carried.push(data.to_vec());
+            true
+        });
+        assert_eq!(carried, [expected.to_vec()], "bit {bit}");
+        assert_eq!(
+            com.tx_ipdu(TxIpduId(0)),
+            Some(&[0x5A, 0, 0, 0, 0, 0, 0, 0][..]),
+            "bit {bit} cleared"
+        );
+    }
+}
