@@ -171,6 +171,82 @@ mod tests {
         Thresholds::new(red, yellow).ok()
     }
 
+    /// The thresholds read back as given.
+    #[test]
+    fn thresholds_keep_what_they_were_given() {
+        let t = thresholds_from(700, 1_500).map(|t| (t.red_below_mm(), t.yellow_below_mm()));
+        assert_eq!(t, Some((700, 1_500)));
+        let paper = Thresholds::PAPER;
+        assert_eq!(
+            (paper.red_below_mm(), paper.yellow_below_mm()),
+            (1_000, 2_000)
+        );
+    }
+
+    /// The validity rule at its edges: red above zero, yellow strictly above red.
+    #[test]
+    fn threshold_rule_at_its_edges() {
+        assert!(spec::thresholds_valid(1, 2));
+        assert!(!spec::thresholds_valid(0, 2));
+        assert!(!spec::thresholds_valid(2, 2));
+        assert!(!spec::thresholds_valid(3, 2));
+        assert!(spec::thresholds_valid(u32::MAX - 1, u32::MAX));
+    }
+
+    /// The other two predicates can fail too: a fault for a valid measurement, no fault
+    /// for an invalid one, and a nearer obstacle warned less than a farther one.
+    #[test]
+    fn fault_and_monotonicity_predicates_refuse_what_breaks_them() {
+        let distance = Measurement::Distance { distance_mm: 500 };
+        assert!(spec::fault_iff_invalid(distance, WarningLevel::Red));
+        assert!(!spec::fault_iff_invalid(distance, WarningLevel::Fault));
+        assert!(!spec::fault_iff_invalid(
+            Measurement::NothingInRange,
+            WarningLevel::Fault
+        ));
+        assert!(spec::fault_iff_invalid(
+            Measurement::Invalid,
+            WarningLevel::Fault
+        ));
+        assert!(!spec::fault_iff_invalid(
+            Measurement::Invalid,
+            WarningLevel::Off
+        ));
+        assert!(spec::monotone(WarningLevel::Red, WarningLevel::Yellow));
+        assert!(spec::monotone(WarningLevel::Yellow, WarningLevel::Yellow));
+        assert!(!spec::monotone(WarningLevel::Off, WarningLevel::Yellow));
+        assert!(!spec::monotone(WarningLevel::Yellow, WarningLevel::Red));
+    }
+
+    /// The spec accepts exactly the level the rule gives and refuses the three others, at
+    /// each edge of each interval: an oracle that could not fail would prove nothing.
+    #[test]
+    fn spec_refuses_every_wrong_level() {
+        let levels = [
+            WarningLevel::Red,
+            WarningLevel::Yellow,
+            WarningLevel::Off,
+            WarningLevel::Fault,
+        ];
+        let t = Thresholds::PAPER;
+        for (d, right) in [
+            (0, WarningLevel::Red),
+            (999, WarningLevel::Red),
+            (1_000, WarningLevel::Yellow),
+            (1_999, WarningLevel::Yellow),
+            (2_000, WarningLevel::Off),
+            (u32::MAX, WarningLevel::Off),
+        ] {
+            for level in levels {
+                assert_eq!(
+                    spec::level_is_correct(&t, d, level),
+                    level == right,
+                    "{d} mm as {level:?}"
+                );
+            }
+        }
+    }
+
     #[test]
     #[cfg_attr(kani, kani::proof)]
     fn paper_level_matches_spec_for_any_distance() {

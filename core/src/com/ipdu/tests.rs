@@ -1087,37 +1087,51 @@ fn wheel_takes_the_entries_of_one_cycle_last_filed_first() {
     assert_eq!(order, expected);
 }
 
+/// A one-signal I-PDU (the signal in byte 0) whose update bit is `bit`.
+const fn update_bit_config(bit: u16) -> ComConfig<8, 1, 0, 1> {
+    match ComConfig::new(
+        10,
+        [TxIpduConfig {
+            name: "t",
+            len: 8,
+            mode: TxMode::Periodic {
+                period_ms: 10,
+                offset_ms: 0,
+            },
+            mdt_ms: 0,
+        }],
+        [],
+        [SignalConfig {
+            name: "s",
+            direction: SignalDirection::Tx(TxIpduId(0), TransferProperty::Pending),
+            layout: layout(0, 8),
+            init: 0,
+            invalid: None,
+            update_bit: Some(bit),
+        }],
+    ) {
+        Ok(cfg) => cfg,
+        Err(_) => panic!("update bit configuration refused"),
+    }
+}
+
+/// [`update_bit_config`] for every update bit outside the signal: 8..64.
+static UPDATE_BIT_CONFIGS: [ComConfig<8, 1, 0, 1>; 56] = {
+    let mut configs = [update_bit_config(8); 56];
+    let mut i = 1;
+    while i < configs.len() {
+        configs[i] = update_bit_config(8 + i as u16);
+        i += 1;
+    }
+    configs
+};
+
 /// An update bit anywhere in the I-PDU outside its signal: sending the signal sets exactly
 /// that bit (byte `bit / 8`, bit `bit % 8`), the transmission carries it, and it is
 /// cleared afterwards with nothing else changed.
 #[test]
 fn tx_update_bits_are_set_in_their_own_byte_and_cleared_after_sending() {
-    for bit in 8u16..64 {
-        let cfg = ComConfig::<8, 1, 0, 1>::new(
-            10,
-            [TxIpduConfig {
-                name: "t",
-                len: 8,
-                mode: TxMode::Periodic {
-                    period_ms: 10,
-                    offset_ms: 0,
-                },
-                mdt_ms: 0,
-            }],
-            [],
-            [SignalConfig {
-                name: "s",
-                direction: SignalDirection::Tx(TxIpduId(0), TransferProperty::Pending),
-                layout: layout(0, 8),
-                init: 0,
-                invalid: None,
-                update_bit: Some(bit),
-            }],
-        );
-        let cfg: &'static ComConfig<8, 1, 0, 1> = match cfg {
-            Ok(cfg) => std::boxed::Box::leak(std::boxed::Box::new(cfg)),
-            Err(e) => panic!("update bit {bit}: {}", e.describe()),
-        };
+    for (bit, cfg) in (8u16..).zip(&UPDATE_BIT_CONFIGS) {
         let mut com = Com::new(cfg);
         let mut expected = [0x5A, 0, 0, 0, 0, 0, 0, 0];
         expected[usize::from(bit / 8)] |= 1 << (bit % 8);
