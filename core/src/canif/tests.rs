@@ -317,6 +317,13 @@ fn buffers_are_discarded_exactly_when_the_channel_stops_sending() {
         assert_eq!(canif.transmit(&mut can, TxPduId(2), &[2; 8]), Ok(()));
         (canif, can)
     };
+    // Both buffers kept, or both discarded and counted.
+    let check = |canif: &CanIf<3, 3>, kept: bool, mode: &dyn core::fmt::Debug| {
+        assert_eq!(canif.is_buffered(TxPduId(0)), kept, "{mode:?}");
+        assert_eq!(canif.is_buffered(TxPduId(2)), kept, "{mode:?}");
+        let discarded = if kept { 0 } else { 2 };
+        assert_eq!(canif.stats().tx_discarded, discarded, "{mode:?}");
+    };
     for (mode, kept) in [
         (ControllerMode::Started, true),
         (ControllerMode::Stopped, false),
@@ -325,13 +332,7 @@ fn buffers_are_discarded_exactly_when_the_channel_stops_sending() {
         let (mut canif, mut can) = buffered();
         assert_eq!(canif.set_controller_mode(&mut can, mode), Ok(()));
         assert_eq!(canif.controller_mode(), mode);
-        assert_eq!(canif.is_buffered(TxPduId(0)), kept, "{mode:?}");
-        assert_eq!(canif.is_buffered(TxPduId(2)), kept, "{mode:?}");
-        assert_eq!(
-            canif.stats().tx_discarded,
-            if kept { 0 } else { 2 },
-            "{mode:?}"
-        );
+        check(&canif, kept, &mode);
     }
     for (mode, kept) in [
         (PduMode::Online, true),
@@ -340,12 +341,6 @@ fn buffers_are_discarded_exactly_when_the_channel_stops_sending() {
     ] {
         let (mut canif, _can) = buffered();
         canif.set_pdu_mode(mode);
-        assert_eq!(canif.is_buffered(TxPduId(0)), kept, "{mode:?}");
-        assert_eq!(canif.is_buffered(TxPduId(2)), kept, "{mode:?}");
-        assert_eq!(
-            canif.stats().tx_discarded,
-            if kept { 0 } else { 2 },
-            "{mode:?}"
-        );
+        check(&canif, kept, &mode);
     }
 }
