@@ -146,7 +146,7 @@ pub fn write_frame(frame: &CanFrame, out: &mut impl fmt::Write) -> fmt::Result {
 }
 
 /// The upper-case hexadecimal digit of the low nibble of `value`, as text.
-pub(crate) const fn hex_digit_text(value: u32) -> &'static str {
+const fn hex_digit_text(value: u32) -> &'static str {
     match value & 0xF {
         0 => "0",
         1 => "1",
