@@ -536,4 +536,29 @@ mod tests {
             Ok((1, 1))
         );
     }
+
+    /// The simulated sensor's echo width is the distance's round trip rounded to the
+    /// nearest microsecond, at every admissible speed, and saturates beyond `u32`. (The
+    /// exhaustive round trip below covers every `u16` distance; this one is quick enough
+    /// to run for each mutant of the mutation tests.)
+    #[test]
+    fn echo_width_is_the_nearest_microsecond_and_saturates() {
+        for mm_per_s in [
+            SpeedOfSound::MIN_MM_PER_S,
+            SpeedOfSound::AT_20_C.mm_per_s(),
+            SpeedOfSound::MAX_MM_PER_S,
+        ] {
+            let cfg = config_at(mm_per_s);
+            let c = u64::from(mm_per_s);
+            for d in (0..=20_000).chain([1_000_000, 2_000_000, 600_000_000]) {
+                let w = u64::from(cfg.distance_to_echo_us(d));
+                let exact = u64::from(d) * 2_000_000;
+                assert!(
+                    2 * (w * c).abs_diff(exact) <= c,
+                    "{d} mm at {c} mm/s: {w} us"
+                );
+            }
+            assert_eq!(cfg.distance_to_echo_us(u32::MAX), u32::MAX);
+        }
+    }
 }

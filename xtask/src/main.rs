@@ -5,7 +5,11 @@
 //! - `cargo xtask differential [--cases N] [--seed S]`: the Com signal codec against
 //!   cantools on random layouts, values and PDU lengths;
 //! - `cargo xtask callgrind`: instructions per call of the codec and scheduler probes;
+//! - `cargo xtask coverage [--write]`: branch coverage of the core, every branch not taken
+//!   both ways explained in `docs/coverage.md`;
 //! - `cargo xtask mutants`: kernel mutants the OSEK conformance suite must catch;
+//! - `cargo xtask mutation [--shard K/N | --ci] [--file PATH]..`: cargo-mutants over the
+//!   verified kernels, every survivor killed or listed as equivalent in `docs/mutants.md`;
 //! - `cargo xtask qemu [--scenario FILE].. [--compare] [--live] [--events] [--profile]
 //!   [--flash] [--serial tcp:PORT]`:
 //!   the ECU's Cortex-M4 image on QEMU's mps2-an386, the emulator-in-the-loop tests against
@@ -19,9 +23,11 @@
 
 mod callgrind;
 mod ci;
+mod coverage;
 mod differential;
 mod json;
 mod mutants;
+mod mutation;
 mod process;
 mod profile;
 mod qemu;
@@ -41,16 +47,25 @@ usage: cargo xtask <command> [options]
 commands:
   ci [--only STAGE[,STAGE..]] [--skip STAGE[,STAGE..]] [--keep-going]
         run the checks in order; stages: setup, fmt, clippy, test, cross, miri, model,
-        mutants, qemu, differential, interop, fuzz, bench. Stops at the first failing stage
-        unless --keep-going. Each stage prints its time budget.
+        coverage, mutants, mutation, qemu, differential, interop, fuzz, bench. Stops at
+        the first failing stage unless --keep-going. Each stage prints its time budget.
   differential [--cases N] [--seed SEED]
         compare the Com signal codec with cantools on N random cases (default 20000)
   callgrind [--binary PATH]
         count instructions per call of each probe in core/examples/callgrind_probe.rs
         (built in release), or in a prebuilt probe binary taking `<op> <iterations>`
+  coverage [--write]
+        branch coverage of core/ (cw-core's unit tests and OSEK suite, cargo-llvm-cov on
+        the pinned nightly); fails on a branch not taken both ways that docs/coverage.md
+        does not explain, or one it lists that is covered now; --write updates its table
   mutants
         plant each kernel mutant in a copy of the workspace and require the OSEK
         conformance sequences named for it to fail
+  mutation [--shard K/N | --ci] [--file PATH]..
+        cargo-mutants over the verified kernels (xtask/src/mutation.rs lists the files):
+        every mutant, or shard K of N (--ci: the check command's shard, chosen by the
+        number of commits on HEAD); fails on a mutant that survives every test and is not
+        listed as equivalent in docs/mutants.md; prints each file's score
   qemu [--scenario FILE].. [--compare] [--live] [--events] [--profile] [--flash]
        [--serial tcp:PORT]
         build the ECU's Cortex-M4 image and run it on QEMU's mps2-an386 on each scenario
@@ -101,6 +116,8 @@ fn run(args: &[String]) -> Result {
             no_options(rest)?;
             mutants::run()
         }
+        "coverage" => coverage::run(&coverage::Options::parse(rest)?),
+        "mutation" => mutation::run(&mutation::Options::parse(rest)?),
         "help" | "--help" | "-h" => {
             print!("{USAGE}");
             Ok(())

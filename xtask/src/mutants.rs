@@ -7,9 +7,11 @@
 //! runs the conformance test binaries that must catch it, and requires each named sequence
 //! to fail. A mutant that no sequence catches fails the command.
 //!
-//! The copy builds into the workspace's target directory: its crates sit at other paths,
-//! so cargo keeps their artifacts apart from the workspace's own, while the registry
-//! dependencies are shared and built once.
+//! The copy builds into the workspace's target directory, so the registry dependencies are
+//! shared and built once. Cargo names a workspace crate's artifacts by its path relative to
+//! the workspace root, so the copy's `cw-core` test binaries replace the workspace's own;
+//! each mutant's file is restored after its test, which leaves them older than their
+//! sources, and the workspace's next `cargo test` rebuilds them.
 
 use crate::process::{root, target_dir, Cmd};
 use crate::Result;

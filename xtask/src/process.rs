@@ -112,6 +112,14 @@ impl Cmd {
         }
     }
 
+    /// Prints the command, runs it with inherited stdout/stderr and returns its exit code
+    /// (`None` when a signal ended it); only failing to start is an error.
+    pub fn status(mut self) -> Result<Option<i32>> {
+        println!("$ {}", self.shown);
+        let status = self.inner.status().map_err(|e| self.spawn_error(&e))?;
+        Ok(status.code())
+    }
+
     /// Prints the command, runs it capturing its output; an exit status other than 0 is
     /// not an error here (the caller decides), failing to start is.
     pub fn capture(mut self) -> Result<Captured> {

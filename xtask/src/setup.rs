@@ -12,8 +12,8 @@ use std::path::PathBuf;
 pub const NIGHTLY: &str = "nightly-2026-05-20";
 
 /// Components the pinned nightly needs (Miri, and the library sources Miri builds its
-/// sysroot from, for the host and for s390x).
-const NIGHTLY_COMPONENTS: &[&str] = &["miri", "rust-src"];
+/// sysroot from, for the host and for s390x; LLVM's profile tools for the coverage stage).
+const NIGHTLY_COMPONENTS: &[&str] = &["miri", "rust-src", "llvm-tools"];
 
 /// Components of the default (stable) toolchain.
 const STABLE_COMPONENTS: &[&str] = &["rustfmt", "clippy"];
@@ -29,6 +29,13 @@ pub const TARGETS: &[&str] = &[
 
 /// The cargo-bolero version the fuzz stage is written against.
 pub const CARGO_BOLERO_VERSION: &str = "0.13.5";
+
+/// The cargo-mutants version the `mutation` stage is written against (its `mutants.out`
+/// layout and exit codes).
+pub const CARGO_MUTANTS_VERSION: &str = "27.1.0";
+
+/// The cargo-llvm-cov version the `coverage` stage is written against (its JSON export).
+pub const CARGO_LLVM_COV_VERSION: &str = "0.9.1";
 
 /// The defmt-print version that decodes the image's log (defmt 1.x, wire format 4).
 pub const DEFMT_PRINT_VERSION: &str = "1.2.0";
@@ -49,6 +56,8 @@ pub fn run() -> Result {
     rustup_targets()?;
     rustup_nightly()?;
     cargo_bolero()?;
+    cargo_mutants()?;
+    cargo_llvm_cov()?;
     defmt_print()?;
     valgrind()?;
     qemu()?;
@@ -153,6 +162,26 @@ fn cargo_bolero() -> Result {
         &["bolero", "--version"],
         "cargo-bolero",
         CARGO_BOLERO_VERSION,
+    )
+}
+
+/// Mutation testing of the kernels (`cargo xtask mutation`).
+fn cargo_mutants() -> Result {
+    cargo_tool(
+        "cargo",
+        &["mutants", "--version"],
+        "cargo-mutants",
+        CARGO_MUTANTS_VERSION,
+    )
+}
+
+/// Branch coverage of the core (`cargo xtask coverage`).
+fn cargo_llvm_cov() -> Result {
+    cargo_tool(
+        "cargo",
+        &["llvm-cov", "--version"],
+        "cargo-llvm-cov",
+        CARGO_LLVM_COV_VERSION,
     )
 }
 

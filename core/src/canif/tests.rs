@@ -84,7 +84,14 @@ impl CanDriver for Recorder {
 }
 
 fn online() -> (CanIf<3, 3>, Recorder) {
-    let mut canif = CanIf::new(&CFG);
+    online_with(&CFG)
+}
+
+/// CanIf on `cfg` with its controller started and its channel online.
+fn online_with<const TX: usize, const RX: usize>(
+    cfg: &'static CanIfConfig<TX, RX>,
+) -> (CanIf<TX, RX>, Recorder) {
+    let mut canif = CanIf::new(cfg);
     let mut can = Recorder::default();
     assert_eq!(
         canif.set_controller_mode(&mut can, ControllerMode::Started),
@@ -343,4 +350,137 @@ fn buffers_are_discarded_exactly_when_the_channel_stops_sending() {
         canif.set_pdu_mode(mode);
         check(&canif, kept, &mode);
     }
+}
+
+/// Receive PDUs with ids `raws`, in that order, DLC 8.
+fn rx_table<const RX: usize>(raws: [u16; RX]) -> [RxPduConfig; RX] {
+    raws.map(|raw| RxPduConfig {
+        name: "r",
+        id: id(raw),
+        dlc: 8,
+        hrh: Hrh(0),
+    })
+}
+
+#[test]
+fn a_configuration_built_at_run_time_finds_every_receive_id_in_any_order() {
+    // Every order of four ids: the table is sorted by insertion, whatever the order given.
+    let raws = [0x30, 0x10, 0x7FF, 0x20];
+    let mut orders = 0;
+    for a in 0..4 {
+        for b in 0..4 {
+            for c in 0..4 {
+                for d in 0..4 {
+                    let order = [a, b, c, d];
+                    if (0..4).any(|i| !order.contains(&i)) {
+                        continue;
+                    }
+                    orders += 1;
+                    let given = order.map(|i| raws[i]);
+                    let cfg = CanIfConfig::<0, 4>::new([], rx_table(given))
+                        .unwrap_or_else(|e| panic!("{given:?}: {}", e.describe()));
+                    for (pdu, raw) in given.iter().enumerate() {
+                        assert_eq!(
+                            cfg.rx_pdu_for(id(*raw)),
+                            Some(RxPduId(pdu as u16)),
+                            "{given:?}"
+                        );
+                    }
+                    assert_eq!(cfg.rx_pdu_for(id(0x11)), None);
+                    // The same id twice, wherever the second one sits, is refused at it.
+                    for dup in 1..4 {
+                        let mut twice = given;
+                        twice[dup] = given[0];
+                        assert_eq!(
+                            CanIfConfig::<0, 4>::new([], rx_table(twice)).err(),
+                            Some(CanIfConfigError::DuplicateRxId { pdu: dup as u16 }),
+                            "{twice:?}"
+                        );
+                    }
+                }
+            }
+        }
+    }
+    assert_eq!(orders, 24);
+}
+
+#[test]
+fn tables_of_255_pdus_are_the_limit() {
+    let tx = |raw: u16| TxPduConfig {
+        name: "t",
+        id: id(raw),
+        dlc: 8,
+        hth: Hth(0),
+    };
+    let ids = |n: u16| -> Vec<u16> { (0..n).collect() };
+    let txs_255: [TxPduConfig; 255] = core::array::from_fn(|i| tx(i as u16));
+    let txs_256: [TxPduConfig; 256] = core::array::from_fn(|i| tx(i as u16));
+    let rxs_255: [u16; 255] = core::array::from_fn(|i| ids(255)[i]);
+    let rxs_256: [u16; 256] = core::array::from_fn(|i| ids(256)[i]);
+    assert!(CanIfConfig::<255, 255>::new(txs_255, rx_table(rxs_255)).is_ok());
+    assert_eq!(
+        CanIfConfig::<256, 1>::new(txs_256, rx_table([1])).err(),
+        Some(CanIfConfigError::TooManyPdus)
+    );
+    assert_eq!(
+        CanIfConfig::<1, 256>::new([tx(1)], rx_table(rxs_256)).err(),
+        Some(CanIfConfigError::TooManyPdus)
+    );
+}
+
+#[test]
+fn every_configuration_error_describes_its_rule() {
+    let errors = [
+        (CanIfConfigError::TooManyPdus, "more than 255"),
+        (
+            CanIfConfigError::TxDlc { pdu: 0 },
+            "transmit PDU has a DLC above 8",
+        ),
+        (
+            CanIfConfigError::RxDlc { pdu: 0 },
+            "receive PDU has a DLC above 8",
+        ),
+        (CanIfConfigError::DuplicateRxId { pdu: 1 }, "share a CAN id"),
+    ];
+    for (error, words) in errors {
+        assert!(error.describe().contains(words), "{error:?}");
+    }
+}
+
+#[test]
+fn of_two_buffered_pdus_with_one_id_the_first_configured_goes_first() {
+    static TWINS: CanIfConfig<2, 0> = match CanIfConfig::new(
+        [
+            TxPduConfig {
+                name: "A",
+                id: id(0x100),
+                dlc: 1,
+                hth: Hth(0),
+            },
+            TxPduConfig {
+                name: "B",
+                id: id(0x100),
+                dlc: 1,
+                hth: Hth(0),
+            },
+        ],
+        [],
+    ) {
+        Ok(cfg) => cfg,
+        Err(e) => panic!("{}", e.describe()),
+    };
+    let (mut canif, mut can) = online_with(&TWINS);
+    can.busy = true;
+    assert_eq!(canif.transmit(&mut can, TxPduId(1), &[2]), Ok(()));
+    assert_eq!(canif.transmit(&mut can, TxPduId(0), &[1]), Ok(()));
+    can.busy = false;
+    assert_eq!(canif.tx_confirmation(&mut can, 0), Some(TxPduId(0)));
+    assert_eq!(canif.tx_confirmation(&mut can, 0), Some(TxPduId(0)));
+    assert_eq!(
+        can.written,
+        [
+            (Hth(0), 0, frame(0x100, &[1])),
+            (Hth(0), 1, frame(0x100, &[2]))
+        ]
+    );
 }

@@ -236,6 +236,17 @@ impl<const N: usize, const TX: usize, const RX: usize, const S: usize> ComConfig
         rx: [RxIpduConfig; RX],
         signals: [SignalConfig<N>; S],
     ) -> Result<Self, ComConfigError> {
+        Self::checked(main_period_ms, tx, rx, signals)
+    }
+
+    /// [`Self::new`]'s checks and derived tables. (A function of its own because
+    /// cargo-mutants leaves functions named `new` alone: see `docs/mutants.md`.)
+    const fn checked(
+        main_period_ms: u32,
+        tx: [TxIpduConfig; TX],
+        rx: [RxIpduConfig; RX],
+        signals: [SignalConfig<N>; S],
+    ) -> Result<Self, ComConfigError> {
         if TX > 254 || RX > 254 || S > 254 || main_period_ms == 0 {
             return Err(ComConfigError::Limits);
         }
@@ -640,6 +651,12 @@ where
     /// `Com_Init`: every signal holds its init value; periodic I-PDUs start after their
     /// offset; deadline monitoring starts now.
     pub fn new(cfg: C) -> Self {
+        Self::init(cfg)
+    }
+
+    /// [`Self::new`]'s work. (A function of its own because cargo-mutants leaves functions
+    /// named `new` alone: see `docs/mutants.md`.)
+    fn init(cfg: C) -> Self {
         let mut com = Self {
             cfg,
             tx_buf: [[0; N]; TX],

@@ -68,6 +68,10 @@ struct Recorder {
     fail_inside_error_hook: bool,
     /// Make ErrorHook shut the OS down.
     shutdown_in_error_hook: bool,
+    /// Make PostTaskHook call a service it may not (so ErrorHook runs from it).
+    fail_inside_post_task_hook: bool,
+    /// Make ErrorHook shut the OS down on this error only.
+    shutdown_on_error: Option<OsError>,
 }
 
 impl Recorder {
@@ -83,6 +87,8 @@ impl Recorder {
         *self = Self {
             fail_inside_error_hook: self.fail_inside_error_hook,
             shutdown_in_error_hook: self.shutdown_in_error_hook,
+            fail_inside_post_task_hook: self.fail_inside_post_task_hook,
+            shutdown_on_error: self.shutdown_on_error,
             ..Self::default()
         };
         out
@@ -106,6 +112,9 @@ impl Hooks<TestOs> for Recorder {
     fn post_task_hook(os: &mut TestOs) {
         let id = os.get_task_id().unwrap_or(None);
         os.hooks_mut().push(Seen::Post(id));
+        if os.hooks().fail_inside_post_task_hook {
+            let _ = os.activate_task(TaskId(0));
+        }
     }
     fn error_hook(os: &mut TestOs, error: OsError) {
         let call = os.error_call().unwrap_or(ServiceCall::HookMissingEnd);
@@ -114,7 +123,7 @@ impl Hooks<TestOs> for Recorder {
         if os.hooks().fail_inside_error_hook {
             let _ = os.activate_task(TaskId(0));
         }
-        if os.hooks().shutdown_in_error_hook {
+        if os.hooks().shutdown_in_error_hook || os.hooks().shutdown_on_error == Some(error) {
             let _ = os.shutdown_os(error.status());
         }
     }
@@ -776,6 +785,43 @@ fn shutdown_calls_the_hook_and_stops_everything() {
         Some(&Seen::Shutdown(OsError::Id.status()))
     );
     check(&os);
+}
+
+/// The OS shut down inside PostTaskHook (a service refused there, and ErrorHook shutting
+/// down): every way out of the running state stops at once, nothing else is dispatched.
+#[test]
+fn shutdown_inside_post_task_hook_ends_every_way_out_of_a_task() {
+    type Leave = fn(&mut TestOs) -> Result<(), OsError>;
+    let ways: [(&str, TaskId, Leave); 4] = [
+        ("TerminateTask", LOW, |os| os.terminate_task()),
+        ("ChainTask", LOW, |os| os.chain_task(HIGH)),
+        ("WaitEvent", MID, |os| os.wait_event(1)),
+        ("return", LOW, |os| os.task_returned()),
+    ];
+    for (name, task, leave) in ways {
+        let mut os = os();
+        assert_eq!(activate_from_isr(&mut os, task), Ok(()));
+        assert_eq!(os.running(), Some(task), "{name}");
+        os.hooks_mut().fail_inside_post_task_hook = true;
+        os.hooks_mut().shutdown_on_error = Some(OsError::CallLevel);
+        os.hooks_mut().take();
+        let _ = leave(&mut os);
+        assert!(os.is_shut_down(), "{name}");
+        assert_eq!(os.running(), None, "{name}");
+        let seen = os.hooks_mut().take();
+        let post = seen.iter().position(|s| *s == Seen::Post(Some(task)));
+        assert!(post.is_some(), "{name}: {seen:?}");
+        assert_eq!(
+            seen.last(),
+            Some(&Seen::Shutdown(OsError::CallLevel.status())),
+            "{name}: {seen:?}"
+        );
+        assert!(
+            !seen.iter().any(|s| matches!(s, Seen::Pre(_))),
+            "{name}: nothing is dispatched after the shutdown: {seen:?}"
+        );
+        check(&os);
+    }
 }
 
 fn os_after(setup: impl FnOnce(&mut TestOs)) -> TestOs {

@@ -1151,3 +1151,167 @@ fn tx_update_bits_are_set_in_their_own_byte_and_cleared_after_sending() {
         );
     }
 }
+
+/// Every rule of `ComConfig::new` at its edge, on tables built at run time.
+#[test]
+fn configuration_limits_and_edges() {
+    let tx = |len, mode| TxIpduConfig {
+        name: "t",
+        len,
+        mode,
+        mdt_ms: 0,
+    };
+    let rx = |len| RxIpduConfig {
+        name: "r",
+        len,
+        deadline_ms: 0,
+    };
+    let none = TxMode::None;
+    let sig = |direction, init, invalid, update_bit| SignalConfig {
+        name: "s",
+        direction,
+        layout: layout(0, 8),
+        init,
+        invalid,
+        update_bit,
+    };
+    let tx0 = SignalDirection::Tx(TxIpduId(0), TransferProperty::Pending);
+    let no_sig = sig(tx0, 0, None, None);
+
+    // 254 I-PDUs or signals of each kind are allowed, 255 are not.
+    assert!(ComConfig::<8, 254, 0, 0>::new(10, [tx(8, none); 254], [], []).is_ok());
+    assert!(ComConfig::<8, 0, 254, 0>::new(10, [], [rx(8); 254], []).is_ok());
+    assert!(ComConfig::<8, 1, 0, 254>::new(10, [tx(8, none)], [], [no_sig; 254]).is_ok());
+    let limits = Some(ComConfigError::Limits);
+    assert_eq!(
+        ComConfig::<8, 255, 0, 0>::new(10, [tx(8, none); 255], [], []).err(),
+        limits
+    );
+    assert_eq!(
+        ComConfig::<8, 0, 255, 0>::new(10, [], [rx(8); 255], []).err(),
+        limits
+    );
+    assert_eq!(
+        ComConfig::<8, 1, 0, 255>::new(10, [tx(8, none)], [], [no_sig; 255]).err(),
+        limits
+    );
+
+    // I-PDU lengths: 1..=N bytes, TX and RX (RX counted after the TX table).
+    for len in [0, 9] {
+        assert_eq!(
+            ComConfig::<8, 1, 0, 0>::new(10, [tx(len, none)], [], []).err(),
+            Some(ComConfigError::IpduLength { ipdu: 0 }),
+            "TX {len}"
+        );
+        assert_eq!(
+            ComConfig::<8, 1, 1, 0>::new(10, [tx(8, none)], [rx(len)], []).err(),
+            Some(ComConfigError::IpduLength { ipdu: 1 }),
+            "RX {len}"
+        );
+    }
+    assert!(ComConfig::<8, 1, 1, 0>::new(10, [tx(1, none)], [rx(1)], []).is_ok());
+
+    // A periodic mode needs a period; repetitions need a repetition period.
+    let timing = Some(ComConfigError::Timing { ipdu: 0 });
+    let mixed = |period_ms, repetitions, repetition_period_ms| TxMode::Mixed {
+        period_ms,
+        offset_ms: 0,
+        repetitions,
+        repetition_period_ms,
+    };
+    assert_eq!(
+        ComConfig::<8, 1, 0, 0>::new(10, [tx(8, mixed(0, 0, 0))], [], []).err(),
+        timing
+    );
+    assert_eq!(
+        ComConfig::<8, 1, 0, 0>::new(10, [tx(8, mixed(100, 2, 0))], [], []).err(),
+        timing
+    );
+    assert!(ComConfig::<8, 1, 0, 0>::new(10, [tx(8, mixed(100, 0, 0))], [], []).is_ok());
+    assert!(ComConfig::<8, 1, 0, 0>::new(10, [tx(8, mixed(100, 2, 20))], [], []).is_ok());
+    let direct = |repetitions, repetition_period_ms| TxMode::Direct {
+        repetitions,
+        repetition_period_ms,
+    };
+    assert_eq!(
+        ComConfig::<8, 1, 0, 0>::new(10, [tx(8, direct(1, 0))], [], []).err(),
+        timing
+    );
+    assert!(ComConfig::<8, 1, 0, 0>::new(10, [tx(8, direct(0, 0))], [], []).is_ok());
+    assert_eq!(
+        ComConfig::<8, 0, 1, 0>::new(
+            10,
+            [],
+            [RxIpduConfig {
+                deadline_ms: 15,
+                ..rx(8)
+            }],
+            []
+        )
+        .err(),
+        timing
+    );
+
+    // Signals: in an existing I-PDU, inside its length, values that fit, update bit inside.
+    let bad = Some(ComConfigError::Signal { signal: 0 });
+    let one = |s: SignalConfig<8>, len| {
+        ComConfig::<8, 1, 1, 1>::new(10, [tx(len, none)], [rx(8)], [s]).err()
+    };
+    assert_eq!(one(sig(tx0, 0, None, None), 8), None);
+    assert_eq!(
+        one(sig(SignalDirection::Rx(RxIpduId(0)), 0, None, None), 8),
+        None
+    );
+    assert_eq!(
+        one(
+            sig(
+                SignalDirection::Tx(TxIpduId(1), TransferProperty::Pending),
+                0,
+                None,
+                None
+            ),
+            8
+        ),
+        bad
+    );
+    assert_eq!(
+        one(sig(SignalDirection::Rx(RxIpduId(1)), 0, None, None), 8),
+        bad
+    );
+    assert_eq!(
+        one(sig(tx0, 0x100, None, None), 8),
+        bad,
+        "init wider than 8 bits"
+    );
+    assert_eq!(one(sig(tx0, 0xFF, Some(0xFF), None), 8), None);
+    assert_eq!(
+        one(sig(tx0, 0, Some(0x100), None), 8),
+        bad,
+        "invalid wider than 8 bits"
+    );
+    let beyond = SignalConfig {
+        layout: layout(56, 8),
+        ..sig(tx0, 0, None, None)
+    };
+    assert_eq!(one(beyond, 8), None);
+    assert_eq!(one(beyond, 2), bad, "signal in byte 7 of a 2-byte I-PDU");
+    assert_eq!(one(sig(tx0, 0, None, Some(15)), 2), None);
+    assert_eq!(
+        one(sig(tx0, 0, None, Some(16)), 2),
+        bad,
+        "update bit beyond 2 bytes"
+    );
+
+    let errors = [
+        (ComConfigError::Limits, "254"),
+        (ComConfigError::IpduLength { ipdu: 0 }, "empty or longer"),
+        (ComConfigError::Timing { ipdu: 0 }, "main-function periods"),
+        (
+            ComConfigError::Signal { signal: 0 },
+            "does not fit its I-PDU",
+        ),
+    ];
+    for (error, words) in errors {
+        assert!(error.describe().contains(words), "{error:?}");
+    }
+}

@@ -231,6 +231,10 @@ fn dbc_examples() {
         SignalLayout::<65>::new(0, 8, ByteOrder::Intel, Signedness::Unsigned),
         Err(LayoutError::PduLength { pdu_len: 65 })
     );
+    assert_eq!(
+        SignalLayout::<0>::new(0, 1, ByteOrder::Intel, Signedness::Unsigned),
+        Err(LayoutError::PduLength { pdu_len: 0 })
+    );
 }
 
 #[test]
