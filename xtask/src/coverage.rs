@@ -11,7 +11,9 @@
 //!
 //! Every branch not covered must be listed in `docs/coverage.md` with the reason, as a list
 //! item ``- `FILE: FUNCTION: `CONDITION` never true`: why``; a branch not listed fails the
-//! command, and so does a listed one that is covered now (the list stays exact).
+//! command, and so does a listed one that is covered now (the list stays exact). The
+//! oracles' branches are reported, not judged: which of their sides the random inputs of
+//! the OS harnesses reach differs between runs (bolero draws new inputs each time).
 //! `--write` rewrites the generated part of `docs/coverage.md` (between its markers) with
 //! the per-file table.
 //!
@@ -30,9 +32,9 @@ const REPORT: &str = "docs/coverage.md";
 const BEGIN: &str = "<!-- coverage:begin (cargo xtask coverage --write) -->";
 const END: &str = "<!-- coverage:end -->";
 
-/// Inputs per bolero harness and their seed, so that every run covers the same paths.
+/// Inputs per bolero harness. bolero draws them afresh on every run, so the branches only
+/// random inputs reach can differ from run to run: the oracles' (see the module comment).
 const BOLERO_ITERATIONS: &str = "1000";
-const BOLERO_SEED: &str = "11";
 
 /// The proofs by exhaustion add no branch the rest of the suite misses, and instrumented
 /// they take minutes.
@@ -99,6 +101,8 @@ struct FileCoverage {
     oracle_covered: usize,
     lines_percent: f64,
     uncovered: Vec<Uncovered>,
+    /// Names of the functions inside the file's `mod spec`.
+    spec_functions: Vec<String>,
 }
 
 /// Lines (1-based, inclusive) of each `mod NAME {` block in `src`, found by counting braces
@@ -200,7 +204,12 @@ fn analyse(export: &Value) -> Result<BTreeMap<String, FileCoverage>> {
             counts.0 += field(4);
             counts.1 += field(5);
         }
+        let spec_functions = specs
+            .iter()
+            .flat_map(|&(a, b)| (a..=b).map(|l| function_at(&src, l)))
+            .collect();
         let mut fc = FileCoverage {
+            spec_functions,
             lines_percent: file
                 .pointer("/summary/lines/percent")
                 .and_then(Value::as_f64)
@@ -277,6 +286,19 @@ fn percent(covered: usize, total: usize) -> String {
     }
 }
 
+/// Whether a listed key names an oracle's branch: one in `os/spec.rs`, or in a `spec`
+/// function of a file whose other uncovered branches say so.
+fn is_oracle_key(key: &str, files: &BTreeMap<String, FileCoverage>) -> bool {
+    let file = key.split(": ").next().unwrap_or_default();
+    if file.ends_with("/spec.rs") {
+        return true;
+    }
+    let function = key.split(": ").nth(1).unwrap_or_default();
+    files
+        .get(file)
+        .is_some_and(|f| f.spec_functions.iter().any(|name| name == function))
+}
+
 /// The per-file table, as Markdown.
 fn table(files: &BTreeMap<String, FileCoverage>) -> String {
     let mut s = String::new();
@@ -332,7 +354,6 @@ pub fn run(options: &Options) -> Result {
         .arg(&toolchain)
         .env("RUSTFLAGS", "-Zcoverage-options=condition")
         .env("BOLERO_RANDOM_ITERATIONS", BOLERO_ITERATIONS)
-        .env("BOLERO_RANDOM_SEED", BOLERO_SEED)
         .args(["llvm-cov", "--no-report", "--branch", "-p", "cw-core"])
         .args(["--lib", "--tests", "--"]);
     for test in SKIPPED_TESTS {
@@ -365,7 +386,7 @@ pub fn run(options: &Options) -> Result {
         .collect();
     let unexplained: Vec<String> = uncovered
         .iter()
-        .filter(|(_, u)| !listed.contains(&u.key))
+        .filter(|(_, u)| !u.oracle && !listed.contains(&u.key))
         .map(|(name, u)| {
             let oracle = if u.oracle { " (oracle)" } else { "" };
             format!("{name}:{}{oracle}: {}", u.line, u.key)
@@ -373,8 +394,18 @@ pub fn run(options: &Options) -> Result {
         .collect();
     let stale: Vec<&String> = listed
         .iter()
-        .filter(|k| !uncovered.iter().any(|(_, u)| &u.key == *k))
+        .filter(|k| !is_oracle_key(k, &files) && !uncovered.iter().any(|(_, u)| &u.key == *k))
         .collect();
+    let oracle_changes = uncovered
+        .iter()
+        .filter(|(_, u)| u.oracle && !listed.contains(&u.key))
+        .count();
+    if oracle_changes > 0 {
+        println!(
+            "note: {oracle_changes} oracle branch(es) not taken both ways on this run are not in \
+             {REPORT} (random inputs; not judged)"
+        );
+    }
     println!(
         "{} branches not taken both ways, {} of them explained in {REPORT}",
         uncovered.len(),
