@@ -203,6 +203,16 @@ fn busy_mailbox_buffers_newest_data_and_confirmation_sends_highest_priority_firs
         "HTH 1 has had no confirmation"
     );
     assert_eq!(canif.tx_confirmation(&mut can, 9), None);
+    // A confirmation while the mailbox is taken again keeps the data for the next one.
+    can.busy = true;
+    assert_eq!(canif.tx_confirmation(&mut can, 2), Some(TxPduId(2)));
+    assert!(canif.is_buffered(TxPduId(2)));
+    assert_eq!(can.written.len(), 2);
+    can.busy = false;
+    assert_eq!(canif.tx_confirmation(&mut can, 2), Some(TxPduId(2)));
+    assert!(!canif.is_buffered(TxPduId(2)));
+    assert_eq!(can.written.len(), 3);
+    assert_eq!((can.written[2].0, can.written[2].1), (Hth(1), 2));
 }
 
 #[test]
@@ -255,6 +265,11 @@ fn bus_off_stops_the_controller_and_discards_buffers() {
     assert_eq!(canif.controller_mode(), ControllerMode::Stopped);
     assert!(!canif.is_buffered(TxPduId(0)));
     assert_eq!(canif.stats().tx_discarded, 1);
+    // A stopped controller receives nothing, although the channel is still online.
+    assert_eq!(
+        canif.rx_indication(Hrh(1), &frame(0x7DF, &[0; 8])),
+        Err(RxDropped::Offline)
+    );
     assert_eq!(
         canif.transmit(&mut can, TxPduId(0), &[1; 8]),
         Err(TransmitError::Offline)

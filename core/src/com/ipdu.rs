@@ -812,7 +812,7 @@ where
         transmit: impl FnMut(TxIpduId, &[u8]) -> bool,
     ) {
         if let Some(bit) = sig.update_bit {
-            set_bit(&mut self.tx_buf[i], bit, true);
+            set_bit(&mut self.tx_buf[i], bit);
         }
         let timing = self.cfg().tx_timing[i];
         let (triggers, repeat) = match property {
@@ -1048,14 +1048,10 @@ where
     }
 }
 
-fn set_bit<const N: usize>(buf: &mut [u8; N], bit: u16, value: bool) {
-    let (byte, mask) = (usize::from(bit / 8), 1u8 << (bit % 8));
-    if let Some(b) = buf.get_mut(byte) {
-        if value {
-            *b |= mask;
-        } else {
-            *b &= !mask;
-        }
+/// Sets bit `bit` of `buf` (an update bit: they are cleared through the I-PDU's mask).
+fn set_bit<const N: usize>(buf: &mut [u8; N], bit: u16) {
+    if let Some(b) = buf.get_mut(usize::from(bit / 8)) {
+        *b |= 1u8 << (bit % 8);
     }
 }
 

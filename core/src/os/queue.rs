@@ -204,6 +204,17 @@ mod tests {
         q.iter(prio).collect()
     }
 
+    /// A queue without room refuses every entry and stays empty.
+    #[test]
+    fn a_queue_of_no_entries_refuses_every_push() {
+        let mut q = ReadyQueue::<0>::new();
+        assert_eq!(q.push_back(1, 0), Err(QueueFull));
+        assert_eq!(q.push_front(1, 0), Err(QueueFull));
+        assert_eq!(q.highest(), None);
+        assert_eq!(q.pop_front(1), None);
+        assert_eq!(q, ReadyQueue::<0>::new());
+    }
+
     /// Equal (and hashed alike) exactly when every priority holds the same tasks in the
     /// same order, whichever pool slots hold them.
     #[test]

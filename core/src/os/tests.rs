@@ -58,6 +58,8 @@ enum Seen {
     Post(Option<TaskId>),
     Error(OsError, ServiceCall, Option<IsrId>),
     Callback(u8, Result<(), OsError>),
+    /// What `exit_isr` returned when a hook called it.
+    ExitIsr(Result<(), OsError>),
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
@@ -72,6 +74,10 @@ struct Recorder {
     fail_inside_post_task_hook: bool,
     /// Make ErrorHook shut the OS down on this error only.
     shutdown_on_error: Option<OsError>,
+    /// Make ErrorHook try to return from the ISR it interrupted (as a broken port would).
+    exit_isr_in_error_hook: bool,
+    /// Make PreTaskHook and ErrorHook return with `SuspendAllInterrupts` in force.
+    leave_lock_in_hooks: bool,
 }
 
 impl Recorder {
@@ -89,6 +95,8 @@ impl Recorder {
             shutdown_in_error_hook: self.shutdown_in_error_hook,
             fail_inside_post_task_hook: self.fail_inside_post_task_hook,
             shutdown_on_error: self.shutdown_on_error,
+            exit_isr_in_error_hook: self.exit_isr_in_error_hook,
+            leave_lock_in_hooks: self.leave_lock_in_hooks,
             ..Self::default()
         };
         out
@@ -108,6 +116,9 @@ impl Hooks<TestOs> for Recorder {
     fn pre_task_hook(os: &mut TestOs) {
         let id = os.get_task_id().unwrap_or(None);
         os.hooks_mut().push(Seen::Pre(id));
+        if os.hooks().leave_lock_in_hooks {
+            let _ = os.suspend_all_interrupts();
+        }
     }
     fn post_task_hook(os: &mut TestOs) {
         let id = os.get_task_id().unwrap_or(None);
@@ -122,6 +133,13 @@ impl Hooks<TestOs> for Recorder {
         os.hooks_mut().push(Seen::Error(error, call, isr));
         if os.hooks().fail_inside_error_hook {
             let _ = os.activate_task(TaskId(0));
+        }
+        if os.hooks().exit_isr_in_error_hook {
+            let exit = os.exit_isr();
+            os.hooks_mut().push(Seen::ExitIsr(exit));
+        }
+        if os.hooks().leave_lock_in_hooks {
+            let _ = os.suspend_all_interrupts();
         }
         if os.hooks().shutdown_in_error_hook || os.hooks().shutdown_on_error == Some(error) {
             let _ = os.shutdown_os(error.status());
@@ -792,8 +810,9 @@ fn shutdown_calls_the_hook_and_stops_everything() {
 #[test]
 fn shutdown_inside_post_task_hook_ends_every_way_out_of_a_task() {
     type Leave = fn(&mut TestOs) -> Result<(), OsError>;
-    let ways: [(&str, TaskId, Leave); 4] = [
+    let ways: [(&str, TaskId, Leave); 5] = [
         ("TerminateTask", LOW, |os| os.terminate_task()),
+        ("preempted", LOW, |os| os.activate_task(HIGH)),
         ("ChainTask", LOW, |os| os.chain_task(HIGH)),
         ("WaitEvent", MID, |os| os.wait_event(1)),
         ("return", LOW, |os| os.task_returned()),
@@ -822,6 +841,173 @@ fn shutdown_inside_post_task_hook_ends_every_way_out_of_a_task() {
         );
         check(&os);
     }
+}
+
+/// `ShutdownOS` called by `ErrorHook` ends the service that reported: the alarms that
+/// expire on the same tick, the ISR's return, the task's missing end go no further.
+#[test]
+fn shutdown_inside_error_hook_ends_the_reporting_path() {
+    {
+        // An alarm's activation over the limit, with a callback alarm due on the same tick.
+        let mut os = os();
+        assert_eq!(os.enter_isr(TICK), Ok(()));
+        assert_eq!(os.activate_task(HIGH), Ok(()));
+        assert_eq!(os.set_rel_alarm(AlarmId(0), 1, 0), Ok(()));
+        assert_eq!(os.set_rel_alarm(AlarmId(2), 1, 0), Ok(()));
+        os.hooks_mut().shutdown_on_error = Some(OsError::Limit);
+        os.hooks_mut().take();
+        assert_eq!(os.increment_counter(CounterId(0)), Ok(()));
+        assert!(os.is_shut_down());
+        let seen = os.hooks_mut().take();
+        assert_eq!(
+            seen.last(),
+            Some(&Seen::Shutdown(OsError::Limit.status())),
+            "{seen:?}"
+        );
+        assert!(
+            !seen.iter().any(|s| matches!(s, Seen::Callback(..))),
+            "no alarm runs after the shutdown: {seen:?}"
+        );
+        assert_eq!(os.exit_isr(), Err(OsError::State));
+        check(&os);
+    }
+    {
+        // A category-2 ISR returns under a lock it took.
+        let mut os = os();
+        assert_eq!(os.enter_isr(TICK), Ok(()));
+        assert_eq!(os.suspend_os_interrupts(), Ok(()));
+        os.hooks_mut().shutdown_on_error = Some(OsError::DisabledInt);
+        os.hooks_mut().take();
+        assert_eq!(os.exit_isr(), Ok(()));
+        assert!(os.is_shut_down());
+        assert_eq!(os.isr_nesting(), 0);
+        assert_eq!(os.locks(), Locks::default());
+        check(&os);
+    }
+    {
+        // A task's body returns without TerminateTask: no PostTaskHook after the shutdown.
+        let mut os = os();
+        assert_eq!(activate_from_isr(&mut os, LOW), Ok(()));
+        os.hooks_mut().shutdown_on_error = Some(OsError::MissingEnd);
+        os.hooks_mut().take();
+        assert_eq!(os.task_returned(), Ok(()));
+        assert!(os.is_shut_down());
+        assert_eq!(
+            os.hooks_mut().take(),
+            [
+                Seen::Error(OsError::MissingEnd, ServiceCall::TaskMissingEnd(LOW), None),
+                Seen::Shutdown(OsError::MissingEnd.status()),
+            ]
+        );
+        check(&os);
+    }
+}
+
+/// A second shutdown (the board reporting a fault after `ShutdownOS`) changes nothing and
+/// does not call `ShutdownHook` again.
+#[test]
+fn a_second_shutdown_changes_nothing() {
+    let mut os = os();
+    assert_eq!(activate_from_isr(&mut os, LOW), Ok(()));
+    assert_eq!(os.shutdown_os(OsError::Value.status()), Ok(()));
+    assert_eq!(
+        os.hooks_mut().take(),
+        [
+            Seen::Pre(Some(LOW)),
+            Seen::Shutdown(OsError::Value.status())
+        ]
+    );
+    let before = os;
+    os.shutdown_on_fault(OsError::StackFault);
+    assert_eq!(os, before);
+    assert_eq!(os.hooks_mut().take(), []);
+}
+
+/// Without a `ShutdownHook` configured, `ShutdownOS` stops the OS all the same.
+#[test]
+fn shutdown_without_a_shutdown_hook() {
+    let Ok(mut os) = SmallOs::new(&SMALL) else {
+        panic!("the small configuration is valid")
+    };
+    assert_eq!(os.start_os(OSDEFAULTAPPMODE), Ok(()));
+    assert_eq!(os.enter_isr(IsrId(0)), Ok(()));
+    assert_eq!(os.activate_task(TaskId(0)), Ok(()));
+    assert_eq!(os.exit_isr(), Ok(()));
+    assert_eq!(os.running(), Some(TaskId(0)));
+    assert_eq!(os.shutdown_os(OsError::Value.status()), Ok(()));
+    assert_eq!(os.phase(), Phase::ShutDown);
+    assert_eq!(os.running(), None);
+    assert_eq!(os.activation_count(TaskId(0)), 0);
+    assert!(spec::kernel_invariants(&os));
+}
+
+/// Only the port returns from an ISR: a hook running inside one (here `ErrorHook`) that
+/// tries is refused with `E_OS_CALLEVEL`, and the ISR stays active.
+#[test]
+fn exit_isr_from_a_hook_inside_an_isr_is_refused() {
+    let mut os = os();
+    assert_eq!(os.enter_isr(TICK), Ok(()));
+    os.hooks_mut().exit_isr_in_error_hook = true;
+    os.hooks_mut().take();
+    assert_eq!(os.activate_task(TaskId(9)), Err(OsError::Id));
+    assert_eq!(
+        os.hooks_mut().take(),
+        [
+            Seen::Error(
+                OsError::Id,
+                ServiceCall::ActivateTask(TaskId(9)),
+                Some(TICK)
+            ),
+            Seen::ExitIsr(Err(OsError::CallLevel)),
+        ]
+    );
+    assert_eq!(os.isr_nesting(), 1);
+    assert_eq!(os.exit_isr(), Ok(()));
+    check(&os);
+}
+
+/// A hook that returns with an interrupt lock in force has it undone; `PreTaskHook`'s is
+/// reported to `ErrorHook` (`E_OS_DISABLEDINT`), `ErrorHook`'s own is not (it would call
+/// itself).
+#[test]
+fn locks_left_by_hooks_are_undone() {
+    let mut os = os();
+    os.hooks_mut().leave_lock_in_hooks = true;
+    assert_eq!(activate_from_isr(&mut os, LOW), Ok(()));
+    assert_eq!(
+        os.hooks_mut().take(),
+        [
+            Seen::Pre(Some(LOW)),
+            Seen::Error(OsError::DisabledInt, ServiceCall::HookMissingEnd, None),
+        ]
+    );
+    assert_eq!(os.locks(), Locks::default());
+    assert_eq!(os.running(), Some(LOW));
+    assert_eq!(os.activate_task(HIGH), Ok(()));
+    assert_eq!(os.running(), Some(HIGH));
+    check(&os);
+}
+
+/// A ready queue of more than 255 records cannot be indexed by the kernel's `u8` links.
+#[test]
+fn ready_queue_above_255_is_refused() {
+    static BIG: OsConfig<2, 0, 0, 0, 0> = match OsConfig::new(OsDescription::new(
+        [
+            TaskConfig::basic("A", 1).activations(200),
+            TaskConfig::basic("B", 2).activations(100),
+        ],
+        [],
+        [],
+        [],
+    )) {
+        Ok(c) => c,
+        Err(e) => panic!("{}", e.describe()),
+    };
+    assert_eq!(BIG.total_activations(), 300);
+    assert_eq!(
+        Os::<2, 0, 0, 0, 0, 300>::new(&BIG).err(),
+        Some(ConfigError::QueueCapacity { needed: 300 })
+    );
 }
 
 fn os_after(setup: impl FnOnce(&mut TestOs)) -> TestOs {
@@ -1261,3 +1447,28 @@ fn transition_rules_can_fail() {
     // The invariants themselves catch a broken nesting.
     assert!(spec::isr_nesting_consistent(&forced));
 }
+
+// A configuration without hooks: 0 A(1, basic, 2 activations, uses R0), 1 B(2, extended,
+// uses R0); one counter; alarm 0 sets event 1 of B; ISR 0 (category 2, priority 1).
+static SMALL: OsConfig<2, 1, 1, 1, 1> = match OsConfig::new(OsDescription::new(
+    [
+        TaskConfig::basic("A", 1).activations(2).uses(0b1),
+        TaskConfig::extended("B", 2).uses(0b1),
+    ],
+    [CounterConfig {
+        max_allowed_value: 3,
+        ticks_per_base: 1,
+        min_cycle: 1,
+    }],
+    [AlarmConfig::new(
+        "EvB",
+        CounterId(0),
+        AlarmAction::SetEvent(TaskId(1), 1),
+    )],
+    [IsrConfig::cat2("Tick", 1)],
+)) {
+    Ok(c) => c,
+    Err(e) => panic!("{}", e.describe()),
+};
+
+type SmallOs = Os<2, 1, 1, 1, 1, 3>;

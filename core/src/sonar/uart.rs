@@ -191,26 +191,17 @@ pub struct Ranger {
     counts: RangerCounts,
 }
 
-/// `n`, or 1 for 0: a ranger's silence limit. (Outside [`Ranger::new`] because
-/// cargo-mutants leaves functions named `new` alone: see `docs/mutants.md`.)
-const fn at_least_one(n: u8) -> u8 {
-    if n == 0 {
-        1
-    } else {
-        n
-    }
-}
-
 impl Ranger {
     /// A ranger that reports the module silent after `silent_after_samples` samples
-    /// without a good frame (at least 1: a sample without a new good frame then never
-    /// repeats the last one).
+    /// without a good frame. 0 acts as 1: a sample without a new good frame then never
+    /// repeats the last one (the count of samples since the last good frame is at least 1
+    /// when it is compared).
     pub const fn new(silent_after_samples: u8) -> Self {
         Self {
             decoder: Decoder::new(),
             last_good: None,
             since_good: u8::MAX,
-            silent_after: at_least_one(silent_after_samples),
+            silent_after: silent_after_samples,
             counts: RangerCounts {
                 frames: 0,
                 bad_checksums: 0,

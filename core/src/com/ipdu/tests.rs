@@ -15,6 +15,7 @@ const fn layout(start: u16, len: u8) -> SignalLayout<8> {
 
 const DISTANCE: SignalId = SignalId(0);
 const LEVEL: SignalId = SignalId(1);
+const STATUS: SignalId = SignalId(2);
 const RX_DISTANCE: SignalId = SignalId(3);
 const RX_FLAG: SignalId = SignalId(4);
 
@@ -1047,6 +1048,14 @@ fn wheel_filing_earlier_moves_and_later_stays() {
     wheel.file(0, 10, 0);
     assert_eq!(wheel.head[30], 1, "unlinked behind the head");
     assert_eq!(wheel.next[1], NIL);
+    // Third in its list (2 -> 1 -> 0): the walk passes an entry that is not it.
+    let mut wheel = Wheel::<3>::new();
+    for k in 0..3 {
+        wheel.file(k, 30, 0);
+    }
+    wheel.file(0, 10, 0);
+    assert_eq!((wheel.head[30], wheel.next[2], wheel.next[1]), (2, 1, NIL));
+    assert_eq!((wheel.head[10], usize::from(wheel.list[0])), (0, 10));
 }
 
 /// The entries due in one cycle are taken last-filed first, also when some of them came
@@ -1313,5 +1322,126 @@ fn configuration_limits_and_edges() {
     ];
     for (error, words) in errors {
         assert!(error.describe().contains(words), "{error:?}");
+    }
+}
+
+/// A triggering write to an I-PDU without direct transmission (periodic mode) sends
+/// nothing at once: the value goes out with the next period.
+#[test]
+fn a_trigger_on_a_periodic_ipdu_waits_for_its_period() {
+    let mut com = Com::new(&CFG);
+    let mut log = Vec::new();
+    assert_eq!(send(&mut com, STATUS, 0x1234, &mut log), Ok(()));
+    assert_eq!(log, [], "no direct transmission in periodic mode");
+    run(&mut com, 2, &mut log);
+    assert_eq!(log.last(), Some(&(2, 1, std::vec![0x34, 0x12])));
+}
+
+/// A transmit signal has no received value to read.
+#[test]
+fn receiving_a_transmit_signal_is_refused() {
+    let com = Com::new(&CFG);
+    assert_eq!(com.receive_signal(DISTANCE), Err(ComError::UnknownSignal));
+    assert_eq!(
+        com.receive_signal(SignalId(5)),
+        Err(ComError::UnknownSignal)
+    );
+}
+
+/// When the lower layer refuses a transmission, the I-PDU keeps its update bits (the data
+/// has not gone out) and its minimum delay does not start: the next attempt carries them.
+#[test]
+fn a_refused_transmission_keeps_the_update_bits_and_starts_no_mdt() {
+    let mut com = Com::new(&CFG);
+    assert_eq!(
+        com.send_signal(LEVEL, SignalValue::Unsigned(2), |_, _| true),
+        Ok(())
+    );
+    let mut refused = 0;
+    com.main_function_tx(|id, _| {
+        refused += usize::from(id == TxIpduId(0));
+        false
+    });
+    assert_eq!(
+        refused, 1,
+        "the periodic transmission of cycle 1 was attempted"
+    );
+    assert_eq!(
+        com.tx_ipdu(TxIpduId(0)).and_then(|b| b.get(7)).copied(),
+        Some(0x80),
+        "update bit 63 still set"
+    );
+    // No MDT runs from the refused attempt: a triggering write goes out at once.
+    let mut log = Vec::new();
+    assert_eq!(send(&mut com, DISTANCE, 42, &mut log), Ok(()));
+    assert_eq!(log.len(), 1);
+    assert_eq!(log[0].2, [42, 0, 0, 0, 2, 0, 0, 0x80]);
+    assert_eq!(
+        com.tx_ipdu(TxIpduId(0)).and_then(|b| b.get(7)).copied(),
+        Some(0)
+    );
+}
+
+/// Triggered transfer properties without repetition send once and never repeat, even on
+/// an I-PDU configured with repetitions; with repetition they repeat.
+#[test]
+fn triggered_without_repetition_sends_once() {
+    static ONCE: ComConfig<8, 1, 0, 2> = match ComConfig::new(
+        10,
+        [TxIpduConfig {
+            name: "t",
+            len: 1,
+            mode: TxMode::Direct {
+                repetitions: 3,
+                repetition_period_ms: 10,
+            },
+            mdt_ms: 0,
+        }],
+        [],
+        [
+            SignalConfig {
+                name: "once",
+                direction: SignalDirection::Tx(
+                    TxIpduId(0),
+                    TransferProperty::TriggeredWithoutRepetition,
+                ),
+                layout: layout(0, 4),
+                init: 0,
+                invalid: None,
+                update_bit: None,
+            },
+            SignalConfig {
+                name: "on change once",
+                direction: SignalDirection::Tx(
+                    TxIpduId(0),
+                    TransferProperty::TriggeredOnChangeWithoutRepetition,
+                ),
+                layout: layout(4, 4),
+                init: 0,
+                invalid: None,
+                update_bit: None,
+            },
+        ],
+    ) {
+        Ok(cfg) => cfg,
+        Err(e) => panic!("{}", e.describe()),
+    };
+    for (signal, value) in [(SignalId(0), 5), (SignalId(1), 6)] {
+        let mut com = Com::new(&ONCE);
+        let mut sent = 0;
+        assert_eq!(
+            com.send_signal(signal, SignalValue::Unsigned(value), |_, _| {
+                sent += 1;
+                true
+            }),
+            Ok(())
+        );
+        for _ in 0..10 {
+            com.main_function_tx(|_, _| {
+                sent += 1;
+                true
+            });
+        }
+        assert_eq!(sent, 1, "signal {signal:?}: sent once, no repetition");
     }
 }

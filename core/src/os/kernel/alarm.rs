@@ -367,8 +367,10 @@ where
     #[inline(never)]
     fn expire(&mut self, c: usize) {
         loop {
+            // A `ShutdownOS` inside an action (from `ErrorHook` or a callback) disarms
+            // every alarm, so the walk ends there too.
             let a = self.counter_head[c] as usize;
-            if a >= A || self.alarm_delta[a] != 0 || self.is_shut_down() {
+            if a >= A || self.alarm_delta[a] != 0 {
                 break;
             }
             let cycle = self.alarm_cycle[a];

@@ -343,3 +343,24 @@ fn ranger_limits_and_silence() {
         (4, 1, 2)
     );
 }
+
+/// A silence limit of 0 acts as 1: the last distance is never repeated.
+#[test]
+fn a_silence_limit_of_zero_acts_as_one() {
+    let config = SonarConfig::HC_SR04;
+    let mut zero = Ranger::new(0);
+    let mut one = Ranger::new(1);
+    for bytes in [
+        encode(1234).to_vec(),
+        Vec::new(),
+        Vec::new(),
+        encode(900).to_vec(),
+    ] {
+        let a = zero.sample(bytes.iter().copied(), &config);
+        assert_eq!(a, one.sample(bytes.iter().copied(), &config));
+        if bytes.is_empty() {
+            assert_eq!(a, Measurement::Invalid);
+        }
+    }
+    assert_eq!(zero.counts(), one.counts());
+}
