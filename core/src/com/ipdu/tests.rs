@@ -125,6 +125,7 @@ fn send(
 
 #[test]
 fn init_values_and_periodic_timing() {
+    assert_eq!(CFG.main_period_ms(), 10);
     let mut com = Com::new(&CFG);
     assert_eq!(com.tx_ipdu(TxIpduId(1)), Some(&[0xEF, 0xBE][..]));
     assert_eq!(
@@ -1060,11 +1061,17 @@ fn wheel_filing_earlier_moves_and_later_stays() {
 
 /// The entries due in one cycle are taken last-filed first, also when some of them came
 /// down from coarser levels (as the one-level wheel did for entries up to 64 cycles
-/// ahead).
+/// ahead). Also with room for 255 entries, the most an I-PDU table holds, where the
+/// list end `NIL` is one past the last entry.
 #[test]
 fn wheel_takes_the_entries_of_one_cycle_last_filed_first() {
+    last_filed_first::<6>();
+    last_filed_first::<255>();
+}
+
+fn last_filed_first<const K: usize>() {
     let due = 3 * 4_096 + 5 * 64 + 7;
-    let mut wheel = Wheel::<6>::new();
+    let mut wheel = Wheel::<K>::new();
     // (entry, filed in cycle, level): from further to nearer.
     let filings = [
         (0, 1, 2),
