@@ -1452,3 +1452,53 @@ fn triggered_without_repetition_sends_once() {
         assert_eq!(sent, 1, "signal {signal:?}: sent once, no repetition");
     }
 }
+
+/// A mixed-mode I-PDU without repetitions (and so without a repetition period): a
+/// triggered transmission leaves its periodic timing exactly as it was.
+#[test]
+fn a_trigger_without_repetitions_keeps_the_period() {
+    static NO_REPS: ComConfig<8, 1, 0, 1> = match ComConfig::new(
+        10,
+        [TxIpduConfig {
+            name: "t",
+            len: 1,
+            mode: TxMode::Mixed {
+                period_ms: 50,
+                offset_ms: 0,
+                repetitions: 0,
+                repetition_period_ms: 0,
+            },
+            mdt_ms: 0,
+        }],
+        [],
+        [SignalConfig {
+            name: "s",
+            direction: SignalDirection::Tx(TxIpduId(0), TransferProperty::Triggered),
+            layout: layout(0, 8),
+            init: 0,
+            invalid: None,
+            update_bit: None,
+        }],
+    ) {
+        Ok(cfg) => cfg,
+        Err(e) => panic!("{}", e.describe()),
+    };
+    let mut com = Com::new(&NO_REPS);
+    let mut cycles = Vec::new();
+    for now in 1..=21u32 {
+        com.main_function_tx(|_, _| {
+            cycles.push(now);
+            true
+        });
+        if now == 3 {
+            assert_eq!(
+                com.send_signal(SignalId(0), SignalValue::Unsigned(1), |_, _| {
+                    cycles.push(now);
+                    true
+                }),
+                Ok(())
+            );
+        }
+    }
+    assert_eq!(cycles, [1, 3, 6, 11, 16, 21]);
+}
