@@ -35,6 +35,8 @@ const SLOT_BITS: u32 = WHEEL.trailing_zeros();
 /// Levels of the wheel: enough for any distance between two `u32` cycles, so no entry is
 /// ever looked at before the block of its cycle starts.
 const LEVELS: usize = (u32::BITS as usize).div_ceil(SLOT_BITS as usize);
+// The coarsest level `list_for` can choose, for a distance of 2^31 or more, exists.
+const _: () = assert!((u32::BITS - 1) / SLOT_BITS < LEVELS as u32);
 /// End of a list.
 const NIL: u8 = u8::MAX;
 /// `Wheel::list` of an entry that is not filed.
@@ -607,8 +609,8 @@ fn list_for(due: u32, next: u32) -> usize {
     if distance < WHEEL as u32 {
         return due as usize % WHEEL;
     }
+    // At most (32 - 1) / SLOT_BITS, which is below LEVELS (asserted where LEVELS is).
     let level = ((u32::BITS - 1 - distance.leading_zeros()) / SLOT_BITS) as usize;
-    let level = level.min(LEVELS - 1);
     level * WHEEL + (due >> (level as u32 * SLOT_BITS)) as usize % WHEEL
 }
 
