@@ -906,11 +906,12 @@ where
             if self.tx_reps_left[i] > 0 && (rep_due || deferred_due) {
                 self.tx_next_rep[i] = now + timing.repetition_period;
             }
-        } else if periodic_due || rep_due || deferred_due {
-            // Held back by the MDT: the periodic or repeated transmission happens at its end.
-            self.tx_deferred[i] = true;
         }
-        // Re-file for the earliest pending event.
+        // A periodic or repeated transmission that the MDT holds back stays due (its time
+        // is not advanced) and goes out when the MDT ends. It is not marked deferred: that
+        // mark is for a triggered transmission, which does not count as a repetition, and
+        // a held repetition must (else repetitions closer than the MDT never end).
+        // Re-file for the earliest pending event, and no earlier than the MDT allows.
         let mut next = u32::MAX;
         if timing.period > 0 {
             next = next.min(self.tx_next_periodic[i]);
@@ -919,10 +920,11 @@ where
             next = next.min(self.tx_next_rep[i]);
         }
         if self.tx_deferred[i] {
-            next = next.min(self.mdt_end(i).max(now + 1));
+            next = next.min(self.mdt_end(i));
         }
         if next != u32::MAX {
-            self.tx_wheel.file(i, next.max(now + 1), now);
+            self.tx_wheel
+                .file(i, next.max(self.mdt_end(i)).max(now + 1), now);
         }
     }
 

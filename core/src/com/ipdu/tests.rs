@@ -1502,3 +1502,150 @@ fn a_trigger_without_repetitions_keeps_the_period() {
     }
     assert_eq!(cycles, [1, 3, 6, 11, 16, 21]);
 }
+
+/// A periodic transmission that falls between two repetitions does not move them: the
+/// repetitions keep their own timing.
+#[test]
+fn a_periodic_transmission_between_repetitions_leaves_them_on_time() {
+    static MIXED: ComConfig<8, 1, 0, 1> = match ComConfig::new(
+        10,
+        [TxIpduConfig {
+            name: "t",
+            len: 1,
+            mode: TxMode::Mixed {
+                period_ms: 100,
+                offset_ms: 0,
+                repetitions: 2,
+                repetition_period_ms: 30,
+            },
+            mdt_ms: 0,
+        }],
+        [],
+        [SignalConfig {
+            name: "s",
+            direction: SignalDirection::Tx(TxIpduId(0), TransferProperty::Triggered),
+            layout: layout(0, 8),
+            init: 0,
+            invalid: None,
+            update_bit: None,
+        }],
+    ) {
+        Ok(cfg) => cfg,
+        Err(e) => panic!("{}", e.describe()),
+    };
+    let mut com = Com::new(&MIXED);
+    let mut cycles = Vec::new();
+    for now in 1..=21u32 {
+        com.main_function_tx(|_, _| {
+            cycles.push(now);
+            true
+        });
+        if now == 9 {
+            assert_eq!(
+                com.send_signal(SignalId(0), SignalValue::Unsigned(1), |_, _| {
+                    cycles.push(now);
+                    true
+                }),
+                Ok(())
+            );
+        }
+    }
+    // Periodic in 1, 11, 21; triggered in 9, repeated in 12 and 15.
+    assert_eq!(cycles, [1, 9, 11, 12, 15, 21]);
+}
+
+/// An I-PDU whose every byte carries an update bit (here its only byte): the bit is
+/// cleared after each transmission all the same.
+#[test]
+fn an_update_bit_in_every_byte_is_cleared_after_sending() {
+    static ONE_BYTE: ComConfig<1, 1, 0, 1> = match ComConfig::new(
+        10,
+        [TxIpduConfig {
+            name: "t",
+            len: 1,
+            mode: TxMode::Periodic {
+                period_ms: 10,
+                offset_ms: 0,
+            },
+            mdt_ms: 0,
+        }],
+        [],
+        [SignalConfig {
+            name: "s",
+            direction: SignalDirection::Tx(TxIpduId(0), TransferProperty::Pending),
+            layout: match SignalLayout::new(0, 7, ByteOrder::Intel, Signedness::Unsigned) {
+                Ok(l) => l,
+                Err(_) => panic!("test layout does not fit"),
+            },
+            init: 0,
+            invalid: None,
+            update_bit: Some(7),
+        }],
+    ) {
+        Ok(cfg) => cfg,
+        Err(e) => panic!("{}", e.describe()),
+    };
+    let mut com = Com::new(&ONE_BYTE);
+    assert_eq!(
+        com.send_signal(SignalId(0), SignalValue::Unsigned(5), |_, _| true),
+        Ok(())
+    );
+    assert_eq!(com.tx_ipdu(TxIpduId(0)), Some(&[0x85][..]));
+    let mut sent = Vec::new();
+    com.main_function_tx(|_, data| {
+        sent.extend_from_slice(data);
+        true
+    });
+    assert_eq!(sent, [0x85]);
+    assert_eq!(com.tx_ipdu(TxIpduId(0)), Some(&[0x05][..]));
+}
+
+/// Repetitions 10 ms apart on an I-PDU with a 20 ms MDT: each waits for the MDT, and
+/// there are exactly as many as configured.
+#[test]
+fn repetitions_closer_than_the_mdt_are_held_and_still_end() {
+    static HELD: ComConfig<8, 1, 0, 1> = match ComConfig::new(
+        10,
+        [TxIpduConfig {
+            name: "t",
+            len: 1,
+            mode: TxMode::Direct {
+                repetitions: 2,
+                repetition_period_ms: 10,
+            },
+            mdt_ms: 20,
+        }],
+        [],
+        [SignalConfig {
+            name: "s",
+            direction: SignalDirection::Tx(TxIpduId(0), TransferProperty::Triggered),
+            layout: layout(0, 8),
+            init: 0,
+            invalid: None,
+            update_bit: None,
+        }],
+    ) {
+        Ok(cfg) => cfg,
+        Err(e) => panic!("{}", e.describe()),
+    };
+    let mut com = Com::new(&HELD);
+    let mut cycles = Vec::new();
+    for now in 1..=30u32 {
+        com.main_function_tx(|_, _| {
+            cycles.push(now);
+            true
+        });
+        if now == 1 {
+            assert_eq!(
+                com.send_signal(SignalId(0), SignalValue::Unsigned(1), |_, _| {
+                    cycles.push(now);
+                    true
+                }),
+                Ok(())
+            );
+        }
+    }
+    // Triggered in 1; the two repetitions, due in 2 and 3, wait for the 20 ms MDT: 3 and 5.
+    // (They once never ended: a held repetition did not count.)
+    assert_eq!(cycles, [1, 3, 5]);
+}
