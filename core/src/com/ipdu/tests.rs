@@ -126,6 +126,8 @@ fn send(
 #[test]
 fn init_values_and_periodic_timing() {
     assert_eq!(CFG.main_period_ms(), 10);
+    assert_eq!(Com::new(&CFG).signedness(LEVEL), Some(Signedness::Unsigned));
+    assert_eq!(Com::new(&CFG).signedness(SignalId(5)), None);
     let mut com = Com::new(&CFG);
     assert_eq!(com.tx_ipdu(TxIpduId(1)), Some(&[0xEF, 0xBE][..]));
     assert_eq!(
