@@ -1651,3 +1651,38 @@ fn repetitions_closer_than_the_mdt_are_held_and_still_end() {
     // (They once never ended: a held repetition did not count.)
     assert_eq!(cycles, [1, 3, 5]);
 }
+
+/// A received signal with its update bit in the middle of a byte (bit 13: byte 1, bit 5)
+/// is taken over exactly when that bit is set in the frame.
+#[test]
+fn rx_update_bit_inside_a_byte() {
+    static RX13: ComConfig<8, 0, 1, 1> = match ComConfig::new(
+        10,
+        [],
+        [RxIpduConfig {
+            name: "r",
+            len: 2,
+            deadline_ms: 0,
+        }],
+        [SignalConfig {
+            name: "s",
+            direction: SignalDirection::Rx(RxIpduId(0)),
+            layout: layout(0, 8),
+            init: 9,
+            invalid: None,
+            update_bit: Some(13),
+        }],
+    ) {
+        Ok(cfg) => cfg,
+        Err(e) => panic!("{}", e.describe()),
+    };
+    let mut com = Com::new(&RX13);
+    com.rx_indication(RxIpduId(0), &[42, 0b1101_1111]);
+    assert_eq!(
+        com.receive_signal(SignalId(0)),
+        Ok(SignalValue::Unsigned(9)),
+        "bit 13 clear (the other bits of its byte set): not updated"
+    );
+    com.rx_indication(RxIpduId(0), &[42, 0b0010_0000]);
+    assert_eq!(com.receive_signal(SignalId(0)), Ok(SignalValue::Unsigned(42)));
+}
