@@ -39,6 +39,15 @@ use crate::{option_value, Result};
 use std::collections::BTreeMap;
 use std::path::Path;
 
+/// What cargo-mutants made of a mutant: the file (`<outcome>.txt`) that lists it.
+#[derive(Clone, Copy)]
+enum Outcome {
+    Caught,
+    Timeout,
+    Missed,
+    Unviable,
+}
+
 /// The verified kernels' source files: every mutant cargo-mutants makes in them is run.
 pub const KERNEL_FILES: &[&str] = &[
     "core/src/warning.rs",
@@ -286,18 +295,18 @@ pub fn run(options: &Options) -> Result {
         .collect();
     let mut unexplained = Vec::new();
     for (name, outcome) in [
-        ("caught.txt", 0),
-        ("timeout.txt", 1),
-        ("missed.txt", 2),
-        ("unviable.txt", 3),
+        ("caught.txt", Outcome::Caught),
+        ("timeout.txt", Outcome::Timeout),
+        ("missed.txt", Outcome::Missed),
+        ("unviable.txt", Outcome::Unviable),
     ] {
         for line in outcome_lines(&dir, name)? {
             let file = line.split(':').next().unwrap_or_default().to_string();
             let t = tally.entry(file).or_default();
             match outcome {
-                0 => t.caught += 1,
-                1 => t.timeout += 1,
-                2 => {
+                Outcome::Caught => t.caught += 1,
+                Outcome::Timeout => t.timeout += 1,
+                Outcome::Missed => {
                     let known = key(&line).is_some_and(|k| equivalent.contains(&k));
                     if known {
                         t.equivalent += 1;
@@ -306,7 +315,7 @@ pub fn run(options: &Options) -> Result {
                         unexplained.push(line);
                     }
                 }
-                _ => t.unviable += 1,
+                Outcome::Unviable => t.unviable += 1,
             }
         }
     }

@@ -1684,5 +1684,8 @@ fn rx_update_bit_inside_a_byte() {
         "bit 13 clear (the other bits of its byte set): not updated"
     );
     com.rx_indication(RxIpduId(0), &[42, 0b0010_0000]);
-    assert_eq!(com.receive_signal(SignalId(0)), Ok(SignalValue::Unsigned(42)));
+    assert_eq!(
+        com.receive_signal(SignalId(0)),
+        Ok(SignalValue::Unsigned(42))
+    );
 }
