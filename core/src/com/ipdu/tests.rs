@@ -1105,13 +1105,18 @@ fn last_filed_first<const K: usize>() {
     assert_eq!(order, expected);
 }
 
-/// A one-signal I-PDU (the signal in byte 0) whose update bit is `bit`.
-const fn update_bit_config(bit: u16) -> ComConfig<8, 1, 0, 1> {
+/// A one-signal I-PDU of `len` bytes (the signal: the low `bits` bits of byte 0) whose
+/// update bit is `bit`.
+const fn update_bit_config<const N: usize>(len: u8, bits: u8, bit: u16) -> ComConfig<N, 1, 0, 1> {
+    let layout = match SignalLayout::new(0, bits, ByteOrder::Intel, Signedness::Unsigned) {
+        Ok(l) => l,
+        Err(_) => panic!("test layout does not fit"),
+    };
     match ComConfig::new(
         10,
         [TxIpduConfig {
             name: "t",
-            len: 8,
+            len,
             mode: TxMode::Periodic {
                 period_ms: 10,
                 offset_ms: 0,
@@ -1122,7 +1127,7 @@ const fn update_bit_config(bit: u16) -> ComConfig<8, 1, 0, 1> {
         [SignalConfig {
             name: "s",
             direction: SignalDirection::Tx(TxIpduId(0), TransferProperty::Pending),
-            layout: layout(0, 8),
+            layout,
             init: 0,
             invalid: None,
             update_bit: Some(bit),
@@ -1135,10 +1140,10 @@ const fn update_bit_config(bit: u16) -> ComConfig<8, 1, 0, 1> {
 
 /// [`update_bit_config`] for every update bit outside the signal: 8..64.
 static UPDATE_BIT_CONFIGS: [ComConfig<8, 1, 0, 1>; 56] = {
-    let mut configs = [update_bit_config(8); 56];
+    let mut configs = [update_bit_config(8, 8, 8); 56];
     let mut i = 1;
     while i < configs.len() {
-        configs[i] = update_bit_config(8 + i as u16);
+        configs[i] = update_bit_config(8, 8, 8 + i as u16);
         i += 1;
     }
     configs
@@ -1455,138 +1460,11 @@ fn triggered_without_repetition_sends_once() {
     }
 }
 
-/// A mixed-mode I-PDU without repetitions (and so without a repetition period): a
-/// triggered transmission leaves its periodic timing exactly as it was.
-#[test]
-fn a_trigger_without_repetitions_keeps_the_period() {
-    static NO_REPS: ComConfig<8, 1, 0, 1> = match ComConfig::new(
-        10,
-        [TxIpduConfig {
-            name: "t",
-            len: 1,
-            mode: TxMode::Mixed {
-                period_ms: 50,
-                offset_ms: 0,
-                repetitions: 0,
-                repetition_period_ms: 0,
-            },
-            mdt_ms: 0,
-        }],
-        [],
-        [SignalConfig {
-            name: "s",
-            direction: SignalDirection::Tx(TxIpduId(0), TransferProperty::Triggered),
-            layout: layout(0, 8),
-            init: 0,
-            invalid: None,
-            update_bit: None,
-        }],
-    ) {
-        Ok(cfg) => cfg,
-        Err(e) => panic!("{}", e.describe()),
-    };
-    let mut com = Com::new(&NO_REPS);
-    let mut cycles = Vec::new();
-    for now in 1..=21u32 {
-        com.main_function_tx(|_, _| {
-            cycles.push(now);
-            true
-        });
-        if now == 3 {
-            assert_eq!(
-                com.send_signal(SignalId(0), SignalValue::Unsigned(1), |_, _| {
-                    cycles.push(now);
-                    true
-                }),
-                Ok(())
-            );
-        }
-    }
-    assert_eq!(cycles, [1, 3, 6, 11, 16, 21]);
-}
-
-/// A periodic transmission that falls between two repetitions does not move them: the
-/// repetitions keep their own timing.
-#[test]
-fn a_periodic_transmission_between_repetitions_leaves_them_on_time() {
-    static MIXED: ComConfig<8, 1, 0, 1> = match ComConfig::new(
-        10,
-        [TxIpduConfig {
-            name: "t",
-            len: 1,
-            mode: TxMode::Mixed {
-                period_ms: 100,
-                offset_ms: 0,
-                repetitions: 2,
-                repetition_period_ms: 30,
-            },
-            mdt_ms: 0,
-        }],
-        [],
-        [SignalConfig {
-            name: "s",
-            direction: SignalDirection::Tx(TxIpduId(0), TransferProperty::Triggered),
-            layout: layout(0, 8),
-            init: 0,
-            invalid: None,
-            update_bit: None,
-        }],
-    ) {
-        Ok(cfg) => cfg,
-        Err(e) => panic!("{}", e.describe()),
-    };
-    let mut com = Com::new(&MIXED);
-    let mut cycles = Vec::new();
-    for now in 1..=21u32 {
-        com.main_function_tx(|_, _| {
-            cycles.push(now);
-            true
-        });
-        if now == 9 {
-            assert_eq!(
-                com.send_signal(SignalId(0), SignalValue::Unsigned(1), |_, _| {
-                    cycles.push(now);
-                    true
-                }),
-                Ok(())
-            );
-        }
-    }
-    // Periodic in 1, 11, 21; triggered in 9, repeated in 12 and 15.
-    assert_eq!(cycles, [1, 9, 11, 12, 15, 21]);
-}
-
 /// An I-PDU whose every byte carries an update bit (here its only byte): the bit is
 /// cleared after each transmission all the same.
 #[test]
 fn an_update_bit_in_every_byte_is_cleared_after_sending() {
-    static ONE_BYTE: ComConfig<1, 1, 0, 1> = match ComConfig::new(
-        10,
-        [TxIpduConfig {
-            name: "t",
-            len: 1,
-            mode: TxMode::Periodic {
-                period_ms: 10,
-                offset_ms: 0,
-            },
-            mdt_ms: 0,
-        }],
-        [],
-        [SignalConfig {
-            name: "s",
-            direction: SignalDirection::Tx(TxIpduId(0), TransferProperty::Pending),
-            layout: match SignalLayout::new(0, 7, ByteOrder::Intel, Signedness::Unsigned) {
-                Ok(l) => l,
-                Err(_) => panic!("test layout does not fit"),
-            },
-            init: 0,
-            invalid: None,
-            update_bit: Some(7),
-        }],
-    ) {
-        Ok(cfg) => cfg,
-        Err(e) => panic!("{}", e.describe()),
-    };
+    static ONE_BYTE: ComConfig<1, 1, 0, 1> = update_bit_config(1, 7, 7);
     let mut com = Com::new(&ONE_BYTE);
     assert_eq!(
         com.send_signal(SignalId(0), SignalValue::Unsigned(5), |_, _| true),
@@ -1600,56 +1478,6 @@ fn an_update_bit_in_every_byte_is_cleared_after_sending() {
     });
     assert_eq!(sent, [0x85]);
     assert_eq!(com.tx_ipdu(TxIpduId(0)), Some(&[0x05][..]));
-}
-
-/// Repetitions 10 ms apart on an I-PDU with a 20 ms MDT: each waits for the MDT, and
-/// there are exactly as many as configured.
-#[test]
-fn repetitions_closer_than_the_mdt_are_held_and_still_end() {
-    static HELD: ComConfig<8, 1, 0, 1> = match ComConfig::new(
-        10,
-        [TxIpduConfig {
-            name: "t",
-            len: 1,
-            mode: TxMode::Direct {
-                repetitions: 2,
-                repetition_period_ms: 10,
-            },
-            mdt_ms: 20,
-        }],
-        [],
-        [SignalConfig {
-            name: "s",
-            direction: SignalDirection::Tx(TxIpduId(0), TransferProperty::Triggered),
-            layout: layout(0, 8),
-            init: 0,
-            invalid: None,
-            update_bit: None,
-        }],
-    ) {
-        Ok(cfg) => cfg,
-        Err(e) => panic!("{}", e.describe()),
-    };
-    let mut com = Com::new(&HELD);
-    let mut cycles = Vec::new();
-    for now in 1..=30u32 {
-        com.main_function_tx(|_, _| {
-            cycles.push(now);
-            true
-        });
-        if now == 1 {
-            assert_eq!(
-                com.send_signal(SignalId(0), SignalValue::Unsigned(1), |_, _| {
-                    cycles.push(now);
-                    true
-                }),
-                Ok(())
-            );
-        }
-    }
-    // Triggered in 1; the two repetitions, due in 2 and 3, wait for the 20 ms MDT: 3 and 5.
-    // (They once never ended: a held repetition did not count.)
-    assert_eq!(cycles, [1, 3, 5]);
 }
 
 /// A received signal with its update bit in the middle of a byte (bit 13: byte 1, bit 5)
@@ -1688,4 +1516,99 @@ fn rx_update_bit_inside_a_byte() {
         com.receive_signal(SignalId(0)),
         Ok(SignalValue::Unsigned(42))
     );
+}
+
+/// A one-byte I-PDU in `mode` with an MDT of `mdt_ms`, and one triggered signal in it.
+const fn one_triggered_ipdu(mode: TxMode, mdt_ms: u32) -> ComConfig<8, 1, 0, 1> {
+    match ComConfig::new(
+        10,
+        [TxIpduConfig {
+            name: "t",
+            len: 1,
+            mode,
+            mdt_ms,
+        }],
+        [],
+        [SignalConfig {
+            name: "s",
+            direction: SignalDirection::Tx(TxIpduId(0), TransferProperty::Triggered),
+            layout: layout(0, 8),
+            init: 0,
+            invalid: None,
+            update_bit: None,
+        }],
+    ) {
+        Ok(cfg) => cfg,
+        Err(_) => panic!("test configuration refused"),
+    }
+}
+
+/// The main-function cycles 1..=`last` in which `cfg`'s I-PDU goes out, with its signal
+/// written right after the main function of cycle `trigger`.
+fn transmissions(cfg: &'static ComConfig<8, 1, 0, 1>, trigger: u32, last: u32) -> Vec<u32> {
+    let mut com = Com::new(cfg);
+    let mut cycles = Vec::new();
+    for now in 1..=last {
+        com.main_function_tx(|_, _| {
+            cycles.push(now);
+            true
+        });
+        if now == trigger {
+            assert_eq!(
+                com.send_signal(SignalId(0), SignalValue::Unsigned(1), |_, _| {
+                    cycles.push(now);
+                    true
+                }),
+                Ok(())
+            );
+        }
+    }
+    cycles
+}
+
+/// Triggered transmissions against the periodic timing, the repetitions and the MDT of a
+/// one-byte I-PDU:
+/// - mixed, without repetitions (and so without a repetition period): a trigger leaves
+///   the period exactly as it was;
+/// - mixed, with a periodic transmission between two repetitions: the repetitions keep
+///   their own timing;
+/// - direct, repetitions 10 ms apart under a 20 ms MDT: each waits for the MDT, and there
+///   are exactly as many as configured. (They once never ended: a held repetition did not
+///   count.)
+#[test]
+fn triggers_against_period_repetitions_and_mdt() {
+    static CONFIGS: [ComConfig<8, 1, 0, 1>; 3] = [
+        one_triggered_ipdu(
+            TxMode::Mixed {
+                period_ms: 50,
+                offset_ms: 0,
+                repetitions: 0,
+                repetition_period_ms: 0,
+            },
+            0,
+        ),
+        one_triggered_ipdu(
+            TxMode::Mixed {
+                period_ms: 100,
+                offset_ms: 0,
+                repetitions: 2,
+                repetition_period_ms: 30,
+            },
+            0,
+        ),
+        one_triggered_ipdu(
+            TxMode::Direct {
+                repetitions: 2,
+                repetition_period_ms: 10,
+            },
+            20,
+        ),
+    ];
+    let [no_reps, mixed, held] = &CONFIGS;
+    // Periodic in 1, 6, 11, ...; triggered in 3.
+    assert_eq!(transmissions(no_reps, 3, 21), [1, 3, 6, 11, 16, 21]);
+    // Periodic in 1, 11, 21; triggered in 9, repeated in 12 and 15.
+    assert_eq!(transmissions(mixed, 9, 21), [1, 9, 11, 12, 15, 21]);
+    // Triggered in 1; the repetitions, due in 2 and 3, wait for the MDT: 3 and 5.
+    assert_eq!(transmissions(held, 1, 30), [1, 3, 5]);
 }
