@@ -1272,6 +1272,28 @@ fn counter_wraps_and_simultaneous_alarms_fire_in_arming_order() {
 }
 
 #[test]
+fn cancelling_an_alarm_deep_in_its_counters_list_keeps_the_others() {
+    let mut os = os();
+    assert_eq!(activate_from_isr(&mut os, LOW), Ok(()));
+    // One counter, three alarms 2, 4 and 7 ticks away: the delta list is Cb -> ActHigh -> EvMid.
+    assert_eq!(os.set_rel_alarm(AlarmId(2), 2, 0), Ok(()));
+    assert_eq!(os.set_rel_alarm(AlarmId(0), 4, 0), Ok(()));
+    assert_eq!(os.set_rel_alarm(AlarmId(1), 7, 0), Ok(()));
+    // Cancelling the last walks past the head (whose successor is another alarm).
+    assert_eq!(os.cancel_alarm(AlarmId(1)), Ok(()));
+    check(&os);
+    assert!(!os.alarm_armed(AlarmId(1)));
+    assert_eq!(os.get_alarm(AlarmId(2)), Ok(2));
+    assert_eq!(os.get_alarm(AlarmId(0)), Ok(4));
+    // Cancelling the middle one links the head to the last; both keep their times.
+    assert_eq!(os.set_rel_alarm(AlarmId(1), 7, 0), Ok(()));
+    assert_eq!(os.cancel_alarm(AlarmId(0)), Ok(()));
+    check(&os);
+    assert_eq!(os.get_alarm(AlarmId(2)), Ok(2));
+    assert_eq!(os.get_alarm(AlarmId(1)), Ok(7));
+}
+
+#[test]
 fn virtual_interrupt_controller_takes_the_highest_admitted_request() {
     let mut os = os();
     let mut irq = VirtualInterrupts::new();
