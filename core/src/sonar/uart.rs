@@ -64,9 +64,10 @@ pub enum Frame {
 /// The streaming frame decoder: one byte at a time, from any starting point.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Decoder {
-    /// The candidate frame so far: its header and up to two bytes.
-    window: [u8; FRAME_LEN - 1],
-    /// Bytes in `window` (0: hunting for a header).
+    /// The candidate frame's data bytes so far. Its header is not kept: a candidate
+    /// always starts with one.
+    data: [u8; 2],
+    /// Bytes of the candidate, its header included (0: hunting for a header).
     len: u8,
     /// Bytes that neither started a candidate nor ended in a good frame.
     stray: u32,
@@ -82,7 +83,7 @@ impl Decoder {
     /// A decoder hunting for a header.
     pub const fn new() -> Self {
         Self {
-            window: [0; FRAME_LEN - 1],
+            data: [0; 2],
             len: 0,
             stray: 0,
         }
@@ -101,11 +102,10 @@ impl Decoder {
 
     /// Takes one byte; a frame's verdict when `byte` ends a candidate.
     pub fn push(&mut self, byte: u8) -> Option<Frame> {
-        let [_, hi, lo] = self.window;
+        let [hi, lo] = self.data;
         match self.len {
             0 => {
                 if byte == HEADER {
-                    self.window[0] = byte;
                     self.len = 1;
                 } else {
                     self.stray = self.stray.saturating_add(1);
@@ -113,12 +113,12 @@ impl Decoder {
                 None
             }
             1 => {
-                self.window[1] = byte;
+                self.data[0] = byte;
                 self.len = 2;
                 None
             }
             2 => {
-                self.window[2] = byte;
+                self.data[1] = byte;
                 self.len = 3;
                 None
             }
@@ -130,10 +130,10 @@ impl Decoder {
                 }
                 // Hunt again from the byte after the bad header: the bytes before the
                 // next 0xFF among them were part of no frame, the bytes from it on are
-                // the new candidate, moved to the front of the window (the slots after
-                // it keep stale bytes, which `len` excludes). Spelt out rather than
-                // searched and copied by iterators, which Kani unwinds into a far
-                // larger program.
+                // the new candidate: that 0xFF is its header and the bytes after it its
+                // data (a stale data slot is excluded by `len`). Spelt out rather than
+                // searched and copied by iterators, which Kani unwinds into a far larger
+                // program.
                 let from: u8 = if hi == HEADER {
                     0
                 } else if lo == HEADER {
@@ -145,12 +145,8 @@ impl Decoder {
                 };
                 self.stray = self.stray.saturating_add(u32::from(from));
                 match from {
-                    0 => self.window = [hi, lo, byte],
-                    1 => {
-                        self.window[0] = lo;
-                        self.window[1] = byte;
-                    }
-                    2 => self.window[0] = byte,
+                    0 => self.data = [lo, byte],
+                    1 => self.data[0] = byte,
                     _ => {}
                 }
                 self.len = FRAME_LEN as u8 - 1 - from;
