@@ -988,26 +988,85 @@ fn locks_left_by_hooks_are_undone() {
     check(&os);
 }
 
-/// A ready queue of more than 255 records cannot be indexed by the kernel's `u8` links.
+/// A ready queue of more than 255 records cannot be indexed by the kernel's `u8` links;
+/// one of exactly 255 can, and holds every record the configuration allows.
 #[test]
-fn ready_queue_above_255_is_refused() {
-    static BIG: OsConfig<2, 0, 0, 0, 0> = match OsConfig::new(OsDescription::new(
-        [
-            TaskConfig::basic("A", 1).activations(200),
-            TaskConfig::basic("B", 2).activations(100),
-        ],
-        [],
-        [],
-        [],
-    )) {
-        Ok(c) => c,
-        Err(e) => panic!("{}", e.describe()),
-    };
+fn ready_queue_of_255_records_is_the_largest() {
+    const fn two_tasks(a: u8, b: u8) -> OsConfig<2, 0, 0, 0, 1> {
+        match OsConfig::new(OsDescription::new(
+            [
+                TaskConfig::basic("A", 1).activations(a),
+                TaskConfig::basic("B", 2).activations(b),
+            ],
+            [],
+            [],
+            [IsrConfig::cat2("I", 1)],
+        )) {
+            Ok(c) => c,
+            Err(e) => panic!("{}", e.describe()),
+        }
+    }
+    static BIG: OsConfig<2, 0, 0, 0, 1> = two_tasks(200, 100);
+    static FULL: OsConfig<2, 0, 0, 0, 1> = two_tasks(200, 55);
     assert_eq!(BIG.total_activations(), 300);
     assert_eq!(
-        Os::<2, 0, 0, 0, 0, 300>::new(&BIG).err(),
+        Os::<2, 0, 0, 0, 1, 300>::new(&BIG).err(),
         Some(ConfigError::QueueCapacity { needed: 300 })
     );
+    assert_eq!(FULL.total_activations(), 255);
+    let Ok(mut os) = Os::<2, 0, 0, 0, 1, 255>::new(&FULL) else {
+        panic!("255 records refused");
+    };
+    assert_eq!(os.start_os(OSDEFAULTAPPMODE), Ok(()));
+    assert_eq!(os.enter_isr(IsrId(0)), Ok(()));
+    for (task, n) in [(TaskId(0), 200), (TaskId(1), 55)] {
+        for _ in 0..n {
+            assert_eq!(os.activate_task(task), Ok(()));
+        }
+        assert_eq!(os.activate_task(task), Err(OsError::Limit));
+    }
+    assert_eq!(os.exit_isr(), Ok(()));
+    // Every record comes out: B's 55, then A's 200.
+    let mut order = Vec::new();
+    while let Some(task) = os.running() {
+        order.push(task);
+        assert_eq!(os.terminate_task(), Ok(()));
+    }
+    assert_eq!(order.len(), 255);
+    assert!(order[..55].iter().all(|t| *t == TaskId(1)));
+    assert!(order[55..].iter().all(|t| *t == TaskId(0)));
+}
+
+/// Before its first start a task's saved priority is its configured one (what
+/// `saved_priority` promises for a task not yet started), before and after `StartOS`.
+#[test]
+fn a_task_not_yet_started_has_its_configured_priority() {
+    let Ok(mut os) = TestOs::new(&CFG) else {
+        panic!("test configuration refused");
+    };
+    let configured = [1, 3, 5, 2, 1];
+    for (t, prio) in configured.iter().enumerate() {
+        assert_eq!(os.saved_priority(TaskId(t as u8)), Some(*prio));
+    }
+    assert_eq!(os.start_os(OSDEFAULTAPPMODE), Ok(()));
+    for (t, prio) in configured.iter().enumerate() {
+        assert_eq!(os.saved_priority(TaskId(t as u8)), Some(*prio));
+    }
+    assert_eq!(os.saved_priority(TaskId(5)), None);
+}
+
+/// Kernels compare equal only over the same configuration (a model checker merging states
+/// by equality must not merge two systems), and their `Debug` names the configuration
+/// rather than printing its tables.
+#[test]
+fn kernels_over_different_configurations_differ() {
+    let other: &'static OsConfig<5, 2, 1, 3, 3> = std::boxed::Box::leak(std::boxed::Box::new(CFG));
+    let (Ok(a), Ok(b), Ok(c)) = (TestOs::new(&CFG), TestOs::new(&CFG), TestOs::new(other)) else {
+        panic!("test configuration refused");
+    };
+    assert_eq!(a, b);
+    assert_ne!(a, c);
+    assert!(std::format!("{a:?}").contains("cfg: OsConfig,"));
 }
 
 fn os_after(setup: impl FnOnce(&mut TestOs)) -> TestOs {
