@@ -468,20 +468,23 @@ impl<const K: usize> Wheel<K> {
     }
 
     /// Files entry `k` for cycle `due`; `now` is the cycle the caller is at (already
-    /// taken). An entry already filed for the same or an earlier cycle stays where it is
-    /// (its slot re-files it when it comes up); one filed for a later cycle is moved.
+    /// taken), so an entry due in `now` or earlier is filed for `now + 1`, the first cycle
+    /// still to be taken. An entry already filed for the same or an earlier cycle stays
+    /// where it is (its slot re-files it when it comes up); one filed for a later cycle is
+    /// moved.
     fn file(&mut self, k: usize, due: u32, now: u32) {
         if k >= K {
             return;
         }
+        let next = now.wrapping_add(1);
+        let due = due.max(next);
         if self.list[k] != UNFILED {
             if self.due[k] <= due {
                 return;
             }
             self.unlink(k);
         }
-        // `now`'s own slot is taken already: the next one to be taken is `now + 1`'s.
-        self.push(k, due, now.wrapping_add(1));
+        self.push(k, due, next);
     }
 
     /// Puts entry `k` at the front of the list for cycle `due`, where `next` is the first
@@ -903,7 +906,8 @@ where
             if periodic_due {
                 self.tx_next_periodic[i] = now + timing.period;
             }
-            if self.tx_reps_left[i] > 0 && (rep_due || deferred_due) {
+            // The next repetition's time (read only while repetitions are left).
+            if rep_due || deferred_due {
                 self.tx_next_rep[i] = now + timing.repetition_period;
             }
         }
@@ -923,8 +927,7 @@ where
             next = next.min(self.mdt_end(i));
         }
         if next != u32::MAX {
-            self.tx_wheel
-                .file(i, next.max(self.mdt_end(i)).max(now + 1), now);
+            self.tx_wheel.file(i, next.max(self.mdt_end(i)), now);
         }
     }
 

@@ -1612,3 +1612,60 @@ fn triggers_against_period_repetitions_and_mdt() {
     // Triggered in 1; the repetitions, due in 2 and 3, wait for the MDT: 3 and 5.
     assert_eq!(transmissions(held, 1, 30), [1, 3, 5]);
 }
+
+/// A direct I-PDU leaves the timer wheel once its last repetition is out, so the main
+/// function's later cycles are idle: nothing is filed, rather than the I-PDU woken every
+/// cycle to find nothing due. The same with repetitions under an MDT and without either.
+#[test]
+fn a_direct_ipdu_leaves_the_wheel_when_its_repetitions_are_done() {
+    static CONFIGS: [ComConfig<8, 1, 0, 1>; 2] = [
+        one_triggered_ipdu(
+            TxMode::Direct {
+                repetitions: 2,
+                repetition_period_ms: 10,
+            },
+            20,
+        ),
+        one_triggered_ipdu(
+            TxMode::Direct {
+                repetitions: 0,
+                repetition_period_ms: 0,
+            },
+            0,
+        ),
+    ];
+    for (cfg, expected) in CONFIGS.iter().zip([&[1, 3, 5][..], &[1][..]]) {
+        let mut com = Com::new(cfg);
+        let mut sent = Vec::new();
+        for now in 1..=300u32 {
+            com.main_function_tx(|_, _| {
+                sent.push(now);
+                true
+            });
+            if now == 1 {
+                let write = com.send_signal(SignalId(0), SignalValue::Unsigned(1), |_, _| {
+                    sent.push(now);
+                    true
+                });
+                assert_eq!(write, Ok(()));
+            }
+            if sent.len() == expected.len() && sent.last() < Some(&now) {
+                assert_eq!(com.tx_wheel.list[0], UNFILED, "cycle {now}");
+                assert!(com.tx_wheel.head.iter().all(|h| *h == NIL), "cycle {now}");
+            }
+        }
+        assert_eq!(sent, expected);
+    }
+}
+
+/// An entry filed for the cycle the caller is at, or one before it, is taken in the next
+/// cycle (the caller's own slot is taken already), not a wheel revolution later.
+#[test]
+fn an_entry_filed_for_a_past_cycle_is_taken_in_the_next() {
+    for due in [0, 99, 100] {
+        let mut wheel = Wheel::<1>::new();
+        wheel.file(0, due, 100);
+        assert!(wheel.busy(101), "due {due}");
+        assert_eq!(wheel.take(101), 0, "due {due}");
+    }
+}
