@@ -1055,6 +1055,38 @@ fn a_task_not_yet_started_has_its_configured_priority() {
     assert_eq!(os.saved_priority(TaskId(5)), None);
 }
 
+/// The inspection functions (what the oracles read) report the kernel's state: the
+/// highest ready priority beside the running task, and a waiting task's mask and events.
+#[test]
+fn inspection_reports_ready_priorities_masks_and_events() {
+    let mut os = os();
+    assert_eq!(os.highest_ready(), None);
+    assert_eq!(activate_from_isr(&mut os, LOW), Ok(()));
+    assert_eq!(os.running(), Some(LOW));
+    assert_eq!(os.highest_ready(), None, "the running task is not ready");
+    assert_eq!(os.activate_task(LOW2), Ok(()));
+    assert_eq!(os.highest_ready(), Some(1));
+    assert_eq!(os.activate_task(MID), Ok(()));
+    assert_eq!(os.running(), Some(MID));
+    assert_eq!(os.highest_ready(), Some(1));
+    assert_eq!(os.activate_task(NP), Ok(()));
+    assert_eq!(os.highest_ready(), Some(2));
+    assert_eq!((os.wait_mask(MID), os.events(MID)), (0, 0));
+    assert_eq!(os.wait_event(0b10), Ok(()));
+    // Mid waits; Np (priority 2) runs.
+    assert_eq!(os.running(), Some(NP));
+    assert_eq!((os.wait_mask(MID), os.events(MID)), (0b10, 0));
+    assert_eq!(os.set_event(MID, 0b01), Ok(()));
+    assert_eq!((os.wait_mask(MID), os.events(MID)), (0b10, 0b01));
+    assert!(os.is_waiting(MID));
+    assert_eq!(os.set_event(MID, 0b10), Ok(()));
+    // Np is non-preemptive: Mid is ready, with both events and no mask.
+    assert_eq!(os.running(), Some(NP));
+    assert_eq!(os.highest_ready(), Some(3));
+    assert_eq!((os.wait_mask(MID), os.events(MID)), (0, 0b11));
+    check(&os);
+}
+
 /// Kernels compare equal only over the same configuration (a model checker merging states
 /// by equality must not merge two systems), and their `Debug` names the configuration
 /// rather than printing its tables.
