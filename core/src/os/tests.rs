@@ -128,6 +128,8 @@ impl Hooks<TestOs> for Recorder {
         }
     }
     fn error_hook(os: &mut TestOs, error: OsError) {
+        // OSErrorGetServiceId names the service of the failed call.
+        assert_eq!(os.error_service_id(), os.error_call().map(|c| c.id()));
         let call = os.error_call().unwrap_or(ServiceCall::HookMissingEnd);
         let isr = os.get_isr_id().unwrap_or(None);
         os.hooks_mut().push(Seen::Error(error, call, isr));
@@ -1084,6 +1086,11 @@ fn inspection_reports_ready_priorities_masks_and_events() {
     assert_eq!(os.running(), Some(NP));
     assert_eq!(os.highest_ready(), Some(3));
     assert_eq!((os.wait_mask(MID), os.events(MID)), (0, 0b11));
+    // Np runs at the scheduler's ceiling (its internal resource); no priority beyond the
+    // last task.
+    assert_eq!(os.dispatch_priority(NP), Some(5));
+    assert_eq!(os.dispatch_priority(MID), Some(3));
+    assert_eq!(os.dispatch_priority(TaskId(5)), None);
     check(&os);
 }
 
