@@ -1391,6 +1391,80 @@ fn cancelling_an_alarm_deep_in_its_counters_list_keeps_the_others() {
     assert_eq!(os.get_alarm(AlarmId(1)), Ok(7));
 }
 
+/// Alarms on two counters: each alarm follows its own counter (its limits, its base, its
+/// ticks), and cancelling one leaves the other counter's list alone.
+#[test]
+fn alarms_follow_their_own_counter() {
+    static TWO: OsConfig<2, 0, 2, 2, 1> = match OsConfig::new(OsDescription::new(
+        [TaskConfig::basic("A", 1), TaskConfig::basic("B", 2)],
+        [
+            COUNTER,
+            CounterConfig {
+                max_allowed_value: 9,
+                ticks_per_base: 2,
+                min_cycle: 2,
+            },
+        ],
+        [
+            AlarmConfig::new(
+                "OnFirst",
+                CounterId(0),
+                AlarmAction::ActivateTask(TaskId(0)),
+            ),
+            AlarmConfig::new(
+                "OnSecond",
+                CounterId(1),
+                AlarmAction::ActivateTask(TaskId(1)),
+            ),
+        ],
+        [IsrConfig::cat2("Tick", 1)],
+    )) {
+        Ok(c) => c,
+        Err(e) => panic!("{}", e.describe()),
+    };
+    let Ok(mut os) = Os::<2, 0, 2, 2, 1, 2>::new(&TWO) else {
+        panic!("test configuration refused");
+    };
+    let (first, second) = (AlarmId(0), AlarmId(1));
+    assert_eq!(os.start_os(OSDEFAULTAPPMODE), Ok(()));
+    assert_eq!(os.enter_isr(IsrId(0)), Ok(()));
+    assert_eq!(
+        os.get_alarm_base(second),
+        Ok(AlarmBase {
+            max_allowed_value: 9,
+            ticks_per_base: 2,
+            min_cycle: 2
+        })
+    );
+    // The second counter's limits: at most 9 ticks, cycles of at least 2.
+    assert_eq!(os.set_rel_alarm(second, 10, 0), Err(OsError::Value));
+    assert_eq!(os.set_rel_alarm(second, 3, 1), Err(OsError::Value));
+    assert_eq!(os.set_rel_alarm(first, 50, 0), Ok(()));
+    assert_eq!(os.set_rel_alarm(second, 3, 0), Ok(()));
+    // Ticks of the first counter do not bring the second alarm nearer.
+    for _ in 0..3 {
+        assert_eq!(os.increment_counter(CounterId(0)), Ok(()));
+    }
+    assert_eq!(os.get_alarm(first), Ok(47));
+    assert_eq!(os.get_alarm(second), Ok(3));
+    // Cancelling the first leaves the second armed, and the second expires on its own
+    // counter's third tick.
+    assert_eq!(os.cancel_alarm(first), Ok(()));
+    assert!(os.alarm_armed(second));
+    for _ in 0..2 {
+        assert_eq!(os.increment_counter(CounterId(1)), Ok(()));
+    }
+    assert_eq!(os.task_state(TaskId(1)), Some(TaskState::Suspended));
+    assert_eq!(os.increment_counter(CounterId(1)), Ok(()));
+    assert_eq!(os.task_state(TaskId(1)), Some(TaskState::Ready));
+    assert!(!os.alarm_armed(second));
+    // An absolute alarm on the second counter wraps at its own modulus (10): value 1 is
+    // 8 ticks from 3.
+    assert_eq!(os.set_abs_alarm(second, 1, 0), Ok(()));
+    assert_eq!(os.get_alarm(second), Ok(8));
+    assert_eq!(os.exit_isr(), Ok(()));
+}
+
 #[test]
 fn virtual_interrupt_controller_takes_the_highest_admitted_request() {
     let mut os = os();
