@@ -1462,6 +1462,14 @@ fn alarms_follow_their_own_counter() {
     // 8 ticks from 3.
     assert_eq!(os.set_abs_alarm(second, 1, 0), Ok(()));
     assert_eq!(os.get_alarm(second), Ok(8));
+    // The limits are inclusive: an increment, a start and a cycle of the maximum are
+    // accepted.
+    assert_eq!(os.cancel_alarm(second), Ok(()));
+    assert_eq!(os.set_rel_alarm(second, 9, 9), Ok(()));
+    assert_eq!(os.get_alarm(second), Ok(9));
+    assert_eq!(os.cancel_alarm(second), Ok(()));
+    assert_eq!(os.set_abs_alarm(second, 9, 2), Ok(()));
+    assert_eq!(os.get_alarm(second), Ok(6));
     assert_eq!(os.exit_isr(), Ok(()));
 }
 
