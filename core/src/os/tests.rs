@@ -1470,6 +1470,12 @@ fn alarms_follow_their_own_counter() {
     assert_eq!(os.cancel_alarm(second), Ok(()));
     assert_eq!(os.set_abs_alarm(second, 9, 2), Ok(()));
     assert_eq!(os.get_alarm(second), Ok(6));
+    // Elapsed ticks on the second counter (now 3): none since 3, two since 1, four since
+    // 9 (wrapped at 10).
+    assert_eq!(os.get_elapsed_value(CounterId(1), 3), Ok((3, 0)));
+    assert_eq!(os.get_elapsed_value(CounterId(1), 1), Ok((3, 2)));
+    assert_eq!(os.get_elapsed_value(CounterId(1), 9), Ok((3, 4)));
+    assert_eq!(os.get_elapsed_value(CounterId(1), 10), Err(OsError::Value));
     assert_eq!(os.exit_isr(), Ok(()));
 }
 
