@@ -17,7 +17,7 @@ const COUNTER: CounterConfig = CounterConfig {
 // 2 High(5, basic), 3 Np(2, non-preemptive basic), 4 Low2(1, basic, 2 activations).
 // Alarms on counter 0: activate High, set event 1 of Mid, callback 7.
 // ISRs: 0 Tick (cat. 2, priority 1), 1 Can (cat. 2, priority 3, uses R1), 2 Fast (cat. 1, 6).
-static CFG: OsConfig<5, 2, 1, 3, 3> = match OsConfig::new(
+const CONFIG: OsConfig<5, 2, 1, 3, 3> = match OsConfig::new(
     OsDescription::new(
         [
             TaskConfig::basic("Low", 1).activations(3).uses(0b01),
@@ -48,6 +48,7 @@ static CFG: OsConfig<5, 2, 1, 3, 3> = match OsConfig::new(
     Ok(c) => c,
     Err(e) => panic!("{}", e.describe()),
 };
+static CFG: OsConfig<5, 2, 1, 3, 3> = CONFIG;
 
 /// What the hooks saw, in order (a fixed ring, so the kernel stays `Copy`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -1099,7 +1100,9 @@ fn inspection_reports_ready_priorities_masks_and_events() {
 /// rather than printing its tables.
 #[test]
 fn kernels_over_different_configurations_differ() {
-    let other: &'static OsConfig<5, 2, 1, 3, 3> = std::boxed::Box::leak(std::boxed::Box::new(CFG));
+    // The same tables at another address: another configuration.
+    static OTHER: OsConfig<5, 2, 1, 3, 3> = CONFIG;
+    let other = &OTHER;
     let (Ok(a), Ok(b), Ok(c)) = (TestOs::new(&CFG), TestOs::new(&CFG), TestOs::new(other)) else {
         panic!("test configuration refused");
     };
