@@ -61,13 +61,13 @@ const BUDGET_S: &[(&str, u32)] = &[
     ("cross", 30),
     ("miri", 400),
     ("model", 45),
-    ("coverage", 240),
+    ("coverage", 200),
     ("mutants", 70),
-    ("mutation", 200),
+    ("mutation", 260),
     ("qemu", 100),
     ("differential", 15),
-    ("interop", 45),
-    ("fuzz", 210),
+    ("interop", 35),
+    ("fuzz", 200),
     ("bench", 115),
 ];
 
