@@ -124,7 +124,25 @@ impl<const Q: usize> ReadyQueue<Q> {
             queue: self,
             slot: self.head[p],
             last: self.tail[p],
+            left: Q,
         }
+    }
+
+    /// The priorities with ready entries, lowest first. Each holds at least one of the
+    /// pool's `Q` records, so there are at most `Q` of them: the walk is bounded by the
+    /// configuration, not by the bitmap's 64 bits (which is what lets a model checker
+    /// unwind it only `Q` times).
+    pub(crate) fn levels(&self) -> impl Iterator<Item = u8> + Clone {
+        let mut bits = self.bitmap;
+        core::iter::from_fn(move || {
+            if bits == 0 {
+                return None;
+            }
+            let p = bits.trailing_zeros() as u8;
+            bits &= bits - 1;
+            Some(p)
+        })
+        .take(Q)
     }
 
     /// Bitmap of non-empty priorities.
@@ -133,17 +151,25 @@ impl<const Q: usize> ReadyQueue<Q> {
     }
 }
 
-/// Iterator over one priority's entries, oldest first.
+/// Iterator over one priority's entries, oldest first. A list never holds more than the
+/// pool's `Q` records, and the walk stops there whatever the links say.
 #[derive(Clone)]
 pub(crate) struct Iter<'a, const Q: usize> {
     queue: &'a ReadyQueue<Q>,
     slot: u8,
     last: u8,
+    left: usize,
 }
 
 impl<const Q: usize> Iterator for Iter<'_, Q> {
     type Item = u8;
     fn next(&mut self) -> Option<u8> {
+        // The count goes down before anything else is looked at, so that it falls by one
+        // on every call whatever the links hold.
+        if self.left == 0 {
+            return None;
+        }
+        self.left -= 1;
         let s = self.slot as usize;
         if s >= Q {
             return None;
@@ -159,18 +185,7 @@ impl<const Q: usize> Iterator for Iter<'_, Q> {
 
 impl<const Q: usize> PartialEq for ReadyQueue<Q> {
     fn eq(&self, other: &Self) -> bool {
-        if self.bitmap != other.bitmap {
-            return false;
-        }
-        let mut levels = self.bitmap;
-        while levels != 0 {
-            let p = levels.trailing_zeros() as u8;
-            if !self.iter(p).eq(other.iter(p)) {
-                return false;
-            }
-            levels &= levels - 1;
-        }
-        true
+        self.bitmap == other.bitmap && self.levels().all(|p| self.iter(p).eq(other.iter(p)))
     }
 }
 
@@ -179,14 +194,11 @@ impl<const Q: usize> Eq for ReadyQueue<Q> {}
 impl<const Q: usize> Hash for ReadyQueue<Q> {
     fn hash<H: Hasher>(&self, state: &mut H) {
         self.bitmap.hash(state);
-        let mut levels = self.bitmap;
-        while levels != 0 {
-            let p = levels.trailing_zeros() as u8;
+        for p in self.levels() {
             for t in self.iter(p) {
                 t.hash(state);
             }
             NIL.hash(state);
-            levels &= levels - 1;
         }
     }
 }
@@ -285,6 +297,23 @@ mod tests {
         full_pool_refuses_the_next_record::<1>();
         full_pool_refuses_the_next_record::<8>();
         full_pool_refuses_the_next_record::<255>();
+    }
+
+    /// A list whose links were corrupted into a cycle is walked at most `Q` entries deep,
+    /// and the levels of a bitmap with more bits than records at most `Q` wide: the walks
+    /// end whatever the state holds.
+    #[test]
+    fn walks_end_after_the_pool_size_even_on_a_corrupted_queue() {
+        let mut q = ReadyQueue::<2>::new();
+        assert_eq!(q.push_back(5, 7), Ok(()));
+        assert_eq!(q.push_back(5, 8), Ok(()));
+        // The tail's link, never read on a sound list, now points back to the head, and
+        // the tail is moved off the list so the walk never meets it.
+        q.next[1] = 0;
+        q.tail[5] = NIL - 1;
+        assert_eq!(q.iter(5).take(10).collect::<Vec<_>>(), [7, 8]);
+        q.bitmap |= 0b111;
+        assert_eq!(q.levels().collect::<Vec<_>>(), [0, 1]);
     }
 
     /// FIFO per priority, a preempted task back at the head, the highest priority first.

@@ -362,7 +362,11 @@ where
     });
     let mut dispatched = 0;
     let mut levels = before.ready_bitmap() | after.ready_bitmap();
-    while levels != 0 {
+    // Each queue has at most `Q` non-empty priorities (one record each at least).
+    for _ in 0..2 * Q {
+        if levels == 0 {
+            break;
+        }
         let p = levels.trailing_zeros() as u8;
         levels &= levels - 1;
         let mut new = after.ready_at(p).peekable();

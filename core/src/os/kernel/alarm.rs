@@ -107,7 +107,11 @@ where
         let mut prev = NONE;
         let mut node = self.counter_head.get(c).copied().unwrap_or(NONE);
         let mut rest = delay;
-        while (node as usize) < A && rest >= self.alarm_delta[node as usize] {
+        // A list holds at most the `A` alarms: the walk is bounded by the configuration.
+        for _ in 0..A {
+            if node as usize >= A || rest < self.alarm_delta[node as usize] {
+                break;
+            }
             rest -= self.alarm_delta[node as usize];
             prev = node;
             node = self.alarm_next[node as usize];
@@ -137,7 +141,10 @@ where
             self.counter_head[c] = next;
         } else {
             let mut node = self.counter_head[c];
-            while (node as usize) < A {
+            for _ in 0..A {
+                if node as usize >= A {
+                    break;
+                }
                 if self.alarm_next[node as usize] as usize == a {
                     self.alarm_next[node as usize] = next;
                     break;
@@ -189,7 +196,10 @@ where
         }
         let mut node = self.counter_head[self.alarm_counter(a)];
         let mut ticks = 0u64;
-        while (node as usize) < A {
+        for _ in 0..A {
+            if node as usize >= A {
+                break;
+            }
             ticks += self.alarm_delta[node as usize];
             if node as usize == a {
                 break;
@@ -366,7 +376,9 @@ where
     /// Pops and runs every alarm of counter `c` that is due now.
     #[inline(never)]
     fn expire(&mut self, c: usize) {
-        loop {
+        // At most the `A` alarms are due: one re-armed here, or armed by an action, is
+        // at least one tick away (`arm` takes `delay >= 1`), so it is behind them.
+        for _ in 0..A {
             // A `ShutdownOS` inside an action (from `ErrorHook` or a callback) disarms
             // every alarm, so the walk ends there too.
             let a = self.counter_head[c] as usize;

@@ -60,10 +60,13 @@ where
 
     /// The active ISRs, outermost first, each with the processor priority it runs at now.
     pub fn active_isrs(&self) -> impl Iterator<Item = (IsrId, u8)> + '_ {
+        let depth = self.isr_depth as usize;
+        // Over the whole stack (`I` frames) and stopping at `depth`: the walk's length is
+        // the configuration's, not the state's.
         self.isr_stack
             .iter()
-            .take(self.isr_depth as usize)
-            .map(|frame| (IsrId(frame.isr), frame.level))
+            .enumerate()
+            .map_while(move |(i, frame)| (i < depth).then_some((IsrId(frame.isr), frame.level)))
     }
 
     /// The processor priority and context the active ISR at nesting depth `depth`

@@ -462,14 +462,10 @@ where
 
     /// Number of ready-queue records of `task` (activations not running or waiting).
     pub fn queued_records(&self, task: super::TaskId) -> usize {
-        let mut levels = self.ready.bitmap();
-        let mut n = 0;
-        while levels != 0 {
-            let p = levels.trailing_zeros() as u8;
-            n += self.ready.iter(p).filter(|t| *t == task.0).count();
-            levels &= levels - 1;
-        }
-        n
+        self.ready
+            .levels()
+            .map(|p| self.ready.iter(p).filter(|t| *t == task.0).count())
+            .sum()
     }
 
     /// The priority a task runs at when holding no resource: its own, or the

@@ -62,6 +62,8 @@ where
         self.resource_stack(top)
     }
 
+    /// The stack from `top` down. It holds at most the `R` resources and `RES_SCHEDULER`,
+    /// and the walk stops there whatever the links say.
     fn resource_stack(&self, mut top: u8) -> impl Iterator<Item = ResourceId> + '_ {
         core::iter::from_fn(move || {
             let id = ResourceId(top);
@@ -69,6 +71,7 @@ where
             top = state.next;
             Some(id)
         })
+        .take(R + 1)
     }
 
     /// The ceiling of a resource (a processor priority).
@@ -81,10 +84,14 @@ where
     }
 
     pub(super) fn active_frame(&self, isr: IsrId) -> Option<&IsrFrame> {
+        let depth = self.isr_depth as usize;
+        // Over the whole stack (`I` frames), not a slice of `depth`: the walk's length is
+        // the configuration's, not the state's.
         self.isr_stack
-            .get(..self.isr_depth as usize)?
             .iter()
-            .find(|frame| frame.isr == isr.0)
+            .enumerate()
+            .find(|(i, frame)| *i < depth && frame.isr == isr.0)
+            .map(|(_, frame)| frame)
     }
 
     fn res_state(&self, id: ResourceId) -> Result<&ResState, OsError> {
@@ -254,19 +261,22 @@ where
         };
         let holder = Holder::Isr(depth);
         let mut any = false;
-        loop {
+        // Each round releases one of at most `R + 1` held resources.
+        for _ in 0..=R {
             let top = self.holder_top(holder);
             if top == NO_RES || self.release_top(holder, ResourceId(top)).is_err() {
-                return any;
+                break;
             }
             any = true;
         }
+        any
     }
 
     /// Releases everything the running task holds (its body returned holding resources).
     pub(super) fn release_all_of_task(&mut self, t: usize) {
         let holder = Holder::Task(t);
-        loop {
+        // Each round releases one of at most `R + 1` held resources.
+        for _ in 0..=R {
             let top = self.holder_top(holder);
             if top == NO_RES || self.release_top(holder, ResourceId(top)).is_err() {
                 return;
