@@ -56,19 +56,19 @@ pub const STAGES: &[&str] = &[
 const BUDGET_S: &[(&str, u32)] = &[
     ("setup", 360),
     ("fmt", 10),
-    ("clippy", 70),
+    ("clippy", 65),
     ("test", 175),
-    ("cross", 30),
-    ("miri", 400),
-    ("model", 45),
-    ("coverage", 200),
+    ("cross", 25),
+    ("miri", 460),
+    ("model", 40),
+    ("coverage", 195),
     ("mutants", 70),
     ("mutation", 260),
-    ("qemu", 100),
-    ("differential", 15),
-    ("interop", 35),
+    ("qemu", 90),
+    ("differential", 10),
+    ("interop", 30),
     ("fuzz", 200),
-    ("bench", 115),
+    ("bench", 95),
 ];
 
 fn budget_s(stage: &str) -> u32 {
