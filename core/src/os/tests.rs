@@ -1850,6 +1850,26 @@ fn from_start_any_isr_ticking_the_counter_keeps_the_invariants() {
         .for_each(|i| first_step_keeps_the_invariants(Step::IsrTick(i)));
 }
 
+/// Two steps: the ISR activates task A (so A runs), then `ChainTask` of any task id.
+#[test]
+#[cfg_attr(kani, kani::proof, kani::unwind(10))]
+fn after_an_isr_started_a_any_chain_keeps_the_invariants() {
+    bolero::check!()
+        .with_type::<u8>()
+        .cloned()
+        .for_each(|t| second_step_keeps_the_invariants(0, 0, Step::Chain(t)));
+}
+
+/// Two steps: the ISR activates task A (so A runs), then `ActivateTask` of any task id.
+#[test]
+#[cfg_attr(kani, kani::proof, kani::unwind(10))]
+fn after_an_isr_started_a_any_activation_keeps_the_invariants() {
+    bolero::check!()
+        .with_type::<u8>()
+        .cloned()
+        .for_each(|t| second_step_keeps_the_invariants(0, 0, Step::Activate(t)));
+}
+
 // One harness per group of step kinds: any first ISR, then any step of the group with any
 // arguments. Bolero tests and fuzz inputs; not Kani proofs: every loop the kernel and the
 // oracles run is bounded by the configuration's counts, but a second step still does not
