@@ -1871,10 +1871,10 @@ fn after_an_isr_started_a_any_activation_keeps_the_invariants() {
 }
 
 // One harness per group of step kinds: any first ISR, then any step of the group with any
-// arguments. Bolero tests and fuzz inputs; not Kani proofs: every loop the kernel and the
-// oracles run is bounded by the configuration's counts, but a second step still does not
-// finish under Kani in 300 s, even one kind of it after one concrete first step (README,
-// "Kani"), and a marked harness that does not finish proves nothing.
+// arguments. Bolero tests and fuzz inputs; not Kani proofs: one kind of second step after
+// one concrete first step verifies (the two proofs above), but any second step after any
+// first one does not finish under Kani in 300 s (README, "Kani"), and a marked harness that
+// does not finish proves nothing.
 
 /// Task management: ActivateTask, TerminateTask, ChainTask, Schedule, a body's return.
 #[test]
