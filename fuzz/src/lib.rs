@@ -71,6 +71,10 @@ pub fn decode_service(op: u8, a: u8, b: u8, c: u8) -> Service {
 #[cfg(test)]
 mod targets {
     use super::decode_service;
+    use cw_can::codec;
+    use cw_can::dbc::Database;
+    use cw_can::log::CandumpReader;
+    use cw_can::report::{self, Format};
     use cw_core::can::{slcan, CanFrame, CanId};
     use cw_core::com::signal::{spec, ByteOrder, SignalLayout, Signedness};
     use cw_core::os::spec::call_and_check;
@@ -216,5 +220,69 @@ mod targets {
         bolero::check!()
             .with_type::<Vec<u8>>()
             .for_each(|bytes: &Vec<u8>| assert!(uart::spec::matches_reference(bytes)));
+    }
+
+    /// Any DBC and any log, as `cw-can decode` reads them (the input's bytes up to the
+    /// first 0 byte are the DBC, in UTF-8 or Windows-1252; the rest is a candump log): the
+    /// DBC loads or is refused with a reason, every log line is an entry or an error that
+    /// names its line, and every entry decodes or is refused, then renders in every output
+    /// form, never a panic. Each decoded frame's signals encode back into the same bits.
+    #[test]
+    fn dbc_and_log() {
+        bolero::check!().for_each(|bytes: &[u8]| {
+            let (dbc, log) = match bytes.iter().position(|b| *b == 0) {
+                Some(at) => (&bytes[..at], &bytes[at + 1..]),
+                None => (bytes, &[][..]),
+            };
+            let Ok(db) = Database::from_bytes(dbc) else {
+                return;
+            };
+            let lines = log.split(|b| *b == b'\n').count();
+            for item in CandumpReader::new(log) {
+                let entry = match item {
+                    Ok(entry) => entry,
+                    Err(e) => {
+                        assert!((1..=lines).contains(&e.line), "{e}");
+                        continue;
+                    }
+                };
+                let Ok(decoded) = report::decode(&db, &entry) else {
+                    continue;
+                };
+                for format in [Format::Text, Format::Json, Format::Csv] {
+                    assert!(!decoded.render(format).is_empty());
+                }
+                if let Some((name, signals)) = &decoded.message {
+                    check_reencodes(&db, name, &entry.frame.data, signals);
+                }
+            }
+        });
+    }
+
+    /// The decoded raw values, encoded again without scaling, give back the frame's bits
+    /// of every present signal.
+    fn check_reencodes(db: &Database, name: &str, data: &[u8], signals: &[codec::Decoded<'_>]) {
+        let Some(message) = db.by_name(name) else {
+            panic!("{name} decoded but not in the database")
+        };
+        let Ok(bits) = codec::encode_raw(message, signals) else {
+            panic!("{name}: the decoded values do not encode again")
+        };
+        for d in signals {
+            let mut theirs = [0u8; 64];
+            let mut ours = [0u8; 64];
+            for (to, from) in theirs.iter_mut().zip(data) {
+                *to = *from;
+            }
+            for (to, from) in ours.iter_mut().zip(&bits) {
+                *to = *from;
+            }
+            assert_eq!(
+                d.signal.layout.unpack_raw(&theirs),
+                d.signal.layout.unpack_raw(&ours),
+                "{name}.{}",
+                d.signal.name
+            );
+        }
     }
 }

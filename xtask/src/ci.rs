@@ -16,6 +16,7 @@ pub const FUZZ_TARGETS: &[&str] = &[
     "targets::slcan_stream",
     "targets::scenario_text",
     "targets::sensor_uart_stream",
+    "targets::dbc_and_log",
 ];
 
 /// How long the `fuzz` stage runs each target (cargo-bolero `-T`).
@@ -315,7 +316,10 @@ fn run_stage(stage: &str) -> Result {
         "mutants" => crate::mutants::run(),
         "mutation" => crate::mutation::run(&crate::mutation::Options::ci()),
         "qemu" => crate::qemu::run(&crate::qemu::Options::ci()),
-        "differential" => differential::run(&differential::Options::default()),
+        "differential" => {
+            differential::run(&differential::Options::default())?;
+            crate::dbc_differential::run(&crate::dbc_differential::Options::default())
+        }
         "interop" => interop(),
         "fuzz" => {
             for target in FUZZ_TARGETS {

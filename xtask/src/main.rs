@@ -4,6 +4,8 @@
 //!   from installing the tools (`setup`) to the instruction counts (`bench`);
 //! - `cargo xtask differential [--cases N] [--seed S]`: the Com signal codec against
 //!   cantools on random layouts, values and PDU lengths;
+//! - `cargo xtask dbc-differential [--frames N] [--seed S]`: `cw-can`'s DBC decoding and
+//!   encoding against cantools on random DBCs;
 //! - `cargo xtask callgrind`: instructions per call of the codec and scheduler probes;
 //! - `cargo xtask coverage [--write]`: branch coverage of the core, every branch not taken
 //!   both ways explained in `docs/coverage.md`;
@@ -24,6 +26,7 @@
 mod callgrind;
 mod ci;
 mod coverage;
+mod dbc_differential;
 mod differential;
 mod json;
 mod mutants;
@@ -51,6 +54,9 @@ commands:
         the first failing stage unless --keep-going. Each stage prints its time budget.
   differential [--cases N] [--seed SEED]
         compare the Com signal codec with cantools on N random cases (default 20000)
+  dbc-differential [--frames N] [--seed SEED]
+        compare cw-can's decoding and encoding with cantools on random DBCs, at least N
+        frames (default 12000)
   callgrind [--binary PATH]
         count instructions per call of each probe in core/examples/callgrind_probe.rs
         (built in release), or in a prebuilt probe binary taking `<op> <iterations>`
@@ -109,6 +115,7 @@ fn run(args: &[String]) -> Result {
             ci::run(&ci::Options::parse(&["--only".into(), "setup".into()])?)
         }
         "differential" => differential::run(&differential::Options::parse(rest)?),
+        "dbc-differential" => dbc_differential::run(&dbc_differential::Options::parse(rest)?),
         "callgrind" => callgrind::run(&callgrind::Options::parse(rest)?),
         "qemu" => qemu::run(&qemu::Options::parse(rest)?),
         "qemu-runner" => qemu::runner(rest),

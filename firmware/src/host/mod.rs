@@ -2,7 +2,6 @@
 //! virtual time: the 1 ms timer interrupt, the CAN interrupt, the sensor that sees the
 //! scenario's obstacle, and a PC on the bus.
 
-pub mod cantool;
 pub mod scenario;
 pub mod sim;
 

@@ -1,0 +1,190 @@
+//! `cw-can`: read CAN logs back with a DBC, or build a frame from signal values (the
+//! engineer's PC of paper §4.4; what `python -m cantools decode` and `encode` do).
+//!
+//! ```text
+//! cw-can decode --dbc firmware/ecu.dbc can.log            # or - for standard input
+//! cw-can decode --dbc firmware/ecu.dbc --format json can.log
+//! cw-can encode --dbc firmware/ecu.dbc ThresholdConfig RedBelow=500 YellowBelow=1000
+//! ```
+//!
+//! Exit status: 0 when every line was read and decoded; 1 when some line was not (each
+//! reported on standard error as `FILE:LINE: what is wrong`, the others still decoded;
+//! `--strict` stops at the first); 2 when nothing could be done (usage, an unreadable or
+//! refused DBC, an unreadable log, a value that cannot be encoded).
+
+#![forbid(unsafe_code)]
+// Input from outside (a DBC, a log line, a value typed by the engineer) is an error value
+// with its line, never a panic.
+#![cfg_attr(
+    not(test),
+    warn(
+        clippy::unwrap_used,
+        clippy::expect_used,
+        clippy::panic,
+        clippy::indexing_slicing
+    )
+)]
+
+use std::io::{BufRead, Write};
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use clap::{Parser, Subcommand};
+use cw_can::codec::{self, Input};
+use cw_can::dbc::Database;
+use cw_can::frame::{Frame, FrameKind};
+use cw_can::log::CandumpReader;
+use cw_can::report::{self, Format};
+
+/// Decode CAN logs with a DBC, or encode signal values into a frame.
+#[derive(Parser)]
+#[command(name = "cw-can", version, about, long_about = None)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Decode candump logs (`candump -L`): every frame, with its message and signals.
+    Decode {
+        /// The DBC file (UTF-8 or Windows-1252).
+        #[arg(long)]
+        dbc: PathBuf,
+        /// Stop at the first bad line instead of reporting it and going on.
+        #[arg(long)]
+        strict: bool,
+        /// Output form.
+        #[arg(long, value_enum, default_value_t = Format::Text)]
+        format: Format,
+        /// Log files, or - for standard input.
+        #[arg(required = true)]
+        logs: Vec<PathBuf>,
+    },
+    /// Encode signal values into a frame of a message, printed as `ID#DATA`.
+    Encode {
+        /// The DBC file (UTF-8 or Windows-1252).
+        #[arg(long)]
+        dbc: PathBuf,
+        /// The message's name.
+        message: String,
+        /// `SIGNAL=VALUE`: a number or a name from the signal's value table.
+        values: Vec<String>,
+    },
+}
+
+/// Something that stops the run (exit status 2).
+struct Fatal(String);
+
+fn load(path: &PathBuf) -> Result<Database, Fatal> {
+    let bytes =
+        std::fs::read(path).map_err(|e| Fatal(format!("cannot read {}: {e}", path.display())))?;
+    Database::from_bytes(&bytes).map_err(|e| Fatal(format!("{}: {e}", path.display())))
+}
+
+fn out_err(e: std::io::Error) -> Fatal {
+    Fatal(format!("standard output: {e}"))
+}
+
+/// Decodes every log; returns how many lines were bad.
+fn decode(dbc: &PathBuf, strict: bool, format: Format, logs: &[PathBuf]) -> Result<usize, Fatal> {
+    let db = load(dbc)?;
+    let stdout = std::io::stdout();
+    let mut out = std::io::BufWriter::new(stdout.lock());
+    if format == Format::Csv {
+        writeln!(out, "{}", report::CSV_HEADER).map_err(out_err)?;
+    }
+    let mut bad = 0;
+    for log in logs {
+        let name = log.display().to_string();
+        let reader: Box<dyn BufRead> = if name == "-" {
+            Box::new(std::io::stdin().lock())
+        } else {
+            Box::new(std::io::BufReader::new(
+                std::fs::File::open(log).map_err(|e| Fatal(format!("cannot read {name}: {e}")))?,
+            ))
+        };
+        let mut reader = CandumpReader::new(reader);
+        while let Some(item) = reader.next() {
+            let problem = match &item {
+                Err(e) => Some(format!("{name}:{}: {}", e.line, e.what)),
+                Ok(entry) => match report::decode(&db, entry) {
+                    Ok(r) => {
+                        writeln!(out, "{}", r.render(format)).map_err(out_err)?;
+                        None
+                    }
+                    Err(e) => Some(format!("{name}:{}: {}: {e}", reader.line(), entry.frame)),
+                },
+            };
+            if let Some(problem) = problem {
+                bad += 1;
+                out.flush().map_err(out_err)?;
+                eprintln!("cw-can: {problem}");
+                if strict {
+                    return Ok(bad);
+                }
+            }
+        }
+    }
+    out.flush().map_err(out_err)?;
+    Ok(bad)
+}
+
+fn encode(dbc: &PathBuf, message: &str, values: &[String]) -> Result<(), Fatal> {
+    let db = load(dbc)?;
+    let m = db
+        .by_name(message)
+        .ok_or_else(|| Fatal(format!("no message `{message}` in {}", dbc.display())))?;
+    let values = values
+        .iter()
+        .map(|p| {
+            let (name, value) = p
+                .split_once('=')
+                .ok_or_else(|| Fatal(format!("`{p}` is not SIGNAL=VALUE")))?;
+            let value = Input::parse(value).map_err(|e| Fatal(format!("{name}: {e}")))?;
+            Ok((name.to_string(), value))
+        })
+        .collect::<Result<Vec<_>, Fatal>>()?;
+    let data = codec::encode(m, &values).map_err(Fatal)?;
+    let frame = Frame {
+        kind: if data.len() > 8 {
+            FrameKind::Fd {
+                brs: false,
+                esi: false,
+            }
+        } else {
+            FrameKind::Classic
+        },
+        ..Frame::classic(m.id, m.extended, &data)
+    };
+    let mut out = std::io::stdout().lock();
+    writeln!(out, "{frame}").map_err(out_err)
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match &cli.command {
+        Command::Decode {
+            dbc,
+            strict,
+            format,
+            logs,
+        } => decode(dbc, *strict, *format, logs),
+        Command::Encode {
+            dbc,
+            message,
+            values,
+        } => encode(dbc, message, values).map(|()| 0),
+    };
+    match result {
+        Ok(0) => ExitCode::SUCCESS,
+        Ok(bad) => {
+            eprintln!("cw-can: {bad} bad line(s)");
+            ExitCode::from(1)
+        }
+        Err(Fatal(e)) => {
+            eprintln!("cw-can: {e}");
+            ExitCode::from(2)
+        }
+    }
+}

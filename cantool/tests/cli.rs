@@ -1,0 +1,196 @@
+//! The `cw-can` command as an engineer runs it: its output, its errors on standard error
+//! as `FILE:LINE: what is wrong`, and its exit status.
+
+use std::io::Write;
+use std::path::PathBuf;
+use std::process::{Command, Output, Stdio};
+
+fn ecu_dbc() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../firmware/ecu.dbc")
+}
+
+fn features_dbc() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/data/features.dbc")
+}
+
+fn run(args: &[&str], stdin: &str) -> Output {
+    let mut child = Command::new(env!("CARGO_BIN_EXE_cw-can"))
+        .args(args)
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("cw-can starts");
+    child
+        .stdin
+        .take()
+        .expect("stdin")
+        .write_all(stdin.as_bytes())
+        .expect("stdin written");
+    child.wait_with_output().expect("cw-can ends")
+}
+
+fn text(bytes: &[u8]) -> String {
+    String::from_utf8_lossy(bytes).into_owned()
+}
+
+const LOG: &str = "\
+(1700000000.000000) can0 100#E803000001000000
+(1700000000.040000) can0 100#E8030000010000
+garbage
+(1700000000.080000) can0 7FF#00
+(1700000000.120000) can0 100#R
+(1700000000.160000) can0 20000080#0000000000000000
+(1700000000.200000) can0 200#F401E803
+";
+
+#[test]
+fn decode_reports_each_bad_line_and_goes_on() {
+    let dbc = ecu_dbc();
+    let out = run(&["decode", "--dbc", dbc.to_str().expect("path"), "-"], LOG);
+    assert_eq!(out.status.code(), Some(1), "some lines were bad");
+    assert_eq!(
+        text(&out.stdout),
+        "\
+(1700000000.000000) can0 100#E803000001000000 DistanceFrame(Distance: 1000 mm, WarningLevel: Yellow)
+(1700000000.080000) can0 7FF#00 (not in the DBC)
+(1700000000.120000) can0 100#R (remote frame)
+(1700000000.160000) can0 20000080#0000000000000000 (error frame)
+(1700000000.200000) can0 200#F401E803 ThresholdConfig(RedBelow: 500 mm, YellowBelow: 1000 mm)
+"
+    );
+    assert_eq!(
+        text(&out.stderr),
+        "\
+cw-can: -:2: 100#E8030000010000: 7 data bytes, but the message has 8: the frame is too short
+cw-can: -:3: `garbage` is not a candump log line: (SECONDS) CHANNEL ID#DATA
+cw-can: 2 bad line(s)
+"
+    );
+}
+
+#[test]
+fn strict_stops_at_the_first_bad_line() {
+    let dbc = ecu_dbc();
+    let out = run(
+        &[
+            "decode",
+            "--strict",
+            "--dbc",
+            dbc.to_str().expect("path"),
+            "-",
+        ],
+        LOG,
+    );
+    assert_eq!(out.status.code(), Some(1));
+    assert_eq!(text(&out.stdout).lines().count(), 1);
+    assert!(text(&out.stderr).starts_with("cw-can: -:2: "));
+}
+
+#[test]
+fn a_clean_log_exits_0_and_json_is_one_object_per_frame() {
+    let dbc = features_dbc();
+    let mut data = [0u8; 64];
+    (data[0], data[1], data[63]) = (0x12, 0x34, 0x99);
+    let hex: String = data.iter().map(|b| format!("{b:02X}")).collect();
+    let log = format!("(1.500000) vcan0 300##1{hex}\n");
+    let out = run(
+        &[
+            "decode",
+            "--format",
+            "json",
+            "--dbc",
+            dbc.to_str().expect("path"),
+            "-",
+        ],
+        &log,
+    );
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+    let frame: serde_json::Value =
+        serde_json::from_str(text(&out.stdout).trim()).expect("one JSON object");
+    assert_eq!(frame["kind"], "fd");
+    assert_eq!(frame["brs"], true);
+    assert_eq!(frame["message"], "Fd64");
+    assert_eq!(frame["timestamp"], 1.5);
+    assert_eq!(frame["signals"][0]["name"], "Head");
+    assert_eq!(frame["signals"][0]["value"], 4660);
+    assert_eq!(frame["signals"][1]["name"], "Tail");
+    assert_eq!(frame["signals"][1]["raw"], 153);
+}
+
+#[test]
+fn csv_is_one_row_per_signal_under_a_header() {
+    let dbc = ecu_dbc();
+    let out = run(
+        &[
+            "decode",
+            "--format",
+            "csv",
+            "--dbc",
+            dbc.to_str().expect("path"),
+            "-",
+        ],
+        "(2.000000) can0 100#FFFFFFFF03000000\n(2.100000) can0 123#\n",
+    );
+    assert_eq!(out.status.code(), Some(0));
+    assert_eq!(
+        text(&out.stdout),
+        "\
+timestamp,channel,id,extended,kind,data,message,signal,raw,value,unit,choice
+2.000000,can0,256,false,classic,FFFFFFFF03000000,DistanceFrame,Distance,4294967295,4294967295,mm,Invalid
+2.000000,can0,256,false,classic,FFFFFFFF03000000,DistanceFrame,WarningLevel,3,3,,Fault
+2.100000,can0,291,false,classic,,,,,,,
+"
+    );
+}
+
+#[test]
+fn encode_prints_the_frame_and_refuses_what_does_not_fit() {
+    let dbc = ecu_dbc();
+    let dbc = dbc.to_str().expect("path");
+    let out = run(
+        &[
+            "encode",
+            "--dbc",
+            dbc,
+            "ThresholdConfig",
+            "RedBelow=500",
+            "YellowBelow=1000",
+        ],
+        "",
+    );
+    assert_eq!(text(&out.stdout), "200#F401E803\n");
+    assert_eq!(out.status.code(), Some(0));
+    let out = run(
+        &["encode", "--dbc", dbc, "ThresholdConfig", "RedBelow=500"],
+        "",
+    );
+    assert_eq!(out.status.code(), Some(2));
+    assert!(text(&out.stderr).contains("YellowBelow is missing"));
+    let out = run(
+        &[
+            "encode",
+            "--dbc",
+            dbc,
+            "ThresholdConfig",
+            "RedBelow=nan",
+            "YellowBelow=1",
+        ],
+        "",
+    );
+    assert_eq!(out.status.code(), Some(2));
+    assert_eq!(
+        text(&out.stderr),
+        "cw-can: RedBelow: `nan` is not a finite number\n"
+    );
+}
+
+#[test]
+fn usage_errors_and_missing_files_exit_2() {
+    assert_eq!(run(&["decode"], "").status.code(), Some(2));
+    assert_eq!(run(&["frobnicate"], "").status.code(), Some(2));
+    let out = run(&["decode", "--dbc", "/nonexistent.dbc", "-"], "");
+    assert_eq!(out.status.code(), Some(2));
+    assert!(text(&out.stderr).starts_with("cw-can: cannot read /nonexistent.dbc"));
+    assert_eq!(run(&["--help"], "").status.code(), Some(0));
+}

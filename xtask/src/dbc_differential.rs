@@ -1,0 +1,858 @@
+//! `cargo xtask dbc-differential`: `cw-can`'s DBC decoding and encoding against cantools,
+//! on DBCs generated at random from a seeded generator (replay a run with its printed
+//! seed).
+//!
+//! Each DBC holds messages of 1 to 64 bytes (classic and FD), with 11- and 29-bit ids,
+//! signals of both byte orders, signed and unsigned, integer and IEEE float and double,
+//! factors and offsets (integer and fractional), `[min|max]` ranges, value tables, and
+//! multiplexing: none, simple (`M`, `mN`), or extended (`SG_MUL_VAL_` value ranges and a
+//! nested multiplexer). For every message, frames:
+//! - decode: random bytes (most with a multiplexer value that selects signals, some
+//!   shorter than the message, some longer); cantools and `cw-can` must both refuse, or
+//!   give the same signals with the same values (value-table names where there are);
+//! - encode: values for the signals the frame carries, chosen from each signal's raw range
+//!   (some by value-table name, some just outside the range or the bits, some with a
+//!   signal missing); both must refuse, or give the same bytes.
+//!
+//! `tools/dbc_differential.py` runs cantools on the cases; this module generates them,
+//! computes `cw-can`'s answers (the library the command uses), and compares.
+
+use crate::process::{root, target_dir, Cmd};
+use crate::rng::Rng;
+use crate::setup::venv_python;
+use crate::{option_value, Result};
+use cw_can::codec::{self, Input, Physical};
+use cw_can::dbc::{Database, MessageDef};
+use cw_core::com::signal::spec::{bit_position, layout_fits};
+use cw_core::com::signal::ByteOrder;
+use std::fmt::Write as _;
+
+/// Messages per generated DBC.
+const MESSAGES_PER_DBC: usize = 12;
+/// Frames per message (half decoded, half encoded).
+const FRAMES_PER_MESSAGE: usize = 20;
+/// Message sizes drawn (classic CAN more often).
+const SIZES: &[usize] = &[1, 2, 3, 4, 5, 6, 7, 8, 8, 8, 8, 12, 16, 20, 24, 32, 48, 64];
+/// Integer conversions `(factor, offset)` as written in the DBC.
+const INT_CONVERSIONS: &[(&str, &str)] = &[
+    ("1", "0"),
+    ("1", "0"),
+    ("2", "-100"),
+    ("3", "7"),
+    ("-1", "0"),
+    ("0.5", "0"),
+    ("0.1", "-40"),
+    ("0.001", "0.5"),
+    ("0.25", "1.5"),
+    ("0.01", "0"),
+];
+/// Float signal conversions.
+const FLOAT_CONVERSIONS: &[(&str, &str)] = &[("1", "0"), ("2", "1"), ("0.5", "-3")];
+/// How many disagreements to print in full.
+const SHOW: usize = 5;
+
+/// Options of `cargo xtask dbc-differential`.
+pub struct Options {
+    /// At least this many frames (decoded and encoded).
+    pub frames: usize,
+    /// Generator seed; a fresh one when not given.
+    pub seed: Option<u64>,
+}
+
+impl Default for Options {
+    fn default() -> Self {
+        Self {
+            frames: 12_000,
+            seed: None,
+        }
+    }
+}
+
+impl Options {
+    /// Parses `--frames N` and `--seed S` (decimal or `0x` hex).
+    pub fn parse(args: &[String]) -> Result<Self> {
+        let mut options = Self::default();
+        let mut it = args.iter();
+        while let Some(arg) = it.next() {
+            match arg.as_str() {
+                "--frames" => {
+                    let v = option_value(arg, &mut it)?;
+                    options.frames = v.parse().map_err(|e| format!("--frames `{v}`: {e}"))?;
+                }
+                "--seed" => {
+                    let v = option_value(arg, &mut it)?;
+                    let parsed = match v.strip_prefix("0x") {
+                        Some(hex) => u64::from_str_radix(hex, 16),
+                        None => v.parse(),
+                    };
+                    options.seed = Some(parsed.map_err(|e| format!("--seed `{v}`: {e}"))?);
+                }
+                other => return Err(format!("dbc-differential: unknown argument `{other}`")),
+            }
+        }
+        if options.frames == 0 {
+            return Err("--frames must be at least 1".into());
+        }
+        Ok(options)
+    }
+}
+
+/// Where a generated signal hangs in the multiplexing.
+#[derive(Clone)]
+enum Mux {
+    Plain,
+    /// The message's multiplexer (`M`).
+    Root,
+    /// `mN`, simple multiplexing.
+    Simple(u64),
+    /// Extended: `m{first}` or `m{first}M`, and `SG_MUL_VAL_ sig by ranges`.
+    Extended {
+        by: String,
+        ranges: Vec<(u64, u64)>,
+        is_mux: bool,
+    },
+}
+
+struct Sig {
+    name: String,
+    start: u16,
+    len: u8,
+    order: ByteOrder,
+    signed: bool,
+    /// 0 integer, 1 IEEE float, 2 IEEE double.
+    float: u8,
+    factor: &'static str,
+    offset: &'static str,
+    range: Option<(String, String)>,
+    /// The raw values at the ends of `range`.
+    range_raw: Option<(i128, i128)>,
+    mux: Mux,
+    choices: Vec<(i64, String)>,
+}
+
+struct Msg {
+    name: String,
+    /// As written after `BO_` (bit 31 for a 29-bit id).
+    dbc_id: u32,
+    size: usize,
+    sigs: Vec<Sig>,
+}
+
+type Bits = [u64; 8];
+
+fn bits_of(start: u16, len: u8, order: ByteOrder) -> Bits {
+    let mut set = [0u64; 8];
+    for i in 0..len {
+        let p = bit_position(start, len, order, i);
+        if let Some(w) = set.get_mut(p / 64) {
+            *w |= 1 << (p % 64);
+        }
+    }
+    set
+}
+
+fn overlaps(a: &Bits, b: &Bits) -> bool {
+    a.iter().zip(b).any(|(x, y)| x & y != 0)
+}
+
+fn add(a: &mut Bits, b: &Bits) {
+    for (x, y) in a.iter_mut().zip(b) {
+        *x |= y;
+    }
+}
+
+/// A free place for a signal of `len` bits (any start bit, either order) in `size` bytes.
+fn place(rng: &mut Rng, occupied: &mut Bits, size: usize, len: u8) -> Option<(u16, ByteOrder)> {
+    for _ in 0..40 {
+        let order = if rng.one_in(2) {
+            ByteOrder::Intel
+        } else {
+            ByteOrder::Motorola
+        };
+        let start = rng.below(size as u64 * 8) as u16;
+        if !layout_fits(size, start, len, order) {
+            continue;
+        }
+        let bits = bits_of(start, len, order);
+        if !overlaps(occupied, &bits) {
+            add(occupied, &bits);
+            return Some((start, order));
+        }
+    }
+    None
+}
+
+fn int_len(rng: &mut Rng, size: usize) -> u8 {
+    let most = (size * 8).min(64) as u64;
+    if rng.one_in(3) {
+        rng.pick(&[1u8, 2, 7, 8, 9, 15, 16, 17, 31, 32, 33, 63, 64], 8)
+            .min(most as u8)
+    } else {
+        (1 + rng.below(most.min(24))) as u8
+    }
+}
+
+/// A data signal (not a multiplexer) placed in `occupied`, or `None` if nothing fits.
+fn data_signal(
+    rng: &mut Rng,
+    occupied: &mut Bits,
+    size: usize,
+    name: String,
+    mux: Mux,
+) -> Option<Sig> {
+    let float = if rng.one_in(6) {
+        if rng.one_in(2) {
+            1
+        } else {
+            2
+        }
+    } else {
+        0
+    };
+    let len = match float {
+        1 => 32,
+        2 => 64,
+        _ => int_len(rng, size),
+    };
+    let (start, order) = place(rng, occupied, size, len)?;
+    let signed = rng.one_in(2);
+    let (factor, offset) = if float > 0 {
+        rng.pick(FLOAT_CONVERSIONS, ("1", "0"))
+    } else {
+        rng.pick(INT_CONVERSIONS, ("1", "0"))
+    };
+    let mut sig = Sig {
+        name,
+        start,
+        len,
+        order,
+        signed,
+        float,
+        factor,
+        offset,
+        range: None,
+        range_raw: None,
+        mux,
+        choices: Vec::new(),
+    };
+    if float == 0 && len <= 32 {
+        let (lo, hi) = raw_range(&sig);
+        if rng.one_in(3) {
+            // A range inside the raw range, so that encoding meets it.
+            let a = lo + i128::from(rng.below((hi - lo + 1) as u64 / 2 + 1));
+            let b = hi - i128::from(rng.below((hi - lo + 1) as u64 / 2 + 1));
+            let (pa, pb) = (physical_text(&sig, a), physical_text(&sig, b));
+            let (fa, fb) = (
+                pa.parse::<f64>().unwrap_or(0.0),
+                pb.parse::<f64>().unwrap_or(0.0),
+            );
+            sig.range = Some(if fa <= fb { (pa, pb) } else { (pb, pa) });
+            sig.range_raw = Some((a.min(b), a.max(b)));
+        }
+        if rng.one_in(4) && len <= 16 {
+            let mut used = Vec::new();
+            for k in 0..1 + rng.below(3) {
+                let v = lo + i128::from(rng.below((hi - lo + 1) as u64));
+                if !used.contains(&v) {
+                    used.push(v);
+                    sig.choices.push((v as i64, format!("Choice{k}")));
+                }
+            }
+        }
+    }
+    Some(sig)
+}
+
+fn raw_range(sig: &Sig) -> (i128, i128) {
+    if sig.signed {
+        (-(1i128 << (sig.len - 1)), (1i128 << (sig.len - 1)) - 1)
+    } else {
+        (0, (1i128 << sig.len) - 1)
+    }
+}
+
+fn integral(text: &str) -> Option<i128> {
+    text.parse::<i128>().ok()
+}
+
+/// The physical value of raw `r` as text: an exact integer for integer conversions (as
+/// cantools computes it), else Python's float arithmetic `r * factor + offset`.
+fn physical_text(sig: &Sig, r: i128) -> String {
+    match (integral(sig.factor), integral(sig.offset)) {
+        (Some(f), Some(o)) => format!("{}", r * f + o),
+        _ => {
+            let f: f64 = sig.factor.parse().unwrap_or(1.0);
+            let o: f64 = sig.offset.parse().unwrap_or(0.0);
+            format!("{:?}", r as f64 * f + o)
+        }
+    }
+}
+
+fn gen_message(rng: &mut Rng, index: usize, used_ids: &mut Vec<u32>) -> Msg {
+    let size = rng.pick(SIZES, 8);
+    let extended = rng.one_in(3);
+    let dbc_id = loop {
+        let id = if extended {
+            (rng.below(1 << 29) as u32) | 1 << 31
+        } else {
+            rng.below(0x800) as u32
+        };
+        if !used_ids.contains(&id) {
+            used_ids.push(id);
+            break id;
+        }
+    };
+    let mut base: Bits = [0; 8];
+    let mut sigs = Vec::new();
+    let mode = if size * 8 < 16 { 0 } else { rng.below(4) };
+    let mut sel = None;
+    if mode >= 2 {
+        let len = (2 + rng.below(5)) as u8;
+        if let Some((start, order)) = place(rng, &mut base, size, len) {
+            sel = Some(sigs.len());
+            sigs.push(Sig {
+                name: "Sel".into(),
+                start,
+                len,
+                order,
+                signed: false,
+                float: 0,
+                factor: "1",
+                offset: "0",
+                range: None,
+                range_raw: None,
+                mux: Mux::Root,
+                choices: Vec::new(),
+            });
+        }
+    }
+    for k in 0..1 + rng.below(3) {
+        if let Some(s) = data_signal(rng, &mut base, size, format!("P{k}"), Mux::Plain) {
+            sigs.push(s);
+        }
+    }
+    if let Some(sel) = sel.and_then(|i| sigs.get(i)).map(|s| s.len) {
+        let top = (1u64 << sel) - 1;
+        if mode == 2 {
+            // Simple: a few distinct selector values, each with its own signals.
+            let mut values: Vec<u64> = Vec::new();
+            for _ in 0..1 + rng.below(3) {
+                let v = rng.below(top + 1);
+                if !values.contains(&v) {
+                    values.push(v);
+                }
+            }
+            for v in values {
+                let mut occ = base;
+                for k in 0..1 + rng.below(2) {
+                    let name = format!("G{v}S{k}");
+                    if let Some(s) = data_signal(rng, &mut occ, size, name, Mux::Simple(v)) {
+                        sigs.push(s);
+                    }
+                }
+            }
+        } else {
+            // Extended: disjoint value ranges of Sel; the first group also holds a nested
+            // multiplexer `Sub` with signals of its own.
+            let mut cuts: Vec<u64> = (0..2 + rng.below(3)).map(|_| rng.below(top + 1)).collect();
+            cuts.sort_unstable();
+            cuts.dedup();
+            let ranges: Vec<(u64, u64)> = cuts
+                .windows(2)
+                .map(|w| (w[0], w[1].saturating_sub(1).max(w[0])))
+                .chain(cuts.last().map(|l| (*l, *l)))
+                .collect();
+            let mut ranges = ranges;
+            ranges.dedup();
+            ranges.retain(|(lo, hi)| lo <= hi);
+            for (g, (lo, hi)) in ranges.iter().enumerate() {
+                let mut occ = base;
+                let by = || Mux::Extended {
+                    by: "Sel".into(),
+                    ranges: vec![(*lo, *hi)],
+                    is_mux: false,
+                };
+                if let Some(s) = data_signal(rng, &mut occ, size, format!("R{g}"), by()) {
+                    sigs.push(s);
+                }
+                if g == 0 {
+                    let len = (1 + rng.below(3)) as u8;
+                    if let Some((start, order)) = place(rng, &mut occ, size, len) {
+                        sigs.push(Sig {
+                            name: "Sub".into(),
+                            start,
+                            len,
+                            order,
+                            signed: false,
+                            float: 0,
+                            factor: "1",
+                            offset: "0",
+                            range: None,
+                            range_raw: None,
+                            mux: Mux::Extended {
+                                by: "Sel".into(),
+                                ranges: vec![(*lo, *hi)],
+                                is_mux: true,
+                            },
+                            choices: Vec::new(),
+                        });
+                        for v in 0..(1u64 << len).min(3) {
+                            let mut inner = occ;
+                            let mux = Mux::Extended {
+                                by: "Sub".into(),
+                                ranges: vec![(v, v)],
+                                is_mux: false,
+                            };
+                            if let Some(s) =
+                                data_signal(rng, &mut inner, size, format!("N{v}"), mux)
+                            {
+                                sigs.push(s);
+                            }
+                        }
+                    }
+                }
+            }
+        }
+    }
+    Msg {
+        name: format!("M{index}"),
+        dbc_id,
+        size,
+        sigs,
+    }
+}
+
+fn dbc_text(messages: &[Msg]) -> String {
+    let mut t = String::from("VERSION \"\"\n\n\nNS_ :\n\nBS_:\n\nBU_: N\n\n");
+    for m in messages {
+        let _ = writeln!(t, "BO_ {} {}: {} N", m.dbc_id, m.name, m.size);
+        for s in &m.sigs {
+            let ind = match &s.mux {
+                Mux::Plain => String::new(),
+                Mux::Root => " M".into(),
+                Mux::Simple(v) => format!(" m{v}"),
+                Mux::Extended { ranges, is_mux, .. } => format!(
+                    " m{}{}",
+                    ranges.first().map_or(0, |r| r.0),
+                    if *is_mux { "M" } else { "" }
+                ),
+            };
+            let (min, max) = s.range.clone().unwrap_or(("0".into(), "0".into()));
+            let _ = writeln!(
+                t,
+                " SG_ {}{ind} : {}|{}@{}{} ({},{}) [{min}|{max}] \"\" N",
+                s.name,
+                s.start,
+                s.len,
+                if s.order == ByteOrder::Intel { 1 } else { 0 },
+                if s.signed { "-" } else { "+" },
+                s.factor,
+                s.offset,
+            );
+        }
+        t.push('\n');
+    }
+    t.push_str(concat!(
+        "BA_DEF_ BO_ \"VFrameFormat\" ENUM \"StandardCAN\",\"ExtendedCAN\",\"reserved\",\"J1939PG\",",
+        "\"reserved\",\"reserved\",\"reserved\",\"reserved\",\"reserved\",\"reserved\",\"reserved\",",
+        "\"reserved\",\"reserved\",\"reserved\",\"StandardCAN_FD\",\"ExtendedCAN_FD\";\n",
+        "BA_DEF_DEF_ \"VFrameFormat\" \"StandardCAN\";\n"
+    ));
+    for m in messages.iter().filter(|m| m.size > 8) {
+        let fd = if m.dbc_id & 1 << 31 != 0 { 15 } else { 14 };
+        let _ = writeln!(t, "BA_ \"VFrameFormat\" BO_ {} {fd};", m.dbc_id);
+    }
+    for m in messages {
+        for s in m.sigs.iter().filter(|s| !s.choices.is_empty()) {
+            let _ = write!(t, "VAL_ {} {}", m.dbc_id, s.name);
+            for (v, n) in &s.choices {
+                let _ = write!(t, " {v} \"{n}\"");
+            }
+            t.push_str(" ;\n");
+        }
+    }
+    for m in messages {
+        for s in m.sigs.iter().filter(|s| s.float > 0) {
+            let _ = writeln!(t, "SIG_VALTYPE_ {} {} : {};", m.dbc_id, s.name, s.float);
+        }
+    }
+    for m in messages {
+        for s in &m.sigs {
+            if let Mux::Extended { by, ranges, .. } = &s.mux {
+                let list: Vec<String> = ranges.iter().map(|(l, h)| format!("{l}-{h}")).collect();
+                let _ = writeln!(
+                    t,
+                    "SG_MUL_VAL_ {} {} {by} {};",
+                    m.dbc_id,
+                    s.name,
+                    list.join(", ")
+                );
+            }
+        }
+    }
+    t
+}
+
+/// One case for both implementations.
+enum Op {
+    Decode(Vec<u8>),
+    Encode(Vec<(String, String)>),
+}
+
+struct Case {
+    id: usize,
+    dbc: usize,
+    message: String,
+    op: Op,
+}
+
+/// A multiplexer value for each multiplexer of `m` that selects something (the frame's
+/// signals then follow), by index; `None` to leave the frame's bits as they are.
+fn choose_mux(rng: &mut Rng, m: &MessageDef) -> Vec<(usize, u64)> {
+    let mut out = Vec::new();
+    for (i, s) in m
+        .signals
+        .iter()
+        .enumerate()
+        .filter(|(_, s)| s.is_multiplexer)
+    {
+        let mut options = Vec::new();
+        for t in &m.signals {
+            if let cw_can::dbc::Muxing::When {
+                multiplexer,
+                values,
+            } = &t.muxing
+            {
+                if *multiplexer == i {
+                    options.extend(values.iter().copied());
+                }
+            }
+        }
+        let (lo, hi) = rng.pick(&options, (0, 0));
+        let _ = s;
+        out.push((i, lo + rng.below(hi - lo + 1)));
+    }
+    out
+}
+
+fn hex(data: &[u8]) -> String {
+    data.iter().fold(String::new(), |mut s, b| {
+        let _ = write!(s, "{b:02X}");
+        s
+    })
+}
+
+fn gen_cases(
+    rng: &mut Rng,
+    dbc: usize,
+    db: &Database,
+    msgs: &[Msg],
+    next_id: &mut usize,
+) -> Vec<Case> {
+    let mut cases = Vec::new();
+    for (m, gen) in db.messages().iter().zip(msgs) {
+        for k in 0..FRAMES_PER_MESSAGE {
+            let id = *next_id;
+            *next_id += 1;
+            let mux = choose_mux(rng, m);
+            let op = if k % 2 == 0 {
+                let mut pdu = [0u8; 64];
+                rng.fill(&mut pdu);
+                if !rng.one_in(5) {
+                    for (i, v) in &mux {
+                        if let Some(s) = m.signals.get(*i) {
+                            s.layout.pack_masked(&mut pdu, *v);
+                        }
+                    }
+                }
+                let len = match rng.below(10) {
+                    0 => rng.below(m.size as u64 + 1) as usize,
+                    1 => (m.size + 1 + rng.below(4) as usize).min(64),
+                    _ => m.size,
+                };
+                Op::Decode(pdu.get(..len).unwrap_or(&pdu).to_vec())
+            } else {
+                let mux_raw = |j: usize| {
+                    mux.iter()
+                        .find(|(i, _)| *i == j)
+                        .map_or(-1, |(_, v)| i128::from(*v))
+                };
+                let mut values = Vec::new();
+                for (i, s) in m.signals.iter().enumerate() {
+                    if !m.present(i, &mux_raw) {
+                        continue;
+                    }
+                    let Some(g) = gen.sigs.iter().find(|g| g.name == s.name) else {
+                        continue;
+                    };
+                    let text = if let Some((_, v)) = mux.iter().find(|(j, _)| *j == i) {
+                        v.to_string()
+                    } else {
+                        value_text(rng, g)
+                    };
+                    values.push((s.name.clone(), text));
+                }
+                if rng.one_in(20) && !values.is_empty() {
+                    let at = rng.below(values.len() as u64) as usize;
+                    values.remove(at);
+                }
+                Op::Encode(values)
+            };
+            cases.push(Case {
+                id,
+                dbc,
+                message: m.name.clone(),
+                op,
+            });
+        }
+    }
+    cases
+}
+
+/// A value for a data signal: most within its raw range, some by value-table name, some
+/// one raw step outside or beyond its `[min|max]`.
+fn value_text(rng: &mut Rng, s: &Sig) -> String {
+    if s.float == 1 {
+        let raw = (rng.next_u64() as i64 % 2_000_000) as f64 / 64.0;
+        return format!("{:?}", raw * s.factor.parse::<f64>().unwrap_or(1.0));
+    }
+    if s.float == 2 {
+        let raw = (rng.next_u64() as i64) as f64 / 1024.0;
+        return format!("{:?}", raw);
+    }
+    if !s.choices.is_empty() && rng.one_in(3) {
+        let k = rng.below(s.choices.len() as u64) as usize;
+        return s.choices.get(k).map_or("0".into(), |(_, n)| n.clone());
+    }
+    let (lo, hi) = match s.range_raw {
+        Some(inside) if !rng.one_in(4) => inside,
+        _ => raw_range(s),
+    };
+    let raw = match rng.below(12) {
+        0 => lo,
+        1 => hi,
+        2 => lo - 1,
+        3 => hi + 1,
+        _ => {
+            let span = (hi - lo) as u128 + 1;
+            lo + ((u128::from(rng.next_u64()) << 64 | u128::from(rng.next_u64())) % span) as i128
+        }
+    };
+    if let (Some((min, _)), true) = (&s.range, rng.one_in(8)) {
+        let f: f64 = s.factor.parse().unwrap_or(1.0);
+        let m: f64 = min.parse().unwrap_or(0.0);
+        return format!("{:?}", m - f.abs() * 0.5);
+    }
+    physical_text(s, raw)
+}
+
+/// Our verdict, in the same terms as the script's.
+fn ours(db: &Database, case: &Case) -> std::result::Result<String, ()> {
+    let m = db.by_name(&case.message).ok_or(())?;
+    match &case.op {
+        Op::Decode(data) => {
+            let signals = codec::decode(m, data).map_err(|_| ())?;
+            let mut parts: Vec<String> = signals
+                .iter()
+                .map(|d| match (d.choice, d.physical) {
+                    (Some(c), _) => format!("{}=choice:{c}", d.signal.name),
+                    (None, Physical::Int(v)) => format!("{}={v}", d.signal.name),
+                    (None, Physical::Float(x)) => format!("{}={}", d.signal.name, float_key(x)),
+                })
+                .collect();
+            parts.sort();
+            Ok(parts.join(" "))
+        }
+        Op::Encode(values) => {
+            let values: std::result::Result<Vec<_>, String> = values
+                .iter()
+                .map(|(n, v)| Input::parse(v).map(|i| (n.clone(), i)))
+                .collect();
+            let data = codec::encode(m, &values.map_err(|_| ())?).map_err(|_| ())?;
+            Ok(hex(&data))
+        }
+    }
+}
+
+/// A float as a key both sides write alike: integers without a fraction, NaN as `nan`.
+fn float_key(x: f64) -> String {
+    if x.is_nan() {
+        "nan".into()
+    } else if x.fract() == 0.0 && x.abs() < 1e300 {
+        format!("{}", x as i128)
+    } else {
+        format!("{:e}", x)
+    }
+}
+
+/// cantools' verdict from one line of the script's output.
+fn theirs(obj: &serde_json::Value) -> std::result::Result<String, ()> {
+    if obj.get("ok").and_then(serde_json::Value::as_bool) != Some(true) {
+        return Err(());
+    }
+    if let Some(data) = obj.get("data").and_then(serde_json::Value::as_str) {
+        return Ok(data.to_string());
+    }
+    let signals = obj
+        .get("signals")
+        .and_then(serde_json::Value::as_object)
+        .ok_or(())?;
+    let mut parts: Vec<String> = signals
+        .iter()
+        .map(|(name, v)| {
+            let kind = v.get(0).and_then(serde_json::Value::as_str).unwrap_or("");
+            let text = v.get(1).and_then(serde_json::Value::as_str).unwrap_or("");
+            match kind {
+                "choice" => format!("{name}=choice:{text}"),
+                "int" => format!("{name}={text}"),
+                _ => format!(
+                    "{name}={}",
+                    float_key(text.parse::<f64>().unwrap_or(f64::NAN))
+                ),
+            }
+        })
+        .collect();
+    parts.sort();
+    Ok(parts.join(" "))
+}
+
+/// Generates, runs cantools, compares; fails on any disagreement.
+pub fn run(options: &Options) -> Result {
+    let seed = options.seed.unwrap_or_else(Rng::fresh_seed);
+    println!("dbc-differential: seed {seed} (replay with --seed {seed})");
+    let mut rng = Rng::new(seed);
+    let dir = target_dir().join("xtask-dbc-differential");
+    std::fs::create_dir_all(&dir).map_err(|e| format!("creating {}: {e}", dir.display()))?;
+    let mut dbs = Vec::new();
+    let mut cases = Vec::new();
+    let mut next_id = 0;
+    let mut total_signals = 0;
+    while cases.len() < options.frames {
+        let mut used = Vec::new();
+        let msgs: Vec<Msg> = (0..MESSAGES_PER_DBC)
+            .map(|i| gen_message(&mut rng, i, &mut used))
+            .collect();
+        let text = dbc_text(&msgs);
+        let path = dir.join(format!("gen{}.dbc", dbs.len()));
+        std::fs::write(&path, &text).map_err(|e| format!("writing {}: {e}", path.display()))?;
+        let db = Database::from_text(&text).map_err(|e| {
+            format!(
+                "{}: cw-can refuses a generated DBC: {e} (seed {seed})",
+                path.display()
+            )
+        })?;
+        total_signals += msgs.iter().map(|m| m.sigs.len()).sum::<usize>();
+        cases.extend(gen_cases(&mut rng, dbs.len(), &db, &msgs, &mut next_id));
+        dbs.push((path, db));
+    }
+    let cases_path = dir.join("cases.jsonl");
+    let out_path = dir.join("cantools.jsonl");
+    let mut text = String::new();
+    for c in &cases {
+        let mut obj = serde_json::json!({
+            "id": c.id,
+            "dbc": dbs.get(c.dbc).map(|(p, _)| p.display().to_string()),
+            "message": c.message,
+        });
+        match &c.op {
+            Op::Decode(data) => {
+                obj["op"] = "decode".into();
+                obj["data"] = hex(data).into();
+            }
+            Op::Encode(values) => {
+                obj["op"] = "encode".into();
+                obj["values"] = values
+                    .iter()
+                    .map(|(n, v)| (n.clone(), serde_json::Value::from(v.as_str())))
+                    .collect::<serde_json::Map<_, _>>()
+                    .into();
+            }
+        }
+        text.push_str(&obj.to_string());
+        text.push('\n');
+    }
+    std::fs::write(&cases_path, text)
+        .map_err(|e| format!("writing {}: {e}", cases_path.display()))?;
+    let _ = std::fs::remove_file(&out_path);
+    let python = venv_python();
+    if !python.exists() {
+        return Err(format!(
+            "{} not found: the cantools venv is missing; run `cargo xtask setup`",
+            python.display()
+        ));
+    }
+    Cmd::new(&python)
+        .arg(root().join("tools").join("dbc_differential.py"))
+        .arg(&cases_path)
+        .arg(&out_path)
+        .run()?;
+    let out = std::fs::read_to_string(&out_path)
+        .map_err(|e| format!("reading {}: {e}", out_path.display()))?;
+    let mut results = std::collections::HashMap::new();
+    for (n, line) in out.lines().enumerate() {
+        let obj: serde_json::Value = serde_json::from_str(line)
+            .map_err(|e| format!("{}:{}: {e}", out_path.display(), n + 1))?;
+        let id = obj
+            .get("id")
+            .and_then(serde_json::Value::as_u64)
+            .unwrap_or(u64::MAX);
+        results.insert(id as usize, obj);
+    }
+    let (mut decodes, mut encodes, mut refused) = (0, 0, 0);
+    let mut mismatches = Vec::new();
+    for c in &cases {
+        let Some((path, db)) = dbs.get(c.dbc) else {
+            continue;
+        };
+        let Some(obj) = results.get(&c.id) else {
+            return Err(format!("cantools wrote no result for case {}", c.id));
+        };
+        let (a, b) = (ours(db, c), theirs(obj));
+        match &c.op {
+            Op::Decode(_) => decodes += 1,
+            Op::Encode(_) => encodes += 1,
+        }
+        if a.is_err() && b.is_err() {
+            refused += 1;
+        }
+        if a != b {
+            let what = match &c.op {
+                Op::Decode(d) => format!("decode {}", hex(d)),
+                Op::Encode(v) => format!("encode {v:?}"),
+            };
+            mismatches.push(format!(
+                "case {}: {} {} {what}\n  cw-can:   {a:?}\n  cantools: {:?} {}",
+                c.id,
+                path.display(),
+                c.message,
+                b,
+                obj.get("error")
+                    .and_then(serde_json::Value::as_str)
+                    .unwrap_or("")
+            ));
+        }
+    }
+    println!(
+        "dbc-differential: {} DBCs, {} messages, {total_signals} signals; {} frames: {decodes} decoded, {encodes} encoded, {refused} refused by both; {} disagreements",
+        dbs.len(),
+        dbs.len() * MESSAGES_PER_DBC,
+        cases.len(),
+        mismatches.len()
+    );
+    if mismatches.is_empty() {
+        Ok(())
+    } else {
+        Err(format!(
+            "cw-can and cantools disagree on {} of {} frames (seed {seed}); the first {}:\n{}",
+            mismatches.len(),
+            cases.len(),
+            SHOW.min(mismatches.len()),
+            mismatches
+                .iter()
+                .take(SHOW)
+                .cloned()
+                .collect::<Vec<_>>()
+                .join("\n")
+        ))
+    }
+}
