@@ -4,6 +4,7 @@
 //! - [`frame`]: a frame as logs hold it (classic, FD, remote, error; up to 64 bytes) and
 //!   can-utils' compact text form;
 //! - [`log`]: candump logs, line by line, a bad line named and skipped;
+//! - [`asc`] and [`blf`]: Vector's ASC (text) and BLF (binary, zlib containers) logs;
 //! - [`dbc`]: a DBC checked once at load (sizes, layouts, floats, multiplexers);
 //! - [`codec`]: signals decoded and encoded with cantools' semantics, the bits by the
 //!   ECU's own proved codec;
@@ -22,6 +23,8 @@
     )
 )]
 
+pub mod asc;
+pub mod blf;
 pub mod codec;
 pub mod dbc;
 pub mod frame;

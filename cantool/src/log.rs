@@ -3,10 +3,11 @@
 //!
 //! candump's log form (`candump -L`, what `canplayer` replays and python-can's
 //! `CanutilsLogReader` reads): `(SECONDS) CHANNEL FRAME`, the frame in can-utils' compact
-//! form ([`crate::frame`]).
+//! form ([`crate::frame`]), and the direction `R` or `T` that python-can's writer adds.
 
 use std::fmt;
-use std::io::BufRead;
+use std::io::{BufRead, Read};
+use std::path::Path;
 
 use crate::frame::{self, Frame};
 
@@ -21,22 +22,121 @@ pub struct Entry {
     pub frame: Frame,
 }
 
-/// Why a line is not a log entry.
+/// Where in a log something is wrong.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum At {
+    /// A text log's line (1-based).
+    Line(usize),
+    /// A binary log's byte offset.
+    Byte(u64),
+}
+
+impl fmt::Display for At {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Self::Line(n) => write!(f, "{n}"),
+            Self::Byte(n) => write!(f, "byte {n}"),
+        }
+    }
+}
+
+/// Why a line (or an object of a binary log) is not a log entry.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct LineError {
-    /// 1-based line number.
-    pub line: usize,
+    /// Where.
+    pub at: At,
     /// What is wrong.
     pub what: String,
 }
 
+impl LineError {
+    /// An error at a text log's line.
+    pub fn line(line: usize, what: impl Into<String>) -> Self {
+        Self {
+            at: At::Line(line),
+            what: what.into(),
+        }
+    }
+
+    /// The line number, for a text log's error.
+    pub fn line_number(&self) -> Option<usize> {
+        match self.at {
+            At::Line(n) => Some(n),
+            At::Byte(_) => None,
+        }
+    }
+}
+
 impl fmt::Display for LineError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "line {}: {}", self.line, self.what)
+        write!(f, "{}: {}", self.at, self.what)
     }
 }
 
 impl std::error::Error for LineError {}
+
+/// Reads a text log's lines as bytes, so that a line that is not UTF-8 is one bad line,
+/// not the end of the log: each non-blank line, trimmed, with its number.
+pub struct Lines<R> {
+    reader: R,
+    line: usize,
+    buf: Vec<u8>,
+    failed: bool,
+}
+
+impl<R: BufRead> Lines<R> {
+    /// Lines of `reader`.
+    pub fn new(reader: R) -> Self {
+        Self {
+            reader,
+            line: 0,
+            buf: Vec::new(),
+            failed: false,
+        }
+    }
+
+    /// The next non-blank line and its number, or its error; `None` at the end.
+    pub fn next_line(&mut self) -> Option<(usize, Result<&str, LineError>)> {
+        loop {
+            if self.failed {
+                return None;
+            }
+            self.buf.clear();
+            self.line += 1;
+            match self.reader.read_until(b'\n', &mut self.buf) {
+                Ok(0) => return None,
+                Ok(_) => {}
+                Err(e) => {
+                    self.failed = true;
+                    let line = self.line;
+                    return Some((
+                        line,
+                        Err(LineError::line(line, format!("cannot read: {e}"))),
+                    ));
+                }
+            }
+            let blank = std::str::from_utf8(&self.buf).is_ok_and(|t| t.trim().is_empty());
+            if !blank {
+                break;
+            }
+        }
+        let line = self.line;
+        Some(match std::str::from_utf8(&self.buf) {
+            Ok(text) => (line, Ok(text.trim())),
+            Err(_) => (
+                line,
+                Err(LineError::line(line, "not text (a byte that is not UTF-8)")),
+            ),
+        })
+    }
+}
+
+impl<R> Lines<R> {
+    /// The number of the line read last.
+    pub fn line(&self) -> usize {
+        self.line
+    }
+}
 
 /// Reads one `(1700000000.123456) can0 123#DEADBEEF` line.
 ///
@@ -44,11 +144,16 @@ impl std::error::Error for LineError {}
 /// A sentence naming the part that is wrong.
 pub fn parse_candump(line: &str) -> Result<Entry, String> {
     let mut parts = line.split_whitespace();
-    let (Some(stamp), Some(channel), Some(text), None) =
-        (parts.next(), parts.next(), parts.next(), parts.next())
-    else {
+    // python-can's CanutilsLogWriter adds the direction, `R` or `T`.
+    let (Some(stamp), Some(channel), Some(text), None | Some("R" | "T"), None) = (
+        parts.next(),
+        parts.next(),
+        parts.next(),
+        parts.next(),
+        parts.next(),
+    ) else {
         return Err(format!(
-            "`{line}` is not a candump log line: (SECONDS) CHANNEL ID#DATA"
+            "`{line}` is not a candump log line: (SECONDS) CHANNEL ID#DATA [R|T]"
         ));
     };
     let timestamp = stamp
@@ -69,20 +174,14 @@ pub fn parse_candump(line: &str) -> Result<Entry, String> {
 /// its line. Reading stops only when the reader fails (an I/O error, reported as the
 /// last item).
 pub struct CandumpReader<R> {
-    reader: R,
-    line: usize,
-    buf: Vec<u8>,
-    failed: bool,
+    lines: Lines<R>,
 }
 
 impl<R: BufRead> CandumpReader<R> {
     /// A reader over a log's bytes.
     pub fn new(reader: R) -> Self {
         Self {
-            reader,
-            line: 0,
-            buf: Vec::new(),
-            failed: false,
+            lines: Lines::new(reader),
         }
     }
 }
@@ -90,7 +189,7 @@ impl<R: BufRead> CandumpReader<R> {
 impl<R> CandumpReader<R> {
     /// The number of the line read last (1-based).
     pub fn line(&self) -> usize {
-        self.line
+        self.lines.line
     }
 }
 
@@ -98,37 +197,81 @@ impl<R: BufRead> Iterator for CandumpReader<R> {
     type Item = Result<Entry, LineError>;
 
     fn next(&mut self) -> Option<Self::Item> {
-        loop {
-            if self.failed {
-                return None;
-            }
-            self.buf.clear();
-            self.line += 1;
-            let line = self.line;
-            match self.reader.read_until(b'\n', &mut self.buf) {
-                Ok(0) => return None,
-                Ok(_) => {}
-                Err(e) => {
-                    self.failed = true;
-                    return Some(Err(LineError {
-                        line,
-                        what: format!("cannot read: {e}"),
-                    }));
-                }
-            }
-            let Ok(text) = std::str::from_utf8(&self.buf) else {
-                return Some(Err(LineError {
-                    line,
-                    what: "not text (a byte that is not UTF-8)".into(),
-                }));
-            };
-            let text = text.trim();
-            if text.is_empty() {
-                continue;
-            }
-            return Some(parse_candump(text).map_err(|what| LineError { line, what }));
+        let (line, text) = self.lines.next_line()?;
+        Some(text.and_then(|t| parse_candump(t).map_err(|what| LineError::line(line, what))))
+    }
+}
+
+/// The log formats `cw-can` reads.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum LogFormat {
+    /// `candump -L` (and python-can's `CanutilsLogWriter`).
+    Candump,
+    /// Vector ASC (text).
+    Asc,
+    /// Vector BLF (binary).
+    Blf,
+}
+
+impl LogFormat {
+    /// The format a file's extension names: `.asc` ASC, `.blf` BLF, anything else candump.
+    pub fn of_path(path: &Path) -> Self {
+        match path
+            .extension()
+            .and_then(|e| e.to_str())
+            .map(str::to_ascii_lowercase)
+            .as_deref()
+        {
+            Some("asc") => Self::Asc,
+            Some("blf") => Self::Blf,
+            _ => Self::Candump,
         }
     }
+}
+
+/// A log's entries, each with where it is (its line, or its BLF container's offset).
+pub type Entries = Box<dyn Iterator<Item = Result<(At, Entry), LineError>>>;
+
+/// Opens a log (`-` is standard input) in `format`, or the format its extension names.
+///
+/// # Errors
+/// A file that cannot be read, or a BLF file whose header is not one.
+pub fn open(path: &Path, format: Option<LogFormat>) -> Result<Entries, String> {
+    let name = path.display().to_string();
+    let format = format.unwrap_or_else(|| LogFormat::of_path(path));
+    let reader: Box<dyn BufRead> = if name == "-" {
+        Box::new(std::io::BufReader::new(std::io::stdin()))
+    } else {
+        Box::new(std::io::BufReader::new(
+            std::fs::File::open(path).map_err(|e| format!("cannot read {name}: {e}"))?,
+        ))
+    };
+    Ok(match format {
+        LogFormat::Candump => {
+            let mut r = CandumpReader::new(reader);
+            Box::new(std::iter::from_fn(move || {
+                r.next().map(|x| x.map(|e| (At::Line(r.line()), e)))
+            }))
+        }
+        LogFormat::Asc => {
+            let mut r = crate::asc::AscReader::new(reader);
+            Box::new(std::iter::from_fn(move || {
+                r.next().map(|x| x.map(|e| (At::Line(r.line()), e)))
+            }))
+        }
+        LogFormat::Blf => {
+            let mut bytes = Vec::new();
+            let mut reader = reader;
+            reader
+                .read_to_end(&mut bytes)
+                .map_err(|e| format!("cannot read {name}: {e}"))?;
+            let mut r = crate::blf::BlfReader::new(bytes).map_err(|e| format!("{name}: {e}"))?;
+            Box::new(std::iter::from_fn(move || {
+                r.next()
+                    .map(|x| x.map(|e| (At::Byte(r.container() as u64), e)))
+            }))
+        }
+    })
 }
 
 #[cfg(test)]
@@ -143,13 +286,15 @@ mod tests {
             (2.000000) can0 100#0\xE90\n\
             (3.000000) can0 123##1AABB\n\
             (x) can0 100#00\n\
-            (4.000000) can1 123#R\n";
+            (4.000000) can1 123#R\n\
+            (5.000000) can0 123#00 R\n\
+            (6.000000) can0 123#00 X\n";
         let items: Vec<_> = CandumpReader::new(log).collect();
         let lines: Vec<_> = items
             .iter()
             .map(|r| match r {
                 Ok(e) => format!("ok {} {} {}", e.timestamp, e.channel, e.frame),
-                Err(e) => format!("err {}", e.line),
+                Err(e) => format!("err {}", e.at),
             })
             .collect();
         assert_eq!(
@@ -160,7 +305,9 @@ mod tests {
                 "err 4",
                 "ok 3 can0 123##1AABB",
                 "err 6",
-                "ok 4 can1 123#R"
+                "ok 4 can1 123#R",
+                "ok 5 can0 123#00",
+                "err 9"
             ]
         );
     }
@@ -176,7 +323,7 @@ mod tests {
                         e.timestamp, e.channel, e.frame
                     ))
                     .is_ok()),
-                    Err(e) => assert!((1..=lines).contains(&e.line)),
+                    Err(e) => assert!(e.line_number().is_some_and(|n| (1..=lines).contains(&n))),
                 }
             }
         });

@@ -25,7 +25,7 @@
     )
 )]
 
-use std::io::{BufRead, Write};
+use std::io::Write;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -33,7 +33,7 @@ use clap::{Parser, Subcommand};
 use cw_can::codec::{self, Input};
 use cw_can::dbc::Database;
 use cw_can::frame::{Frame, FrameKind};
-use cw_can::log::CandumpReader;
+use cw_can::log::LogFormat;
 use cw_can::report::{self, Format};
 
 /// Decode CAN logs with a DBC, or encode signal values into a frame.
@@ -46,7 +46,7 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
-    /// Decode candump logs (`candump -L`): every frame, with its message and signals.
+    /// Decode CAN logs (candump, ASC, BLF): every frame, with its message and signals.
     Decode {
         /// The DBC file (UTF-8 or Windows-1252).
         #[arg(long)]
@@ -57,6 +57,9 @@ enum Command {
         /// Output form.
         #[arg(long, value_enum, default_value_t = Format::Text)]
         format: Format,
+        /// The logs' format [default: by extension: .asc ASC, .blf BLF, else candump].
+        #[arg(long, value_enum)]
+        log_format: Option<LogFormat>,
         /// Log files, or - for standard input.
         #[arg(required = true)]
         logs: Vec<PathBuf>,
@@ -87,7 +90,13 @@ fn out_err(e: std::io::Error) -> Fatal {
 }
 
 /// Decodes every log; returns how many lines were bad.
-fn decode(dbc: &PathBuf, strict: bool, format: Format, logs: &[PathBuf]) -> Result<usize, Fatal> {
+fn decode(
+    dbc: &PathBuf,
+    strict: bool,
+    format: Format,
+    log_format: Option<LogFormat>,
+    logs: &[PathBuf],
+) -> Result<usize, Fatal> {
     let db = load(dbc)?;
     let stdout = std::io::stdout();
     let mut out = std::io::BufWriter::new(stdout.lock());
@@ -97,23 +106,15 @@ fn decode(dbc: &PathBuf, strict: bool, format: Format, logs: &[PathBuf]) -> Resu
     let mut bad = 0;
     for log in logs {
         let name = log.display().to_string();
-        let reader: Box<dyn BufRead> = if name == "-" {
-            Box::new(std::io::stdin().lock())
-        } else {
-            Box::new(std::io::BufReader::new(
-                std::fs::File::open(log).map_err(|e| Fatal(format!("cannot read {name}: {e}")))?,
-            ))
-        };
-        let mut reader = CandumpReader::new(reader);
-        while let Some(item) = reader.next() {
+        for item in cw_can::log::open(log, log_format).map_err(Fatal)? {
             let problem = match &item {
-                Err(e) => Some(format!("{name}:{}: {}", e.line, e.what)),
-                Ok(entry) => match report::decode(&db, entry) {
+                Err(e) => Some(format!("{name}:{e}")),
+                Ok((at, entry)) => match report::decode(&db, entry) {
                     Ok(r) => {
                         writeln!(out, "{}", r.render(format)).map_err(out_err)?;
                         None
                     }
-                    Err(e) => Some(format!("{name}:{}: {}: {e}", reader.line(), entry.frame)),
+                    Err(e) => Some(format!("{name}:{at}: {}: {e}", entry.frame)),
                 },
             };
             if let Some(problem) = problem {
@@ -168,8 +169,9 @@ fn main() -> ExitCode {
             dbc,
             strict,
             format,
+            log_format,
             logs,
-        } => decode(dbc, *strict, *format, logs),
+        } => decode(dbc, *strict, *format, *log_format, logs),
         Command::Encode {
             dbc,
             message,

@@ -63,7 +63,7 @@ fn decode_reports_each_bad_line_and_goes_on() {
         text(&out.stderr),
         "\
 cw-can: -:2: 100#E8030000010000: 7 data bytes, but the message has 8: the frame is too short
-cw-can: -:3: `garbage` is not a candump log line: (SECONDS) CHANNEL ID#DATA
+cw-can: -:3: `garbage` is not a candump log line: (SECONDS) CHANNEL ID#DATA [R|T]
 cw-can: 2 bad line(s)
 "
     );
@@ -193,4 +193,36 @@ fn usage_errors_and_missing_files_exit_2() {
     assert_eq!(out.status.code(), Some(2));
     assert!(text(&out.stderr).starts_with("cw-can: cannot read /nonexistent.dbc"));
     assert_eq!(run(&["--help"], "").status.code(), Some(0));
+}
+
+#[test]
+fn asc_and_blf_logs_decode_by_their_extension_or_as_told() {
+    let dbc = ecu_dbc();
+    let dbc = dbc.to_str().expect("path");
+    let data = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/data");
+    for file in ["python-can.asc", "python-can.blf", "python-can.log"] {
+        let path = data.join(file);
+        let out = run(&["decode", "--dbc", dbc, path.to_str().expect("path")], "");
+        assert_eq!(out.status.code(), Some(0), "{file}: {}", text(&out.stderr));
+        let stdout = text(&out.stdout);
+        assert_eq!(stdout.lines().count(), 6, "{file}");
+        assert!(
+            stdout.contains(" 300##1000102030405060708090A0B (not in the DBC)"),
+            "{file}: {stdout}"
+        );
+    }
+    // A BLF read as candump: every line bad, exit status 1.
+    let blf = data.join("python-can.blf");
+    let out = run(
+        &[
+            "decode",
+            "--log-format",
+            "candump",
+            "--dbc",
+            dbc,
+            blf.to_str().expect("path"),
+        ],
+        "",
+    );
+    assert_eq!(out.status.code(), Some(1));
 }

@@ -71,9 +71,11 @@ pub fn decode_service(op: u8, a: u8, b: u8, c: u8) -> Service {
 #[cfg(test)]
 mod targets {
     use super::decode_service;
+    use cw_can::asc::AscReader;
+    use cw_can::blf::BlfReader;
     use cw_can::codec;
     use cw_can::dbc::Database;
-    use cw_can::log::CandumpReader;
+    use cw_can::log::{At, CandumpReader};
     use cw_can::report::{self, Format};
     use cw_core::can::{slcan, CanFrame, CanId};
     use cw_core::com::signal::{spec, ByteOrder, SignalLayout, Signedness};
@@ -223,7 +225,8 @@ mod targets {
     }
 
     /// Any DBC and any log, as `cw-can decode` reads them (the input's bytes up to the
-    /// first 0 byte are the DBC, in UTF-8 or Windows-1252; the rest is a candump log): the
+    /// first 0 byte are the DBC, in UTF-8 or Windows-1252; the rest is read as a candump
+    /// log and as an ASC log): the
     /// DBC loads or is refused with a reason, every log line is an entry or an error that
     /// names its line, and every entry decodes or is refused, then renders in every output
     /// form, never a panic. Each decoded frame's signals encode back into the same bits.
@@ -238,11 +241,16 @@ mod targets {
                 return;
             };
             let lines = log.split(|b| *b == b'\n').count();
-            for item in CandumpReader::new(log) {
+            let candump = CandumpReader::new(log);
+            let asc = AscReader::new(log);
+            for item in candump.chain(asc) {
                 let entry = match item {
                     Ok(entry) => entry,
                     Err(e) => {
-                        assert!((1..=lines).contains(&e.line), "{e}");
+                        assert!(
+                            e.line_number().is_some_and(|n| (1..=lines).contains(&n)),
+                            "{e}"
+                        );
                         continue;
                     }
                 };
@@ -284,5 +292,25 @@ mod targets {
                 d.signal.name
             );
         }
+    }
+
+    /// Any bytes as a BLF file (`cw-can`'s reader of Vector's binary logs, zlib
+    /// containers included): refused at the header, or entries and errors that name a
+    /// byte offset, never a panic, and an end.
+    #[test]
+    fn blf_bytes() {
+        bolero::check!().for_each(|bytes: &[u8]| {
+            let Ok(reader) = BlfReader::new(bytes.to_vec()) else {
+                return;
+            };
+            let mut errors = 0;
+            for item in reader {
+                if let Err(e) = item {
+                    assert!(matches!(e.at, At::Byte(_)), "{e}");
+                    errors += 1;
+                    assert!(errors <= bytes.len(), "an error per object at most");
+                }
+            }
+        });
     }
 }

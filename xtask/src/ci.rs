@@ -17,6 +17,7 @@ pub const FUZZ_TARGETS: &[&str] = &[
     "targets::scenario_text",
     "targets::sensor_uart_stream",
     "targets::dbc_and_log",
+    "targets::blf_bytes",
 ];
 
 /// How long the `fuzz` stage runs each target (cargo-bolero `-T`).
@@ -368,7 +369,8 @@ fn ecu_run() -> Cmd {
 }
 
 /// The ECU's CAN log and trace, read back by python-can and cantools with the DBC: every
-/// distance on the bus equals what the ECU measured, for each example scenario.
+/// distance on the bus equals what the ECU measured, for each example scenario. Then
+/// random frames written by python-can as candump, ASC and BLF, read back by `cw-can`.
 fn interop() -> Result {
     let out = crate::process::root().join("target").join("interop");
     std::fs::create_dir_all(&out).map_err(|e| format!("cannot create {}: {e}", out.display()))?;
@@ -390,5 +392,6 @@ fn interop() -> Result {
             .arg(&trace)
             .run()?;
     }
-    Ok(())
+    // python-can's log writers against cw-can's readers.
+    crate::log_formats::run(&crate::log_formats::Options::default())
 }

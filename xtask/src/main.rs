@@ -6,6 +6,8 @@
 //!   cantools on random layouts, values and PDU lengths;
 //! - `cargo xtask dbc-differential [--frames N] [--seed S]`: `cw-can`'s DBC decoding and
 //!   encoding against cantools on random DBCs;
+//! - `cargo xtask log-formats [--frames N] [--seed S]`: python-can's ASC, BLF and candump
+//!   writers against `cw-can`'s readers;
 //! - `cargo xtask callgrind`: instructions per call of the codec and scheduler probes;
 //! - `cargo xtask coverage [--write]`: branch coverage of the core, every branch not taken
 //!   both ways explained in `docs/coverage.md`;
@@ -29,6 +31,7 @@ mod coverage;
 mod dbc_differential;
 mod differential;
 mod json;
+mod log_formats;
 mod mutants;
 mod mutation;
 mod process;
@@ -57,6 +60,9 @@ commands:
   dbc-differential [--frames N] [--seed SEED]
         compare cw-can's decoding and encoding with cantools on random DBCs, at least N
         frames (default 12000)
+  log-formats [--frames N] [--seed SEED]
+        write N random frames (default 3000) with python-can as candump, ASC and BLF,
+        and compare cw-can's readings with python-can's
   callgrind [--binary PATH]
         count instructions per call of each probe in core/examples/callgrind_probe.rs
         (built in release), or in a prebuilt probe binary taking `<op> <iterations>`
@@ -115,6 +121,7 @@ fn run(args: &[String]) -> Result {
             ci::run(&ci::Options::parse(&["--only".into(), "setup".into()])?)
         }
         "differential" => differential::run(&differential::Options::parse(rest)?),
+        "log-formats" => log_formats::run(&log_formats::Options::parse(rest)?),
         "dbc-differential" => dbc_differential::run(&dbc_differential::Options::parse(rest)?),
         "callgrind" => callgrind::run(&callgrind::Options::parse(rest)?),
         "qemu" => qemu::run(&qemu::Options::parse(rest)?),
