@@ -8,6 +8,7 @@
 //! - [`dbc`]: a DBC checked once at load (sizes, layouts, floats, multiplexers);
 //! - [`codec`]: signals decoded and encoded with cantools' semantics, the bits by the
 //!   ECU's own proved codec;
+//! - [`slcan`]: a live bus through an SLCAN adapter (serial device or `socket://`);
 //! - [`report`]: the decoded frames as text lines, JSON objects or CSV rows.
 
 #![forbid(unsafe_code)]
@@ -30,3 +31,4 @@ pub mod dbc;
 pub mod frame;
 pub mod log;
 pub mod report;
+pub mod slcan;

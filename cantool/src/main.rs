@@ -33,8 +33,9 @@ use clap::{Parser, Subcommand};
 use cw_can::codec::{self, Input};
 use cw_can::dbc::Database;
 use cw_can::frame::{Frame, FrameKind};
-use cw_can::log::LogFormat;
+use cw_can::log::{Entries, LogFormat};
 use cw_can::report::{self, Format};
+use cw_can::slcan::{Limits, SlcanSource};
 
 /// Decode CAN logs with a DBC, or encode signal values into a frame.
 #[derive(Parser)]
@@ -60,8 +61,25 @@ enum Command {
         /// The logs' format [default: by extension: .asc ASC, .blf BLF, else candump].
         #[arg(long, value_enum)]
         log_format: Option<LogFormat>,
+        /// Read a live bus from an SLCAN adapter instead of logs: a serial device
+        /// (`/dev/ttyACM0`) or `socket://HOST:PORT`, as python-can names them.
+        #[arg(long, value_name = "PORT")]
+        slcan: Option<String>,
+        /// The serial device's baud rate (`--slcan` on a device).
+        #[arg(long, default_value_t = 115_200)]
+        baud: u32,
+        /// Set the adapter's CAN bit rate first: SLCAN's index, 0 (10 kbit/s) to 8
+        /// (1 Mbit/s); 6 is 500 kbit/s.
+        #[arg(long, value_name = "N", value_parser = clap::value_parser!(u8).range(0..=8))]
+        bitrate: Option<u8>,
+        /// With `--slcan`: stop after this many frames.
+        #[arg(long, value_name = "N")]
+        frames: Option<usize>,
+        /// With `--slcan`: stop after this many seconds.
+        #[arg(long, value_name = "S")]
+        seconds: Option<f64>,
         /// Log files, or - for standard input.
-        #[arg(required = true)]
+        #[arg(required_unless_present = "slcan", conflicts_with = "slcan")]
         logs: Vec<PathBuf>,
     },
     /// Encode signal values into a frame of a message, printed as `ID#DATA`.
@@ -90,28 +108,56 @@ fn out_err(e: std::io::Error) -> Fatal {
 }
 
 /// Decodes every log; returns how many lines were bad.
-fn decode(
-    dbc: &PathBuf,
-    strict: bool,
-    format: Format,
-    log_format: Option<LogFormat>,
-    logs: &[PathBuf],
-) -> Result<usize, Fatal> {
+/// Where `decode` reads frames from.
+enum Source<'a> {
+    Logs(&'a [PathBuf], Option<LogFormat>),
+    Slcan {
+        port: &'a str,
+        baud: u32,
+        bitrate: Option<u8>,
+        limits: Limits,
+    },
+}
+
+fn decode(dbc: &PathBuf, strict: bool, format: Format, source: Source<'_>) -> Result<usize, Fatal> {
     let db = load(dbc)?;
     let stdout = std::io::stdout();
     let mut out = std::io::BufWriter::new(stdout.lock());
     if format == Format::Csv {
         writeln!(out, "{}", report::CSV_HEADER).map_err(out_err)?;
     }
+    let live = matches!(source, Source::Slcan { .. });
+    let inputs: Vec<(String, Entries)> = match source {
+        Source::Logs(logs, log_format) => logs
+            .iter()
+            .map(|log| {
+                let name = log.display().to_string();
+                cw_can::log::open(log, log_format)
+                    .map(|entries| (name, entries))
+                    .map_err(Fatal)
+            })
+            .collect::<Result<_, _>>()?,
+        Source::Slcan {
+            port,
+            baud,
+            bitrate,
+            limits,
+        } => {
+            let live = SlcanSource::open(port, baud, bitrate, limits).map_err(Fatal)?;
+            vec![(port.to_string(), Box::new(live) as Entries)]
+        }
+    };
     let mut bad = 0;
-    for log in logs {
-        let name = log.display().to_string();
-        for item in cw_can::log::open(log, log_format).map_err(Fatal)? {
+    for (name, entries) in inputs {
+        for item in entries {
             let problem = match &item {
                 Err(e) => Some(format!("{name}:{e}")),
                 Ok((at, entry)) => match report::decode(&db, entry) {
                     Ok(r) => {
                         writeln!(out, "{}", r.render(format)).map_err(out_err)?;
+                        if live {
+                            out.flush().map_err(out_err)?;
+                        }
                         None
                     }
                     Err(e) => Some(format!("{name}:{at}: {}: {e}", entry.frame)),
@@ -170,8 +216,29 @@ fn main() -> ExitCode {
             strict,
             format,
             log_format,
+            slcan,
+            baud,
+            bitrate,
+            frames,
+            seconds,
             logs,
-        } => decode(dbc, *strict, *format, *log_format, logs),
+        } => {
+            let source = match slcan {
+                Some(port) => Source::Slcan {
+                    port,
+                    baud: *baud,
+                    bitrate: *bitrate,
+                    limits: Limits {
+                        frames: *frames,
+                        duration: seconds
+                            .filter(|s| s.is_finite() && *s >= 0.0)
+                            .map(std::time::Duration::from_secs_f64),
+                    },
+                },
+                None => Source::Logs(logs, *log_format),
+            };
+            decode(dbc, *strict, *format, source)
+        }
         Command::Encode {
             dbc,
             message,

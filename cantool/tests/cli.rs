@@ -226,3 +226,106 @@ fn asc_and_blf_logs_decode_by_their_extension_or_as_told() {
     );
     assert_eq!(out.status.code(), Some(1));
 }
+
+/// A fake SLCAN adapter on a TCP port: checks the opening commands, sends `lines`, and
+/// closes the connection.
+fn adapter(lines: &'static [u8]) -> (String, std::thread::JoinHandle<Vec<u8>>) {
+    use std::io::Read;
+    let listener = std::net::TcpListener::bind("127.0.0.1:0").expect("a free port");
+    let port = listener.local_addr().expect("bound").port();
+    let handle = std::thread::spawn(move || {
+        let (mut stream, _) = listener.accept().expect("cw-can connects");
+        let mut got = Vec::new();
+        let mut byte = [0u8; 1];
+        while !got.ends_with(b"O\r") {
+            match stream.read(&mut byte) {
+                Ok(1) => got.push(byte[0]),
+                _ => break,
+            }
+        }
+        stream.write_all(lines).expect("lines sent");
+        got
+    });
+    (format!("socket://127.0.0.1:{port}"), handle)
+}
+
+#[test]
+fn a_live_slcan_adapter_is_decoded_as_it_sends() {
+    let dbc = ecu_dbc();
+    let (url, handle) =
+        adapter(b"\r\rt1008E8030000010000001234\rz\rt2004F401E803\rT123456782AABB\rxyz\r\x07r1004\rb2FF9000102030405060708090A0B\r");
+    let out = run(
+        &[
+            "decode",
+            "--dbc",
+            dbc.to_str().expect("path"),
+            "--slcan",
+            &url,
+            "--bitrate",
+            "6",
+        ],
+        "",
+    );
+    let opened = handle.join().expect("adapter thread");
+    assert_eq!(opened, b"C\rS6\rO\r", "closed, bit rate set, opened");
+    let stdout = text(&out.stdout);
+    let lines: Vec<&str> = stdout
+        .lines()
+        .map(|l| l.split_once(") ").map_or(l, |(_, rest)| rest))
+        .collect();
+    assert_eq!(
+        lines,
+        [
+            format!(
+                "{url} 100#E803000001000000 DistanceFrame(Distance: 1000 mm, WarningLevel: Yellow)"
+            ),
+            format!("{url} 200#F401E803 ThresholdConfig(RedBelow: 500 mm, YellowBelow: 1000 mm)"),
+            format!("{url} 12345678#AABB (not in the DBC)"),
+            format!("{url} 100#R4 (remote frame)"),
+            format!("{url} 2FF##1000102030405060708090A0B (not in the DBC)"),
+        ]
+    );
+    assert_eq!(
+        text(&out.stderr),
+        format!(
+            "cw-can: {url}:7: `xyz` is no SLCAN frame\ncw-can: {url}:8: the adapter refused a command (BEL)\ncw-can: 2 bad line(s)\n"
+        )
+    );
+    assert_eq!(out.status.code(), Some(1));
+}
+
+#[test]
+fn a_live_source_stops_after_the_frames_asked_for() {
+    let dbc = ecu_dbc();
+    let (url, handle) = adapter(b"t3001AA\rt3001BB\rt3001CC\r");
+    let out = run(
+        &[
+            "decode",
+            "--dbc",
+            dbc.to_str().expect("path"),
+            "--slcan",
+            &url,
+            "--frames",
+            "2",
+        ],
+        "",
+    );
+    handle.join().expect("adapter thread");
+    assert_eq!(
+        text(&out.stdout).lines().count(),
+        2,
+        "{}",
+        text(&out.stderr)
+    );
+    let out = run(
+        &[
+            "decode",
+            "--dbc",
+            dbc.to_str().expect("path"),
+            "--slcan",
+            "socket://127.0.0.1:1",
+        ],
+        "",
+    );
+    assert_eq!(out.status.code(), Some(2), "nothing listens there");
+}

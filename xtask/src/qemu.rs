@@ -336,7 +336,68 @@ pub fn run(options: &Options) -> Result {
     }
     if options.live {
         live(&image, &out)?;
+        cw_can_live(&image, &out)?;
     }
+    Ok(())
+}
+
+/// `cw-can` on the running image's bus: the scenario image plays Figure 7 with its SLCAN
+/// UART on a TCP port, and `cw-can decode --slcan socket://...` decodes the frames as they
+/// come, until the image ends. Every line must decode (exit status 0), and every frame
+/// must be one of the ECU's DistanceFrames.
+fn cw_can_live(image: &Path, out: &Path) -> Result {
+    Cmd::new("cargo")
+        .args(["build", "-q", "-p", "cw-can"])
+        .run()?;
+    let tool = target_dir().join("debug").join("cw-can");
+    let port = free_port()?;
+    let serial = format!("tcp:127.0.0.1:{port},server=on,wait=on");
+    let image = image.to_path_buf();
+    let dir = out.join("cw-can-live");
+    let qemu = std::thread::spawn(move || {
+        run_image(&image, &dir, Some(&serial), Some(&root().join(FIGURE7)))
+    });
+    let url = format!("socket://127.0.0.1:{port}");
+    println!(
+        "$ {} decode --dbc firmware/ecu.dbc --slcan {url}",
+        tool.display()
+    );
+    // QEMU listens once it has started; try until it does.
+    let mut attempt = 0;
+    let output = loop {
+        let output = std::process::Command::new(&tool)
+            .args(["decode", "--dbc"])
+            .arg(root().join("firmware").join("ecu.dbc"))
+            .args(["--slcan", &url])
+            .stdin(std::process::Stdio::null())
+            .output()
+            .map_err(|e| format!("running {}: {e}", tool.display()))?;
+        let refused = String::from_utf8_lossy(&output.stderr).contains("cannot connect");
+        attempt += 1;
+        if !refused || attempt >= 100 {
+            break output;
+        }
+        std::thread::sleep(std::time::Duration::from_millis(100));
+    };
+    qemu.join()
+        .map_err(|_| "qemu: the image's thread panicked".to_string())??;
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    let frames = stdout.lines().count();
+    let distance = stdout
+        .lines()
+        .filter(|l| l.contains(" 100#") && l.contains(" DistanceFrame(Distance: "))
+        .count();
+    if !output.status.success() || frames == 0 || distance != frames {
+        return Err(format!(
+            "qemu: cw-can on the image's SLCAN port: exit {:?}, {frames} lines, {distance} DistanceFrames\n{stderr}{}",
+            output.status.code(),
+            stdout.lines().take(5).collect::<Vec<_>>().join("\n")
+        ));
+    }
+    println!(
+        "qemu: cw-can decoded {distance} DistanceFrames live from the image's SLCAN port (Figure 7), every line"
+    );
     Ok(())
 }
 
