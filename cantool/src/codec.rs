@@ -28,20 +28,24 @@ pub enum Physical {
     Float(f64),
 }
 
+/// Integers as they are; floats with a point or an exponent, in the shortest form that
+/// reads back as the same value (`980.0`, `1.46`, `-4.152327929361858e-21`), as cantools
+/// (Python's `repr`) writes them.
 impl fmt::Display for Physical {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
             Self::Int(v) => write!(f, "{v}"),
-            Self::Float(v) => write!(f, "{v}"),
+            Self::Float(v) => write!(f, "{v:?}"),
         }
     }
 }
 
+/// As [`Physical`]'s.
 impl fmt::Display for Raw {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
             Self::Int(v) => write!(f, "{v}"),
-            Self::Float(v) => write!(f, "{v}"),
+            Self::Float(v) => write!(f, "{v:?}"),
         }
     }
 }

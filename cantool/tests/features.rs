@@ -58,7 +58,7 @@ fn integers_factors_offsets_and_value_tables_decode_as_cantools() {
         Ok(vec![
             "Distance=1000".into(),
             "Level=Red".into(),
-            "Temp=980".into(),
+            "Temp=980.0".into(),
             "Ratio=0.18".into()
         ])
     );
@@ -73,7 +73,7 @@ fn ieee_floats_and_doubles_decode_as_floats() {
     let db = db();
     assert_eq!(
         decoded(&db, "Floaty", "0000C03F000000000000F03F"),
-        Ok(vec!["Single=1.5".into(), "Double=3".into()])
+        Ok(vec!["Single=1.5".into(), "Double=3.0".into()])
     );
 }
 

@@ -8,6 +8,8 @@
 //!   encoding against cantools on random DBCs;
 //! - `cargo xtask log-formats [--frames N] [--seed S]`: python-can's ASC, BLF and candump
 //!   writers against `cw-can`'s readers;
+//! - `cargo xtask decode-speed [--frames N]`: `cw-can decode` and `cantools decode` timed
+//!   on one large log;
 //! - `cargo xtask callgrind`: instructions per call of the codec and scheduler probes;
 //! - `cargo xtask coverage [--write]`: branch coverage of the core, every branch not taken
 //!   both ways explained in `docs/coverage.md`;
@@ -29,6 +31,7 @@ mod callgrind;
 mod ci;
 mod coverage;
 mod dbc_differential;
+mod decode_speed;
 mod differential;
 mod json;
 mod log_formats;
@@ -63,6 +66,9 @@ commands:
   log-formats [--frames N] [--seed SEED]
         write N random frames (default 3000) with python-can as candump, ASC and BLF,
         and compare cw-can's readings with python-can's
+  decode-speed [--frames N]
+        time cw-can decode (release) and cantools decode on one log of N frames
+        (default 200000)
   callgrind [--binary PATH]
         count instructions per call of each probe in core/examples/callgrind_probe.rs
         (built in release), or in a prebuilt probe binary taking `<op> <iterations>`
@@ -121,6 +127,7 @@ fn run(args: &[String]) -> Result {
             ci::run(&ci::Options::parse(&["--only".into(), "setup".into()])?)
         }
         "differential" => differential::run(&differential::Options::parse(rest)?),
+        "decode-speed" => decode_speed::run(&decode_speed::Options::parse(rest)?),
         "log-formats" => log_formats::run(&log_formats::Options::parse(rest)?),
         "dbc-differential" => dbc_differential::run(&dbc_differential::Options::parse(rest)?),
         "callgrind" => callgrind::run(&callgrind::Options::parse(rest)?),
