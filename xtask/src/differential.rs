@@ -12,7 +12,6 @@
 //!    value), refuses the layouts we refuse, and writes its encoded bytes back.
 //! 3. Here again: we unpack cantools' bytes and pack the value into them (no change).
 
-use crate::json::{parse_flat, Obj};
 use crate::process::{root, target_dir, Cmd};
 use crate::rng::Rng;
 use crate::setup::venv_python;
@@ -353,34 +352,50 @@ pub fn run(options: &Options) -> Result {
     std::fs::create_dir_all(&dir).map_err(|e| format!("creating {}: {e}", dir.display()))?;
     let cases_path = dir.join("cases.jsonl");
     let out_path = dir.join("cantools.jsonl");
-    let mut text = String::new();
-    for c in &cases {
-        text.push_str(
-            &Obj::new()
-                .str("kind", "case")
-                .int("id", c.id as u64)
-                .int("pdu_len", c.pdu_len as u64)
-                .int("start_bit", c.start_bit)
-                .int("length", c.length_bits)
-                .str("order", order_name(c.order))
-                .bool("signed", c.signedness == Signedness::Signed)
-                .int("value", c.value)
-                .str("packed", &hex(&c.packed))
-                .str("bg_packed", &hex(&c.bg_packed))
-                .finish(),
-        );
-        text.push('\n');
+    /// One line of the cases file (see `tools/codec_differential.py`).
+    #[derive(serde::Serialize)]
+    #[serde(tag = "kind", rename_all = "snake_case")]
+    enum Line<'a> {
+        Case {
+            id: usize,
+            pdu_len: usize,
+            start_bit: u16,
+            length: u8,
+            order: &'a str,
+            signed: bool,
+            value: i128,
+            packed: String,
+            bg_packed: String,
+        },
+        Reject {
+            pdu_len: usize,
+            start_bit: u16,
+            length: u8,
+            order: &'a str,
+        },
     }
-    for r in &rejects {
-        text.push_str(
-            &Obj::new()
-                .str("kind", "reject")
-                .int("pdu_len", r.pdu_len as u64)
-                .int("start_bit", r.start_bit)
-                .int("length", r.length_bits)
-                .str("order", order_name(r.order))
-                .finish(),
-        );
+    let lines = cases
+        .iter()
+        .map(|c| Line::Case {
+            id: c.id,
+            pdu_len: c.pdu_len,
+            start_bit: c.start_bit,
+            length: c.length_bits,
+            order: order_name(c.order),
+            signed: c.signedness == Signedness::Signed,
+            value: c.value,
+            packed: hex(&c.packed),
+            bg_packed: hex(&c.bg_packed),
+        })
+        .chain(rejects.iter().map(|r| Line::Reject {
+            pdu_len: r.pdu_len,
+            start_bit: r.start_bit,
+            length: r.length_bits,
+            order: order_name(r.order),
+        }));
+    let mut text = String::new();
+    for line in lines {
+        text.push_str(&serde_json::to_string(&line).map_err(|e| format!("a case as JSON: {e}"))?);
         text.push('\n');
     }
     std::fs::write(&cases_path, text)
@@ -412,22 +427,34 @@ pub fn run(options: &Options) -> Result {
     let mut encoded: HashMap<usize, Vec<u8>> = HashMap::new();
     let mut counts = (0i128, 0i128, 0i128);
     for (n, line) in out.lines().enumerate() {
-        let obj = parse_flat(line).map_err(|e| format!("{}:{}: {e}", out_path.display(), n + 1))?;
-        match obj.str("kind")? {
+        let at = || format!("{}:{}", out_path.display(), n + 1);
+        let obj: serde_json::Value =
+            serde_json::from_str(line).map_err(|e| format!("{}: {e}", at()))?;
+        let int = |key: &str| {
+            obj.get(key)
+                .and_then(serde_json::Value::as_i64)
+                .ok_or_else(|| format!("{}: no integer `{key}`", at()))
+        };
+        let text = |key: &str| {
+            obj.get(key)
+                .and_then(serde_json::Value::as_str)
+                .ok_or_else(|| format!("{}: no string `{key}`", at()))
+        };
+        match text("kind")? {
             "encoded" => {
                 encoded.insert(
-                    usize::try_from(obj.int("id")?).unwrap_or(usize::MAX),
-                    unhex(obj.str("cantools")?)?,
+                    usize::try_from(int("id")?).unwrap_or(usize::MAX),
+                    unhex(text("cantools")?)?,
                 );
             }
-            "summary" => counts = (obj.int("encode")?, obj.int("decode")?, obj.int("refused")?),
-            other => {
-                return Err(format!(
-                    "{}:{}: unknown kind `{other}`",
-                    out_path.display(),
-                    n + 1
-                ))
+            "summary" => {
+                counts = (
+                    i128::from(int("encode")?),
+                    i128::from(int("decode")?),
+                    i128::from(int("refused")?),
+                )
             }
+            other => return Err(format!("{}: unknown kind `{other}`", at())),
         }
     }
     let mut mismatches = Vec::new();

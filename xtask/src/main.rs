@@ -33,7 +33,6 @@ mod coverage;
 mod dbc_differential;
 mod decode_speed;
 mod differential;
-mod json;
 mod log_formats;
 mod mutants;
 mod mutation;

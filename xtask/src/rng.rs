@@ -1,48 +1,36 @@
-//! A small seeded generator (xoshiro256**, seeded through splitmix64), so a differential
-//! run can be replayed exactly from its printed seed.
+//! The seeded generator of the differential and log-format runs: `rand`'s xoshiro256**
+//! (`rand_xoshiro`, seeded through SplitMix64), so a run can be replayed exactly from its
+//! printed seed, with the few draws the generators need.
 
-/// xoshiro256** state.
-pub struct Rng([u64; 4]);
+use rand::{Rng as _, RngCore as _, SeedableRng as _};
+use rand_xoshiro::Xoshiro256StarStar;
+
+/// A seeded generator.
+pub struct Rng(Xoshiro256StarStar);
 
 impl Rng {
     /// A generator whose whole sequence is determined by `seed`.
     pub fn new(seed: u64) -> Self {
-        let mut sm = seed;
-        let mut next = || {
-            sm = sm.wrapping_add(0x9E37_79B9_7F4A_7C15);
-            let mut z = sm;
-            z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-            z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-            z ^ (z >> 31)
-        };
-        Self([next(), next(), next(), next()])
+        Self(Xoshiro256StarStar::seed_from_u64(seed))
     }
 
-    /// A seed taken from the clock and the process id, for runs without `--seed`.
+    /// A seed from the operating system, for runs without `--seed`.
     pub fn fresh_seed() -> u64 {
-        let nanos = std::time::SystemTime::now()
-            .duration_since(std::time::UNIX_EPOCH)
-            .map_or(0, |d| d.as_nanos() as u64);
-        nanos ^ (u64::from(std::process::id()) << 32)
+        rand::random()
     }
 
     /// The next 64 random bits.
     pub fn next_u64(&mut self) -> u64 {
-        let s = &mut self.0;
-        let result = s[1].wrapping_mul(5).rotate_left(7).wrapping_mul(9);
-        let t = s[1] << 17;
-        s[2] ^= s[0];
-        s[3] ^= s[1];
-        s[1] ^= s[2];
-        s[0] ^= s[3];
-        s[2] ^= t;
-        s[3] = s[3].rotate_left(45);
-        result
+        self.0.next_u64()
     }
 
-    /// A number in `0..n` (`n > 0`; the modulo bias is negligible for the small `n` used).
+    /// A number in `0..n`, uniformly (`0` when `n` is 0).
     pub fn below(&mut self, n: u64) -> u64 {
-        self.next_u64() % n.max(1)
+        if n == 0 {
+            0
+        } else {
+            self.0.random_range(0..n)
+        }
     }
 
     /// True with probability `1 / n`.
@@ -50,7 +38,7 @@ impl Rng {
         self.below(n) == 0
     }
 
-    /// A uniformly chosen element of a non-empty slice.
+    /// A uniformly chosen element of a slice, or `fallback` when it is empty.
     pub fn pick<T: Copy>(&mut self, items: &[T], fallback: T) -> T {
         let i = self.below(items.len() as u64) as usize;
         items.get(i).copied().unwrap_or(fallback)
@@ -58,9 +46,21 @@ impl Rng {
 
     /// Fills `bytes` with random bytes.
     pub fn fill(&mut self, bytes: &mut [u8]) {
-        for chunk in bytes.chunks_mut(8) {
-            let r = self.next_u64().to_le_bytes();
-            chunk.copy_from_slice(&r[..chunk.len()]);
-        }
+        self.0.fill_bytes(bytes);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::Rng;
+
+    #[test]
+    fn a_seed_replays_its_sequence() {
+        let (mut a, mut b) = (Rng::new(7), Rng::new(7));
+        let draws = |r: &mut Rng| (r.next_u64(), r.below(10), r.pick(&[1, 2, 3], 0));
+        assert_eq!(draws(&mut a), draws(&mut b));
+        assert_ne!(Rng::new(7).next_u64(), Rng::new(8).next_u64());
+        assert_eq!(Rng::new(1).below(0), 0);
+        assert_eq!(Rng::new(1).pick::<u8>(&[], 9), 9);
     }
 }
