@@ -39,7 +39,7 @@ use cw_can::slcan::{Limits, SlcanSource};
 
 /// Decode CAN logs with a DBC, or encode signal values into a frame.
 #[derive(Parser)]
-#[command(name = "cw-can", version, about, long_about = None)]
+#[command(name = "cw-can", version)]
 struct Cli {
     #[command(subcommand)]
     command: Command,

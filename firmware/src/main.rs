@@ -2,9 +2,11 @@
 //!
 //! Runs a scenario (by default the paper's Figure 7) in virtual time and prints, per
 //! obstacle position, the distance measured and the LEDs lit, as the paper reports it,
-//! then a summary. See `--help`.
+//! then a summary. See `--help`; the options are parsed by clap.
 
 use std::io::Write;
+
+use clap::Parser;
 use std::process::ExitCode;
 use std::time::{Duration, Instant};
 
@@ -12,75 +14,43 @@ use cw_bsp::host::CandumpLog;
 use cw_core::warning::{Measurement, WarningLevel};
 use cw_firmware::host::{Scenario, Simulation, TraceRow};
 
-const HELP: &str = "\
-cw-ecu: the collision-warning ECU (Kim et al., open-source AUTOSAR on an MPC5748G),
-simulated on a host board in virtual time.
-
-USAGE: cargo run --release [-- OPTIONS]
-
-OPTIONS:
-  --scenario FILE    run this scenario instead of the paper's Figure 7
-                     (format: firmware/src/host/scenario.rs, examples in scenarios/)
-  --trace FILE       write a CSV row every 10 ms:
-                     time_ms,true_distance_mm,measured_distance_mm,level,red,yellow,measurement
-  --can-log FILE     write every CAN frame on the bus in candump log format
-  --duration SECONDS run this long instead of the scenario's length
-  --seed N           seed of the sensor noise (default 1)
-  --realtime         pace the simulation to the wall clock
-  --help             this text
-";
-
+/// The collision-warning ECU (Kim et al., open-source AUTOSAR on an MPC5748G), simulated
+/// on a host board in virtual time: runs a scenario (by default the paper's Figure 7) and
+/// prints, per obstacle position, the distance measured and the LEDs lit, then a summary.
+#[derive(Parser)]
+#[command(name = "cw-ecu", version)]
 struct Options {
+    /// Run this scenario instead of the paper's Figure 7 (format:
+    /// firmware/src/host/scenario.rs, examples in scenarios/)
+    #[arg(long, value_name = "FILE")]
     scenario: Option<String>,
+    /// Write a CSV row every 10 ms: time_ms,true_distance_mm,measured_distance_mm,level,
+    /// red,yellow,measurement
+    #[arg(long, value_name = "FILE")]
     trace: Option<String>,
+    /// Write every CAN frame on the bus in candump log format
+    #[arg(long, value_name = "FILE")]
     can_log: Option<String>,
+    /// Run this long instead of the scenario's length (more than 0, at most 10^7 s)
+    #[arg(long = "duration", value_name = "SECONDS", value_parser = duration_ms, allow_negative_numbers = true)]
     duration_ms: Option<u64>,
+    /// Seed of the sensor noise
+    #[arg(long, default_value_t = 1)]
     seed: u64,
+    /// Pace the simulation to the wall clock
+    #[arg(long)]
     realtime: bool,
 }
 
-fn parse_args(args: &[String]) -> Result<Option<Options>, String> {
-    let mut o = Options {
-        scenario: None,
-        trace: None,
-        can_log: None,
-        duration_ms: None,
-        seed: 1,
-        realtime: false,
-    };
-    let mut it = args.iter();
-    while let Some(arg) = it.next() {
-        let mut value = |name: &str| {
-            it.next()
-                .cloned()
-                .ok_or_else(|| format!("{name} needs a value"))
-        };
-        match arg.as_str() {
-            "--help" | "-h" => return Ok(None),
-            "--scenario" => o.scenario = Some(value("--scenario")?),
-            "--trace" => o.trace = Some(value("--trace")?),
-            "--can-log" => o.can_log = Some(value("--can-log")?),
-            "--seed" => {
-                let v = value("--seed")?;
-                o.seed = v
-                    .parse()
-                    .map_err(|_| format!("--seed: `{v}` is not a whole number"))?;
-            }
-            "--duration" => {
-                let v = value("--duration")?;
-                let seconds: f64 = v
-                    .parse()
-                    .map_err(|_| format!("--duration: `{v}` is not a number of seconds"))?;
-                if !(seconds > 0.0 && seconds <= 1.0e7) {
-                    return Err(format!("--duration: {v} s is not between 0 and 10^7 s"));
-                }
-                o.duration_ms = Some((seconds * 1000.0).round() as u64);
-            }
-            "--realtime" => o.realtime = true,
-            other => return Err(format!("unknown option `{other}` (see --help)")),
-        }
+/// `--duration`: seconds, more than 0 and at most 10^7, as whole milliseconds.
+fn duration_ms(v: &str) -> Result<u64, String> {
+    let seconds: f64 = v
+        .parse()
+        .map_err(|_| format!("`{v}` is not a number of seconds"))?;
+    if !(seconds > 0.0 && seconds <= 1.0e7) {
+        return Err(format!("{v} s is not between 0 and 10^7 s"));
     }
-    Ok(Some(o))
+    Ok((seconds * 1000.0).round() as u64)
 }
 
 fn on_off(lit: bool) -> &'static str {
@@ -205,16 +175,9 @@ fn run(o: &Options) -> Result<(), String> {
 }
 
 fn main() -> ExitCode {
-    let args: Vec<String> = std::env::args().skip(1).collect();
-    let result = match parse_args(&args) {
-        Ok(None) => {
-            print!("{HELP}");
-            Ok(())
-        }
-        Ok(Some(options)) => run(&options),
-        Err(e) => Err(e),
-    };
-    match result {
+    // Usage errors (an unknown option, a bad value) are clap's: a message and exit status 2.
+    let options = Options::parse();
+    match run(&options) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("cw-ecu: {e}");
