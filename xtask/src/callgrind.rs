@@ -8,7 +8,7 @@
 //! the exact instruction count of one call (x86-64 of this machine, not the MPC5748G).
 
 use crate::process::{target_dir, Cmd};
-use crate::{option_value, Result};
+use crate::Result;
 use std::path::{Path, PathBuf};
 
 /// Probes, as (op, what one call does). `probe_<op>` must exist in the probe example.
@@ -145,25 +145,12 @@ const EXAMPLE: &str = "callgrind_probe";
 const STACK_EXAMPLE: &str = "stack_probe";
 
 /// Options of `cargo xtask callgrind`.
-#[derive(Default)]
+#[derive(Default, clap::Args)]
 pub struct Options {
-    /// A prebuilt probe binary to measure instead of building the example.
+    /// A prebuilt probe binary to measure (taking `<op> <iterations>`) instead of
+    /// building core/examples/callgrind_probe.rs in release
+    #[arg(long, value_name = "PATH")]
     pub binary: Option<PathBuf>,
-}
-
-impl Options {
-    /// Parses `--binary PATH`.
-    pub fn parse(args: &[String]) -> Result<Self> {
-        let mut options = Self::default();
-        let mut it = args.iter();
-        while let Some(arg) = it.next() {
-            match arg.as_str() {
-                "--binary" => options.binary = Some(PathBuf::from(option_value(arg, &mut it)?)),
-                other => return Err(format!("callgrind: unknown argument `{other}`")),
-            }
-        }
-        Ok(options)
-    }
 }
 
 /// Builds the probe binary (unless one is given) and prints instructions per call for

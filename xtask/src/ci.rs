@@ -3,7 +3,7 @@
 
 use crate::process::Cmd;
 use crate::setup::NIGHTLY;
-use crate::{callgrind, differential, option_value, setup, Result};
+use crate::{callgrind, differential, setup, Result};
 use std::time::Instant;
 
 /// Fuzz targets run by the `fuzz` stage: bolero tests in the `cw-fuzz` package. cargo-bolero
@@ -81,64 +81,51 @@ fn budget_s(stage: &str) -> u32 {
 }
 
 /// Which stages to run.
+#[derive(clap::Args)]
 pub struct Options {
-    stages: Vec<&'static str>,
+    /// Run only these stages (comma-separated, repeatable)
+    #[arg(long, value_name = "STAGE,..", value_delimiter = ',', value_parser = stage)]
+    only: Vec<&'static str>,
+    /// Skip these stages (comma-separated, repeatable)
+    #[arg(long, value_name = "STAGE,..", value_delimiter = ',', value_parser = stage)]
+    skip: Vec<&'static str>,
+    /// Go on after a failing stage (the summary still fails)
+    #[arg(long)]
     keep_going: bool,
 }
 
 impl Options {
-    /// Parses `--only A,B`, `--skip A,B` and `--keep-going`.
-    pub fn parse(args: &[String]) -> Result<Self> {
-        let mut only: Option<Vec<&'static str>> = None;
-        let mut skip: Vec<&'static str> = Vec::new();
-        let mut keep_going = false;
-        let mut it = args.iter();
-        while let Some(arg) = it.next() {
-            match arg.as_str() {
-                "--only" => only
-                    .get_or_insert_with(Vec::new)
-                    .extend(stage_list(option_value(arg, &mut it)?)?),
-                "--skip" => skip.extend(stage_list(option_value(arg, &mut it)?)?),
-                "--keep-going" => keep_going = true,
-                other => {
-                    if let Some(v) = other.strip_prefix("--only=") {
-                        only.get_or_insert_with(Vec::new).extend(stage_list(v)?);
-                    } else if let Some(v) = other.strip_prefix("--skip=") {
-                        skip.extend(stage_list(v)?);
-                    } else {
-                        return Err(format!(
-                            "ci: unknown argument `{other}`; see `cargo xtask help`"
-                        ));
-                    }
-                }
-            }
+    /// Only the given stages.
+    pub fn only(stages: &[&'static str]) -> Self {
+        Self {
+            only: stages.to_vec(),
+            skip: Vec::new(),
+            keep_going: false,
         }
+    }
+
+    /// The stages to run, in order.
+    fn stages(&self) -> Result<Vec<&'static str>> {
         let stages: Vec<&'static str> = STAGES
             .iter()
             .copied()
-            .filter(|s| only.as_ref().is_none_or(|o| o.contains(s)))
-            .filter(|s| !skip.contains(s))
+            .filter(|s| self.only.is_empty() || self.only.contains(s))
+            .filter(|s| !self.skip.contains(s))
             .collect();
         if stages.is_empty() {
             return Err("ci: --only/--skip leave no stage to run".into());
         }
-        Ok(Self { stages, keep_going })
+        Ok(stages)
     }
 }
 
-fn stage_list(list: &str) -> Result<Vec<&'static str>> {
-    list.split(',')
-        .map(str::trim)
-        .filter(|s| !s.is_empty())
-        .map(|name| {
-            STAGES.iter().copied().find(|s| *s == name).ok_or_else(|| {
-                format!(
-                    "ci: unknown stage `{name}`; stages are {}",
-                    STAGES.join(", ")
-                )
-            })
-        })
-        .collect()
+/// A stage's name.
+fn stage(name: &str) -> Result<&'static str> {
+    STAGES
+        .iter()
+        .copied()
+        .find(|s| *s == name.trim())
+        .ok_or_else(|| format!("unknown stage `{name}`; stages are {}", STAGES.join(", ")))
 }
 
 enum Outcome {
@@ -149,14 +136,15 @@ enum Outcome {
 
 /// Runs the selected stages and prints the summary; fails if any stage failed.
 pub fn run(options: &Options) -> Result {
+    let stages = options.stages()?;
     println!(
         "xtask ci: stages {} (CI={})",
-        options.stages.join(", "),
+        stages.join(", "),
         std::env::var("CI").unwrap_or_default()
     );
     let mut results: Vec<(&str, Outcome, f64)> = Vec::new();
     let mut stop = false;
-    for &stage in &options.stages {
+    for &stage in &stages {
         if stop {
             results.push((stage, Outcome::NotRun, 0.0));
             continue;

@@ -40,28 +40,15 @@ const BOLERO_ITERATIONS: &str = "1000";
 /// they take minutes.
 const SKIPPED_TESTS: &[&str] = mutation::SKIPPED_TESTS;
 
-/// Options: `--write`.
+/// Options of `cargo xtask coverage`.
+#[derive(clap::Args)]
 pub struct Options {
+    /// Update docs/coverage.md's table from this run
+    #[arg(long)]
     write: bool,
 }
 
 impl Options {
-    /// Parses `[--write]`.
-    pub fn parse(args: &[String]) -> Result<Self> {
-        let mut write = false;
-        for arg in args {
-            match arg.as_str() {
-                "--write" => write = true,
-                other => {
-                    return Err(format!(
-                        "coverage: unknown argument `{other}`; see `cargo xtask help`"
-                    ))
-                }
-            }
-        }
-        Ok(Self { write })
-    }
-
     /// The check command's stage: measure and judge, write nothing.
     pub fn ci() -> Self {
         Self { write: false }

@@ -20,7 +20,7 @@
 use crate::process::{root, target_dir, Cmd};
 use crate::rng::Rng;
 use crate::setup::venv_python;
-use crate::{option_value, Result};
+use crate::Result;
 use cw_can::codec::{self, Input, Physical};
 use cw_can::dbc::{Database, MessageDef};
 use cw_core::com::signal::spec::{bit_position, layout_fits};
@@ -52,10 +52,13 @@ const FLOAT_CONVERSIONS: &[(&str, &str)] = &[("1", "0"), ("2", "1"), ("0.5", "-3
 const SHOW: usize = 5;
 
 /// Options of `cargo xtask dbc-differential`.
+#[derive(clap::Args)]
 pub struct Options {
-    /// At least this many frames (decoded and encoded).
-    pub frames: usize,
-    /// Generator seed; a fresh one when not given.
+    /// At least this many frames (decoded and encoded)
+    #[arg(long, default_value_t = 12_000, value_parser = clap::value_parser!(u64).range(1..))]
+    pub frames: u64,
+    /// Generator seed (decimal or 0x hex); a fresh one when not given
+    #[arg(long, value_parser = crate::parse_seed)]
     pub seed: Option<u64>,
 }
 
@@ -65,35 +68,6 @@ impl Default for Options {
             frames: 12_000,
             seed: None,
         }
-    }
-}
-
-impl Options {
-    /// Parses `--frames N` and `--seed S` (decimal or `0x` hex).
-    pub fn parse(args: &[String]) -> Result<Self> {
-        let mut options = Self::default();
-        let mut it = args.iter();
-        while let Some(arg) = it.next() {
-            match arg.as_str() {
-                "--frames" => {
-                    let v = option_value(arg, &mut it)?;
-                    options.frames = v.parse().map_err(|e| format!("--frames `{v}`: {e}"))?;
-                }
-                "--seed" => {
-                    let v = option_value(arg, &mut it)?;
-                    let parsed = match v.strip_prefix("0x") {
-                        Some(hex) => u64::from_str_radix(hex, 16),
-                        None => v.parse(),
-                    };
-                    options.seed = Some(parsed.map_err(|e| format!("--seed `{v}`: {e}"))?);
-                }
-                other => return Err(format!("dbc-differential: unknown argument `{other}`")),
-            }
-        }
-        if options.frames == 0 {
-            return Err("--frames must be at least 1".into());
-        }
-        Ok(options)
     }
 }
 
@@ -727,7 +701,7 @@ pub fn run(options: &Options) -> Result {
     let mut cases = Vec::new();
     let mut next_id = 0;
     let mut total_signals = 0;
-    while cases.len() < options.frames {
+    while (cases.len() as u64) < options.frames {
         let mut used = Vec::new();
         let msgs: Vec<Msg> = (0..MESSAGES_PER_DBC)
             .map(|i| gen_message(&mut rng, i, &mut used))

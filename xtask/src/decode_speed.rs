@@ -12,32 +12,16 @@
 use crate::process::{root, target_dir, Cmd};
 use crate::rng::Rng;
 use crate::setup::venv_python;
-use crate::{option_value, Result};
+use crate::Result;
 use std::fmt::Write as _;
 use std::time::Instant;
 
 /// Options of `cargo xtask decode-speed`.
+#[derive(clap::Args)]
 pub struct Options {
-    /// Frames in the log.
-    pub frames: usize,
-}
-
-impl Options {
-    /// Parses `--frames N`.
-    pub fn parse(args: &[String]) -> Result<Self> {
-        let mut options = Self { frames: 200_000 };
-        let mut it = args.iter();
-        while let Some(arg) = it.next() {
-            match arg.as_str() {
-                "--frames" => {
-                    let v = option_value(arg, &mut it)?;
-                    options.frames = v.parse().map_err(|e| format!("--frames `{v}`: {e}"))?;
-                }
-                other => return Err(format!("decode-speed: unknown argument `{other}`")),
-            }
-        }
-        Ok(options)
-    }
+    /// Frames in the log
+    #[arg(long, default_value_t = 200_000, value_parser = clap::value_parser!(u64).range(1..))]
+    pub frames: u64,
 }
 
 /// The log: every message of features.dbc in turn, random bytes, multiplexers set.
@@ -106,7 +90,7 @@ pub fn run(options: &Options) -> Result {
     let dir = target_dir().join("xtask-decode-speed");
     std::fs::create_dir_all(&dir).map_err(|e| format!("creating {}: {e}", dir.display()))?;
     let log_path = dir.join("big.log");
-    std::fs::write(&log_path, log(options.frames))
+    std::fs::write(&log_path, log(options.frames as usize))
         .map_err(|e| format!("writing {}: {e}", log_path.display()))?;
     let dbc = root().join("cantool/tests/data/features.dbc");
     let mut ours = std::process::Command::new(target_dir().join("release").join("cw-can"));

@@ -15,7 +15,7 @@
 use crate::process::{root, target_dir, Cmd};
 use crate::rng::Rng;
 use crate::setup::venv_python;
-use crate::{option_value, Result};
+use crate::Result;
 use cw_core::com::signal::{spec, ByteOrder, SignalLayout, Signedness};
 use std::collections::HashMap;
 use std::fmt::Write as _;
@@ -30,10 +30,13 @@ const EDGE_LENGTHS: &[u8] = &[1, 2, 7, 8, 9, 15, 16, 17, 24, 31, 32, 33, 48, 63,
 const SHOW_MISMATCHES: usize = 5;
 
 /// Options of `cargo xtask differential`.
+#[derive(clap::Args)]
 pub struct Options {
-    /// Number of accepted-layout cases.
-    pub cases: usize,
-    /// PRNG seed; a fresh one when not given.
+    /// Number of accepted-layout cases
+    #[arg(long, default_value_t = 20_000, value_parser = clap::value_parser!(u64).range(1..))]
+    pub cases: u64,
+    /// Generator seed (decimal or 0x hex); a fresh one when not given
+    #[arg(long, value_parser = crate::parse_seed)]
     pub seed: Option<u64>,
 }
 
@@ -43,35 +46,6 @@ impl Default for Options {
             cases: 20_000,
             seed: None,
         }
-    }
-}
-
-impl Options {
-    /// Parses `--cases N` and `--seed S` (decimal or `0x` hex).
-    pub fn parse(args: &[String]) -> Result<Self> {
-        let mut options = Self::default();
-        let mut it = args.iter();
-        while let Some(arg) = it.next() {
-            match arg.as_str() {
-                "--cases" => {
-                    let v = option_value(arg, &mut it)?;
-                    options.cases = v.parse().map_err(|e| format!("--cases `{v}`: {e}"))?;
-                }
-                "--seed" => {
-                    let v = option_value(arg, &mut it)?;
-                    let parsed = match v.strip_prefix("0x") {
-                        Some(hex) => u64::from_str_radix(hex, 16),
-                        None => v.parse(),
-                    };
-                    options.seed = Some(parsed.map_err(|e| format!("--seed `{v}`: {e}"))?);
-                }
-                other => return Err(format!("differential: unknown argument `{other}`")),
-            }
-        }
-        if options.cases == 0 {
-            return Err("--cases must be at least 1".into());
-        }
-        Ok(options)
     }
 }
 
@@ -334,10 +308,10 @@ pub fn run(options: &Options) -> Result {
         options.cases, options.cases
     );
     let mut rng = Rng::new(seed);
-    let mut cases = Vec::with_capacity(options.cases);
+    let mut cases = Vec::with_capacity(options.cases as usize);
     let mut rejects = Vec::new();
-    let max_rejects = (options.cases / 10).max(1);
-    for id in 0..options.cases {
+    let max_rejects = (options.cases as usize / 10).max(1);
+    for id in 0..options.cases as usize {
         let len = rng.pick(PDU_LENGTHS, 8);
         let (case, refused) = with_pdu_len!(len, gen_case(&mut rng, id))?;
         cases.push(case);

@@ -7,7 +7,7 @@
 use crate::process::{root, target_dir, Cmd};
 use crate::rng::Rng;
 use crate::setup::venv_python;
-use crate::{option_value, Result};
+use crate::Result;
 use cw_can::frame::{FrameKind, FD_LENGTHS};
 use cw_can::log::{open, Entry, LogFormat};
 use std::fmt::Write as _;
@@ -16,10 +16,13 @@ use std::fmt::Write as _;
 const SHOW: usize = 5;
 
 /// Options of `cargo xtask log-formats`.
+#[derive(clap::Args)]
 pub struct Options {
-    /// Frames written.
+    /// Frames written
+    #[arg(long, default_value_t = 3_000)]
     pub frames: usize,
-    /// Generator seed; a fresh one when not given.
+    /// Generator seed (decimal or 0x hex); a fresh one when not given
+    #[arg(long, value_parser = crate::parse_seed)]
     pub seed: Option<u64>,
 }
 
@@ -29,28 +32,6 @@ impl Default for Options {
             frames: 3_000,
             seed: None,
         }
-    }
-}
-
-impl Options {
-    /// Parses `--frames N` and `--seed S`.
-    pub fn parse(args: &[String]) -> Result<Self> {
-        let mut options = Self::default();
-        let mut it = args.iter();
-        while let Some(arg) = it.next() {
-            match arg.as_str() {
-                "--frames" => {
-                    let v = option_value(arg, &mut it)?;
-                    options.frames = v.parse().map_err(|e| format!("--frames `{v}`: {e}"))?;
-                }
-                "--seed" => {
-                    let v = option_value(arg, &mut it)?;
-                    options.seed = Some(v.parse().map_err(|e| format!("--seed `{v}`: {e}"))?);
-                }
-                other => return Err(format!("log-formats: unknown argument `{other}`")),
-            }
-        }
-        Ok(options)
     }
 }
 

@@ -44,68 +44,77 @@ mod setup;
 
 use std::process::ExitCode;
 
+use clap::{Parser, Subcommand};
+
 /// What went wrong, in words meant for the person reading the CI log.
 pub type Error = String;
 /// Result of a task.
 pub type Result<T = ()> = std::result::Result<T, Error>;
 
-const USAGE: &str = "\
-usage: cargo xtask <command> [options]
+/// Task runner of the workspace: every check of `cargo xtask ci`, and each of its parts.
+#[derive(Parser)]
+#[command(name = "cargo xtask", bin_name = "cargo xtask")]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
 
-commands:
-  ci [--only STAGE[,STAGE..]] [--skip STAGE[,STAGE..]] [--keep-going]
-        run the checks in order; stages: setup, fmt, clippy, test, cross, miri, model,
-        coverage, mutants, mutation, qemu, differential, interop, fuzz, bench. Stops at
-        the first failing stage unless --keep-going. Each stage prints its time budget.
-  differential [--cases N] [--seed SEED]
-        compare the Com signal codec with cantools on N random cases (default 20000)
-  dbc-differential [--frames N] [--seed SEED]
-        compare cw-can's decoding and encoding with cantools on random DBCs, at least N
-        frames (default 12000)
-  log-formats [--frames N] [--seed SEED]
-        write N random frames (default 3000) with python-can as candump, ASC and BLF,
-        and compare cw-can's readings with python-can's
-  decode-speed [--frames N]
-        time cw-can decode (release) and cantools decode on one log of N frames
-        (default 200000)
-  callgrind [--binary PATH]
-        count instructions per call of each probe in core/examples/callgrind_probe.rs
-        (built in release), or in a prebuilt probe binary taking `<op> <iterations>`
-  coverage [--write]
-        branch coverage of core/ (cw-core's unit tests and OSEK suite, cargo-llvm-cov on
-        the pinned nightly); fails on a branch not taken both ways that docs/coverage.md
-        does not explain, or one it lists that is covered now; --write updates its table
-  mutants
-        plant each kernel mutant in a copy of the workspace and require the OSEK
-        conformance sequences named for it to fail
-  mutation [--shard K/N | --ci] [--file PATH]..
-        cargo-mutants over the verified kernels (xtask/src/mutation.rs lists the files):
-        every mutant, or shard K of N (--ci: the check command's shard, chosen by the
-        number of commits on HEAD); fails on a mutant that survives every test and is not
-        listed as equivalent in docs/mutants.md; prints each file's score
-  qemu [--scenario FILE].. [--compare] [--live] [--events] [--profile] [--flash]
-       [--serial tcp:PORT]
-        build the ECU's Cortex-M4 image and run it on QEMU's mps2-an386 on each scenario
-        file (default scenarios/figure7.txt; the image reads it over semihosting);
-        --compare: the emulator-in-the-loop tests (tests/, cw-tests): figure7 and faults
-        give the host simulation's CAN frames and LED levels, bad scenarios are refused;
-        --live: run it in real time on a TCP port and test it with python-can (slcan)
-        --events: run the extended-task and stack-guard demo image (cw-qemu-events)
-        --profile: count where the image's instructions go, per function
-        --flash: the production image (cw-mps2): its flash and RAM, then live
-        --serial: serve the SLCAN UART on a TCP port (python-can: slcan, socket://)
-  qemu-runner IMAGE [ARGS]..
-        cargo's runner for thumbv7em-none-eabihf: IMAGE on QEMU's mps2-an386 with ARGS on
-        its semihosting command line, its defmt log decoded by defmt-print as it comes
-  setup
-        same as `ci --only setup`: install or check every tool the checks need
-  help
-        this text
-";
+#[derive(Subcommand)]
+enum Command {
+    /// Run the checks in order (stages: setup, fmt, clippy, test, cross, miri, model,
+    /// coverage, mutants, mutation, qemu, differential, interop, fuzz, bench); stop at the
+    /// first failing stage unless --keep-going; each stage prints its time budget
+    Ci(ci::Options),
+    /// Install what the checks need (the check command's setup stage)
+    Setup,
+    /// Compare the Com signal codec with cantools on random layouts, values and PDU
+    /// lengths
+    Differential(differential::Options),
+    /// Compare cw-can's decoding and encoding with cantools on random DBCs
+    DbcDifferential(dbc_differential::Options),
+    /// Write random frames with python-can as candump, ASC and BLF, and compare cw-can's
+    /// readings with python-can's
+    LogFormats(log_formats::Options),
+    /// Time cw-can decode (release) and cantools decode on one large log
+    DecodeSpeed(decode_speed::Options),
+    /// Count instructions per call of each probe in core/examples/callgrind_probe.rs
+    Callgrind(callgrind::Options),
+    /// Branch coverage of core/ (cargo-llvm-cov on the pinned nightly); fails on a branch
+    /// not taken both ways that docs/coverage.md does not explain, or one it lists that is
+    /// covered now
+    Coverage(coverage::Options),
+    /// Plant each kernel mutant in a copy of the workspace and require the OSEK
+    /// conformance sequences named for it to fail
+    Mutants,
+    /// cargo-mutants over the verified kernels; fails on a survivor not listed as
+    /// equivalent in docs/mutants.md; prints each file's score
+    Mutation(mutation::Options),
+    /// Build the ECU's Cortex-M4 image and run it on QEMU's mps2-an386
+    Qemu(qemu::Options),
+    /// Cargo's runner for thumbv7em-none-eabihf: IMAGE on QEMU with ARGS on its
+    /// semihosting command line, its defmt log decoded as it comes
+    QemuRunner {
+        /// The image (ELF)
+        image: String,
+        /// The image's command line
+        #[arg(trailing_var_arg = true, allow_hyphen_values = true)]
+        args: Vec<String>,
+    },
+}
+
+/// A generator seed: decimal, or hexadecimal after `0x`.
+fn parse_seed(text: &str) -> Result<u64> {
+    match text.strip_prefix("0x") {
+        Some(hex) => u64::from_str_radix(hex, 16),
+        None => text.parse(),
+    }
+    .map_err(|e| format!("`{text}`: {e}"))
+}
 
 fn main() -> ExitCode {
-    let args: Vec<String> = std::env::args().skip(1).collect();
-    match run(&args) {
+    // Usage errors are clap's (exit status 2); a failing task prints its error.
+    let cli = Cli::parse();
+    match run(cli.command) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("\nxtask: error: {e}");
@@ -114,53 +123,21 @@ fn main() -> ExitCode {
     }
 }
 
-fn run(args: &[String]) -> Result {
-    let Some((command, rest)) = args.split_first() else {
-        print!("{USAGE}");
-        return Err("no command given".into());
-    };
-    match command.as_str() {
-        "ci" => ci::run(&ci::Options::parse(rest)?),
-        "setup" => {
-            no_options(rest)?;
-            ci::run(&ci::Options::parse(&["--only".into(), "setup".into()])?)
-        }
-        "differential" => differential::run(&differential::Options::parse(rest)?),
-        "decode-speed" => decode_speed::run(&decode_speed::Options::parse(rest)?),
-        "log-formats" => log_formats::run(&log_formats::Options::parse(rest)?),
-        "dbc-differential" => dbc_differential::run(&dbc_differential::Options::parse(rest)?),
-        "callgrind" => callgrind::run(&callgrind::Options::parse(rest)?),
-        "qemu" => qemu::run(&qemu::Options::parse(rest)?),
-        "qemu-runner" => qemu::runner(rest),
-        "mutants" => {
-            no_options(rest)?;
-            mutants::run()
-        }
-        "coverage" => coverage::run(&coverage::Options::parse(rest)?),
-        "mutation" => mutation::run(&mutation::Options::parse(rest)?),
-        "help" | "--help" | "-h" => {
-            print!("{USAGE}");
-            Ok(())
-        }
-        other => {
-            print!("{USAGE}");
-            Err(format!("unknown command `{other}`"))
+fn run(command: Command) -> Result {
+    match command {
+        Command::Ci(options) => ci::run(&options),
+        Command::Setup => ci::run(&ci::Options::only(&["setup"])),
+        Command::Differential(options) => differential::run(&options),
+        Command::DbcDifferential(options) => dbc_differential::run(&options),
+        Command::LogFormats(options) => log_formats::run(&options),
+        Command::DecodeSpeed(options) => decode_speed::run(&options),
+        Command::Callgrind(options) => callgrind::run(&options),
+        Command::Coverage(options) => coverage::run(&options),
+        Command::Mutants => mutants::run(),
+        Command::Mutation(options) => mutation::run(&options),
+        Command::Qemu(options) => qemu::run(&options),
+        Command::QemuRunner { image, args } => {
+            qemu::runner(&std::iter::once(image).chain(args).collect::<Vec<_>>())
         }
     }
-}
-
-fn no_options(rest: &[String]) -> Result {
-    match rest.first() {
-        None => Ok(()),
-        Some(arg) => Err(format!(
-            "unexpected argument `{arg}`; see `cargo xtask help`"
-        )),
-    }
-}
-
-/// The value following an option such as `--cases`.
-fn option_value<'a>(name: &str, it: &mut impl Iterator<Item = &'a String>) -> Result<&'a str> {
-    it.next()
-        .map(String::as_str)
-        .ok_or_else(|| format!("option {name} needs a value"))
 }

@@ -35,7 +35,7 @@
 //! dependencies the `test` stage built; with uncommitted edits it works on a copy.
 
 use crate::process::{root, target_dir, Cmd};
-use crate::{option_value, Result};
+use crate::Result;
 use std::collections::BTreeMap;
 use std::path::Path;
 
@@ -91,48 +91,20 @@ pub const CI_SHARDS: u32 = 100;
 const EQUIVALENTS: &str = "docs/mutants.md";
 
 /// Which mutants to run.
+#[derive(clap::Args)]
 pub struct Options {
+    /// Shard K of N (0 <= K < N) of the mutants
+    #[arg(long, value_name = "K/N", value_parser = parse_shard, conflicts_with = "ci")]
     shard: Option<(u32, u32)>,
+    /// The check command's shard, chosen by the number of commits on HEAD
+    #[arg(long)]
     ci: bool,
+    /// Only this kernel file (repeatable)
+    #[arg(long = "file", value_name = "PATH", value_parser = kernel_file)]
     files: Vec<String>,
 }
 
 impl Options {
-    /// Parses `[--shard K/N | --ci] [--file PATH]..`.
-    pub fn parse(args: &[String]) -> Result<Self> {
-        let mut options = Self {
-            shard: None,
-            ci: false,
-            files: Vec::new(),
-        };
-        let mut it = args.iter();
-        while let Some(arg) = it.next() {
-            match arg.as_str() {
-                "--shard" => options.shard = Some(parse_shard(option_value(arg, &mut it)?)?),
-                "--ci" => options.ci = true,
-                "--file" => {
-                    let file = option_value(arg, &mut it)?;
-                    if !KERNEL_FILES.contains(&file) {
-                        return Err(format!(
-                            "mutation: `{file}` is not a kernel file; they are {}",
-                            KERNEL_FILES.join(", ")
-                        ));
-                    }
-                    options.files.push(file.to_string());
-                }
-                other => {
-                    return Err(format!(
-                        "mutation: unknown argument `{other}`; see `cargo xtask help`"
-                    ))
-                }
-            }
-        }
-        if options.ci && options.shard.is_some() {
-            return Err("mutation: --ci chooses the shard; give --ci or --shard".into());
-        }
-        Ok(options)
-    }
-
     /// The options of the check command's stage.
     pub fn ci() -> Self {
         Self {
@@ -143,9 +115,21 @@ impl Options {
     }
 }
 
+/// `--file`: one of the kernel files.
+fn kernel_file(file: &str) -> Result<String> {
+    if KERNEL_FILES.contains(&file) {
+        Ok(file.to_string())
+    } else {
+        Err(format!(
+            "`{file}` is not a kernel file; they are {}",
+            KERNEL_FILES.join(", ")
+        ))
+    }
+}
+
 /// `K/N` with `K < N`.
 fn parse_shard(text: &str) -> Result<(u32, u32)> {
-    let bad = || format!("mutation: --shard wants K/N with 0 <= K < N, not `{text}`");
+    let bad = || format!("K/N with 0 <= K < N, not `{text}`");
     let (k, n) = text.split_once('/').ok_or_else(bad)?;
     let k: u32 = k.trim().parse().map_err(|_| bad())?;
     let n: u32 = n.trim().parse().map_err(|_| bad())?;

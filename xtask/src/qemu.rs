@@ -38,15 +38,43 @@ const TARGET: &str = "thumbv7em-none-eabihf";
 const FIGURE7: &str = "scenarios/figure7.txt";
 
 /// Options of `cargo xtask qemu`.
-#[derive(Default)]
+#[derive(Default, clap::Args)]
 pub struct Options {
+    /// Run the image on this scenario file (repeatable; default scenarios/figure7.txt,
+    /// read by the image over semihosting)
+    #[arg(long = "scenario", value_name = "FILE")]
     scenarios: Vec<PathBuf>,
+    /// The emulator-in-the-loop tests (tests/, cw-tests): the scenarios give the host
+    /// simulation's CAN frames and LED levels, bad scenario files are refused
+    #[arg(long)]
     compare: bool,
+    /// Run the image in real time on TCP ports and test it with python-can (slcan) and a
+    /// simulated UART sensor, then decode it live with cw-can --slcan
+    #[arg(long)]
     live: bool,
+    /// Run the extended-task and stack-guard demo image (cw-qemu-events)
+    #[arg(long)]
     events: bool,
+    /// Count where the image's instructions go, per function
+    #[arg(long)]
     profile: bool,
+    /// The production image (cw-mps2): its flash and RAM, then live
+    #[arg(long)]
     flash: bool,
+    /// Serve the SLCAN UART on a TCP port (python-can: slcan, socket://; cw-can --slcan)
+    #[arg(long, value_name = "tcp:PORT", value_parser = serial_port)]
     serial: Option<String>,
+}
+
+/// `--serial tcp:PORT`: QEMU's server on that loopback port, waiting for the client.
+fn serial_port(text: &str) -> Result<String> {
+    let port = text
+        .strip_prefix("tcp:")
+        .ok_or_else(|| format!("`{text}` is not tcp:PORT"))?;
+    let port: u16 = port
+        .parse()
+        .map_err(|_| format!("`{port}` is not a TCP port"))?;
+    Ok(format!("tcp:127.0.0.1:{port},server=on,wait=on"))
 }
 
 impl Options {
@@ -63,37 +91,6 @@ impl Options {
             flash: true,
             serial: None,
         }
-    }
-
-    /// Parses `[--scenario FILE]... [--compare] [--live] [--events] [--profile] [--flash]
-    /// [--serial tcp:PORT]`.
-    pub fn parse(args: &[String]) -> Result<Self> {
-        let mut options = Self::default();
-        let mut it = args.iter();
-        while let Some(arg) = it.next() {
-            match arg.as_str() {
-                "--compare" => options.compare = true,
-                "--scenario" => {
-                    let file = it.next().ok_or("qemu: --scenario takes a file")?;
-                    options.scenarios.push(PathBuf::from(file));
-                }
-                "--live" => options.live = true,
-                "--events" => options.events = true,
-                "--profile" => options.profile = true,
-                "--flash" => options.flash = true,
-                "--serial" => {
-                    let Some(port) = it.next().and_then(|a| a.strip_prefix("tcp:")) else {
-                        return Err("qemu: --serial takes tcp:PORT".into());
-                    };
-                    let port: u16 = port
-                        .parse()
-                        .map_err(|_| format!("qemu: `{port}` is not a TCP port"))?;
-                    options.serial = Some(format!("tcp:127.0.0.1:{port},server=on,wait=on"));
-                }
-                other => return Err(format!("qemu: unknown argument `{other}`")),
-            }
-        }
-        Ok(options)
     }
 }
 
