@@ -11,8 +11,8 @@ use std::collections::HashMap;
 use std::fmt;
 
 use can_dbc::{
-    ByteOrder as DbcOrder, Dbc, MessageId, MultiplexIndicator, NumericValue,
-    SignalExtendedValueType, ValueDescription, ValueType,
+    AttributeDefinition, AttributeValue, AttributeValueType, ByteOrder as DbcOrder, Dbc, MessageId,
+    MultiplexIndicator, NumericValue, SignalExtendedValueType, ValueDescription, ValueType,
 };
 use cw_core::com::signal::spec::{bit_position, layout_fits};
 use cw_core::com::signal::{ByteOrder, SignalLayout, Signedness};
@@ -97,6 +97,9 @@ pub struct MessageDef {
     pub extended: bool,
     /// Length in bytes (0 to 64).
     pub size: usize,
+    /// Sent as a CAN FD frame: the DBC's `VFrameFormat` says so (`StandardCAN_FD`,
+    /// `ExtendedCAN_FD`), or the message is longer than 8 bytes.
+    pub fd: bool,
     /// Signals in DBC order.
     pub signals: Vec<SignalDef>,
 }
@@ -329,6 +332,42 @@ impl Database {
     }
 }
 
+/// Whether the DBC's `VFrameFormat` attribute makes a message a CAN FD frame. The value is
+/// an index into the attribute's enumeration (CANdb++ lists `StandardCAN_FD` at 14 and
+/// `ExtendedCAN_FD` at 15), or the name itself.
+fn fd_by_attribute(dbc: &Dbc, id: MessageId) -> bool {
+    let names: Option<&Vec<String>> = dbc.attribute_definitions.iter().find_map(|d| match d {
+        AttributeDefinition::Message(name, AttributeValueType::Enum(values))
+            if name == "VFrameFormat" =>
+        {
+            Some(values)
+        }
+        _ => None,
+    });
+    let is_fd = |name: &str| name.ends_with("_FD");
+    dbc.attribute_values_message
+        .iter()
+        .find(|a| a.name == "VFrameFormat" && a.message_id == id)
+        .is_some_and(|a| match &a.value {
+            AttributeValue::String(name) => is_fd(name),
+            AttributeValue::Uint(i) => match names {
+                Some(names) => usize::try_from(*i)
+                    .ok()
+                    .and_then(|i| names.get(i))
+                    .is_some_and(|n| is_fd(n)),
+                None => matches!(i, 14 | 15),
+            },
+            AttributeValue::Int(i) => match names {
+                Some(names) => usize::try_from(*i)
+                    .ok()
+                    .and_then(|i| names.get(i))
+                    .is_some_and(|n| is_fd(n)),
+                None => matches!(i, 14 | 15),
+            },
+            AttributeValue::Double(_) => false,
+        })
+}
+
 fn load_message(dbc: &Dbc, message: &can_dbc::Message) -> Result<MessageDef, DbcError> {
     let name = &message.name;
     let err = |what: String| DbcError(format!("message {name}: {what}"));
@@ -494,6 +533,7 @@ fn load_message(dbc: &Dbc, message: &can_dbc::Message) -> Result<MessageDef, Dbc
         id,
         extended,
         size,
+        fd: size > 8 || fd_by_attribute(dbc, message.id),
         signals,
     };
     // Two signals that can be in one frame must not share a bit (cantools refuses them too).

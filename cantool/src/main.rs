@@ -194,7 +194,7 @@ fn encode(dbc: &PathBuf, message: &str, values: &[String]) -> Result<(), Fatal> 
         .collect::<Result<Vec<_>, Fatal>>()?;
     let data = codec::encode(m, &values).map_err(Fatal)?;
     let frame = Frame {
-        kind: if data.len() > 8 {
+        kind: if m.fd {
             FrameKind::Fd {
                 brs: false,
                 esi: false,

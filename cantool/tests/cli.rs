@@ -186,6 +186,33 @@ fn encode_prints_the_frame_and_refuses_what_does_not_fit() {
 }
 
 #[test]
+fn a_message_the_dbc_marks_as_fd_encodes_as_an_fd_frame() {
+    let dbc = features_dbc();
+    let out = run(
+        &[
+            "encode",
+            "--dbc",
+            dbc.to_str().expect("path"),
+            "SmallFd",
+            "Word=0x10",
+        ],
+        "",
+    );
+    assert_eq!(out.status.code(), Some(2), "0x10 is no number");
+    let out = run(
+        &[
+            "encode",
+            "--dbc",
+            dbc.to_str().expect("path"),
+            "SmallFd",
+            "Word=16",
+        ],
+        "",
+    );
+    assert_eq!(text(&out.stdout), "600##010000000\n");
+}
+
+#[test]
 fn usage_errors_and_missing_files_exit_2() {
     assert_eq!(run(&["decode"], "").status.code(), Some(2));
     assert_eq!(run(&["frobnicate"], "").status.code(), Some(2));

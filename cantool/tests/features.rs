@@ -48,6 +48,10 @@ fn ids_sizes_and_kinds_of_message_load() {
     assert!(db.by_id(0x18FF_0001, true).is_some());
     assert!(db.by_id(0x18FF_0001, false).is_none());
     assert!(db.by_id(0x100, true).is_none());
+    // CAN FD by the DBC's VFrameFormat attribute (4 bytes), or by size.
+    assert!(message(&db, "SmallFd").fd);
+    assert!(message(&db, "Floaty").fd);
+    assert!(!message(&db, "Plain").fd);
 }
 
 #[test]
@@ -298,7 +302,7 @@ fn a_windows_1252_dbc_reads_as_candb_wrote_it() {
         .collect();
     assert!(std::str::from_utf8(&cp1252).is_err());
     let db = Database::from_bytes(&cp1252).expect("Windows-1252 DBC loads");
-    assert_eq!(db.messages().len(), 6);
+    assert_eq!(db.messages().len(), 7);
     assert_eq!(
         cw_can::dbc::text_of(&cp1252),
         utf8,

@@ -1850,24 +1850,61 @@ fn from_start_any_isr_ticking_the_counter_keeps_the_invariants() {
         .for_each(|i| first_step_keeps_the_invariants(Step::IsrTick(i)));
 }
 
-/// Two steps: the ISR activates task A (so A runs), then `ChainTask` of any task id.
-#[test]
-#[cfg_attr(kani, kani::proof, kani::unwind(10))]
-fn after_an_isr_started_a_any_chain_keeps_the_invariants() {
-    bolero::check!()
-        .with_type::<u8>()
-        .cloned()
-        .for_each(|t| second_step_keeps_the_invariants(0, 0, Step::Chain(t)));
+/// A Kani proof (and a bolero test) of two steps from the state after `StartOS`: ISR 0
+/// activates task `$task` (A is 0, B is 1, so that task runs), then one kind of step with
+/// every argument symbolic; the rules and every invariant are checked after each.
+macro_rules! two_step_proof {
+    ($(#[doc = $doc:expr])* $name:ident: task $task:expr, any $ty:ty => |$v:pat_param| $step:expr) => {
+        $(#[doc = $doc])*
+        #[test]
+        #[cfg_attr(kani, kani::proof, kani::unwind(10))]
+        fn $name() {
+            bolero::check!()
+                .with_type::<$ty>()
+                .cloned()
+                .for_each(|$v| second_step_keeps_the_invariants(0, $task, $step));
+        }
+    };
 }
 
-/// Two steps: the ISR activates task A (so A runs), then `ActivateTask` of any task id.
-#[test]
-#[cfg_attr(kani, kani::proof, kani::unwind(10))]
-fn after_an_isr_started_a_any_activation_keeps_the_invariants() {
-    bolero::check!()
-        .with_type::<u8>()
-        .cloned()
-        .for_each(|t| second_step_keeps_the_invariants(0, 0, Step::Activate(t)));
+two_step_proof! {
+    /// Task A runs, then `ChainTask` of any task id.
+    after_an_isr_started_a_any_chain_keeps_the_invariants: task 0, any u8 => |t| Step::Chain(t)
+}
+two_step_proof! {
+    /// Task A runs, then `ActivateTask` of any task id.
+    after_an_isr_started_a_any_activation_keeps_the_invariants: task 0, any u8 => |t| Step::Activate(t)
+}
+two_step_proof! {
+    /// Task A runs, then `GetResource` of any resource id (its own, `RES_SCHEDULER`, or an
+    /// invalid one).
+    after_an_isr_started_a_any_get_resource_keeps_the_invariants: task 0, any u8 => |r| Step::GetResource(r)
+}
+two_step_proof! {
+    /// Task A runs, then `SetEvent` of any task id and any mask (B waits for nothing yet;
+    /// A is basic and refuses events).
+    after_an_isr_started_a_any_set_event_keeps_the_invariants: task 0, any (u8, u8) => |(t, m)| Step::SetEvent(t, m)
+}
+two_step_proof! {
+    /// Task A runs, then `SetRelAlarm` of any alarm id, increment and cycle.
+    after_an_isr_started_a_any_rel_alarm_keeps_the_invariants: task 0, any (u8, u8, u8) => |(a, i, c)| Step::SetRel(a, i, c)
+}
+two_step_proof! {
+    /// Task A runs, then `CancelAlarm` of any alarm id.
+    after_an_isr_started_a_any_cancel_keeps_the_invariants: task 0, any u8 => |a| Step::Cancel(a)
+}
+two_step_proof! {
+    /// Task B (extended) runs, then `ChainTask` of any task id.
+    after_an_isr_started_b_any_chain_keeps_the_invariants: task 1, any u8 => |t| Step::Chain(t)
+}
+two_step_proof! {
+    /// Task B runs, then `ActivateTask` of any task id (A is of lower priority and waits).
+    after_an_isr_started_b_any_activation_keeps_the_invariants: task 1, any u8 => |t| Step::Activate(t)
+}
+two_step_proof! {
+    /// Task B runs, then `WaitEvent` of any mask (B waits, or an event already set lets it
+    /// go on).
+    after_an_isr_started_b_any_wait_event_keeps_the_invariants: task 1, any u8 => |m| Step::WaitEvent(m)
 }
 
 // One harness per group of step kinds: any first ISR, then any step of the group with any
