@@ -56,21 +56,21 @@ pub const STAGES: &[&str] = &[
 /// defmt-print, valgrind, QEMU, llvm, the Python venv); it takes seconds once those are
 /// there.
 const BUDGET_S: &[(&str, u32)] = &[
-    ("setup", 360),
+    ("setup", 340),
     ("fmt", 10),
-    ("clippy", 65),
-    ("test", 175),
+    ("clippy", 80),
+    ("test", 200),
     ("cross", 25),
-    ("miri", 460),
+    ("miri", 420),
     ("model", 40),
-    ("coverage", 195),
+    ("coverage", 180),
     ("mutants", 70),
-    ("mutation", 260),
-    ("qemu", 90),
-    ("differential", 10),
-    ("interop", 30),
-    ("fuzz", 200),
-    ("bench", 95),
+    ("mutation", 250),
+    ("qemu", 105),
+    ("differential", 15),
+    ("interop", 35),
+    ("fuzz", 235),
+    ("bench", 90),
 ];
 
 fn budget_s(stage: &str) -> u32 {
