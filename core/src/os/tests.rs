@@ -526,6 +526,28 @@ fn non_preemptive_task_yields_only_at_schedule() {
     check(&os);
 }
 
+/// A task holding every resource it may and `RES_SCHEDULER` (the most a stack can hold:
+/// `R + 1`) sees them all, most recent first, and gives them back in that order.
+#[test]
+fn the_fullest_resource_stack_is_walked_whole() {
+    let mut os = os();
+    assert_eq!(activate_from_isr(&mut os, MID), Ok(()));
+    assert_eq!(os.running(), Some(MID));
+    for res in [R0, R1, RES_SCHEDULER] {
+        assert_eq!(os.get_resource(res), Ok(()));
+    }
+    assert_eq!(
+        os.held_resources(MID).collect::<Vec<_>>(),
+        [RES_SCHEDULER, R1, R0]
+    );
+    check(&os);
+    for res in [RES_SCHEDULER, R1, R0] {
+        assert_eq!(os.release_resource(res), Ok(()));
+    }
+    assert_eq!(os.held_resources(MID).count(), 0);
+    check(&os);
+}
+
 #[test]
 fn resources_ceiling_and_lifo() {
     let mut os = os();
