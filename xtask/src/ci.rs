@@ -56,21 +56,21 @@ pub const STAGES: &[&str] = &[
 /// defmt-print, valgrind, QEMU, llvm, the Python venv); it takes seconds once those are
 /// there.
 const BUDGET_S: &[(&str, u32)] = &[
-    ("setup", 340),
+    ("setup", 330),
     ("fmt", 10),
-    ("clippy", 80),
-    ("test", 200),
+    ("clippy", 70),
+    ("test", 215),
     ("cross", 25),
-    ("miri", 420),
+    ("miri", 430),
     ("model", 40),
-    ("coverage", 180),
-    ("mutants", 70),
-    ("mutation", 250),
-    ("qemu", 105),
-    ("differential", 15),
-    ("interop", 35),
-    ("fuzz", 235),
-    ("bench", 90),
+    ("coverage", 170),
+    ("mutants", 80),
+    ("mutation", 255),
+    ("qemu", 90),
+    ("differential", 10),
+    ("interop", 25),
+    ("fuzz", 260),
+    ("bench", 80),
 ];
 
 fn budget_s(stage: &str) -> u32 {
