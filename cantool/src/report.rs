@@ -89,7 +89,8 @@ struct JsonFrame<'a> {
     excess_bytes: usize,
 }
 
-fn hex(data: &[u8]) -> String {
+/// Upper-case hex of bytes, no separators (`DEADBEEF`).
+pub fn hex(data: &[u8]) -> String {
     data.iter().fold(String::new(), |mut s, b| {
         let _ = write!(s, "{b:02X}");
         s

@@ -373,12 +373,8 @@ fn interop() -> Result {
             .arg("--can-log")
             .arg(&log)
             .run()?;
-        Cmd::new(crate::setup::venv_python())
-            .arg("tools/interop_check.py")
-            .arg("firmware/ecu.dbc")
-            .arg(&log)
-            .arg(&trace)
-            .run()?;
+        let dbc = crate::process::root().join("firmware").join("ecu.dbc");
+        crate::setup::run_python_tool("interop_check.py", &[&dbc, &log, &trace])?;
     }
     // python-can's log writers against cw-can's readers.
     crate::log_formats::run(&crate::log_formats::Options::default())

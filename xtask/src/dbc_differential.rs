@@ -17,12 +17,12 @@
 //! `tools/dbc_differential.py` runs cantools on the cases; this module generates them,
 //! computes `cw-can`'s answers (the library the command uses), and compares.
 
-use crate::process::{root, target_dir, Cmd};
+use crate::process::target_dir;
 use crate::rng::Rng;
-use crate::setup::venv_python;
 use crate::Result;
 use cw_can::codec::{self, Input, Physical};
 use cw_can::dbc::{Database, MessageDef};
+use cw_can::report::hex;
 use cw_core::com::signal::spec::{bit_position, layout_fits};
 use cw_core::com::signal::ByteOrder;
 use std::fmt::Write as _;
@@ -262,6 +262,24 @@ fn physical_text(sig: &Sig, r: i128) -> String {
     }
 }
 
+/// A multiplexer signal: unsigned, factor 1, offset 0, no range or table.
+fn multiplexer(name: &str, start: u16, len: u8, order: ByteOrder, mux: Mux) -> Sig {
+    Sig {
+        name: name.into(),
+        start,
+        len,
+        order,
+        signed: false,
+        float: 0,
+        factor: "1",
+        offset: "0",
+        range: None,
+        range_raw: None,
+        mux,
+        choices: Vec::new(),
+    }
+}
+
 fn gen_message(rng: &mut Rng, index: usize, used_ids: &mut Vec<u32>) -> Msg {
     let size = rng.pick(SIZES, 8);
     let extended = rng.one_in(3);
@@ -284,20 +302,7 @@ fn gen_message(rng: &mut Rng, index: usize, used_ids: &mut Vec<u32>) -> Msg {
         let len = (2 + rng.below(5)) as u8;
         if let Some((start, order)) = place(rng, &mut base, size, len) {
             sel = Some(sigs.len());
-            sigs.push(Sig {
-                name: "Sel".into(),
-                start,
-                len,
-                order,
-                signed: false,
-                float: 0,
-                factor: "1",
-                offset: "0",
-                range: None,
-                range_raw: None,
-                mux: Mux::Root,
-                choices: Vec::new(),
-            });
+            sigs.push(multiplexer("Sel", start, len, order, Mux::Root));
         }
     }
     for k in 0..1 + rng.below(3) {
@@ -352,24 +357,12 @@ fn gen_message(rng: &mut Rng, index: usize, used_ids: &mut Vec<u32>) -> Msg {
                 if g == 0 {
                     let len = (1 + rng.below(3)) as u8;
                     if let Some((start, order)) = place(rng, &mut occ, size, len) {
-                        sigs.push(Sig {
-                            name: "Sub".into(),
-                            start,
-                            len,
-                            order,
-                            signed: false,
-                            float: 0,
-                            factor: "1",
-                            offset: "0",
-                            range: None,
-                            range_raw: None,
-                            mux: Mux::Extended {
-                                by: "Sel".into(),
-                                ranges: vec![(*lo, *hi)],
-                                is_mux: true,
-                            },
-                            choices: Vec::new(),
-                        });
+                        let mux = Mux::Extended {
+                            by: "Sel".into(),
+                            ranges: vec![(*lo, *hi)],
+                            is_mux: true,
+                        };
+                        sigs.push(multiplexer("Sub", start, len, order, mux));
                         for v in 0..(1u64 << len).min(3) {
                             let mut inner = occ;
                             let mux = Mux::Extended {
@@ -507,13 +500,6 @@ fn choose_mux(rng: &mut Rng, m: &MessageDef) -> Vec<(usize, u64)> {
         out.push((i, lo + rng.below(hi - lo + 1)));
     }
     out
-}
-
-fn hex(data: &[u8]) -> String {
-    data.iter().fold(String::new(), |mut s, b| {
-        let _ = write!(s, "{b:02X}");
-        s
-    })
 }
 
 fn gen_cases(
@@ -748,18 +734,7 @@ pub fn run(options: &Options) -> Result {
     std::fs::write(&cases_path, text)
         .map_err(|e| format!("writing {}: {e}", cases_path.display()))?;
     let _ = std::fs::remove_file(&out_path);
-    let python = venv_python();
-    if !python.exists() {
-        return Err(format!(
-            "{} not found: the cantools venv is missing; run `cargo xtask setup`",
-            python.display()
-        ));
-    }
-    Cmd::new(&python)
-        .arg(root().join("tools").join("dbc_differential.py"))
-        .arg(&cases_path)
-        .arg(&out_path)
-        .run()?;
+    crate::setup::run_python_tool("dbc_differential.py", &[&cases_path, &out_path])?;
     let out = std::fs::read_to_string(&out_path)
         .map_err(|e| format!("reading {}: {e}", out_path.display()))?;
     let mut results = std::collections::HashMap::new();

@@ -12,9 +12,8 @@
 //!    value), refuses the layouts we refuse, and writes its encoded bytes back.
 //! 3. Here again: we unpack cantools' bytes and pack the value into them (no change).
 
-use crate::process::{root, target_dir, Cmd};
+use crate::process::target_dir;
 use crate::rng::Rng;
-use crate::setup::venv_python;
 use crate::Result;
 use cw_core::com::signal::{spec, ByteOrder, SignalLayout, Signedness};
 use std::collections::HashMap;
@@ -376,24 +375,14 @@ pub fn run(options: &Options) -> Result {
         .map_err(|e| format!("writing {}: {e}", cases_path.display()))?;
     let _ = std::fs::remove_file(&out_path);
 
-    let python = venv_python();
-    if !python.exists() {
-        return Err(format!(
-            "{} not found: the cantools venv is missing; run `cargo xtask setup` (or `cargo xtask ci --only setup`)",
-            python.display()
-        ));
-    }
-    Cmd::new(&python)
-        .arg(root().join("tools").join("codec_differential.py"))
-        .arg(&cases_path)
-        .arg(&out_path)
-        .run()
-        .map_err(|e| {
+    crate::setup::run_python_tool("codec_differential.py", &[&cases_path, &out_path]).map_err(
+        |e| {
             format!(
                 "{e}\ncantools disagrees with our codec (seed {seed}; cases in {})",
                 cases_path.display()
             )
-        })?;
+        },
+    )?;
 
     // Reverse direction: cantools' bytes through our codec.
     let out = std::fs::read_to_string(&out_path)

@@ -4,13 +4,12 @@
 //! `cw-can`'s: both readings must be the same frames with the same time stamps, bit for
 //! bit, and the frames those the writers were given.
 
-use crate::process::{root, target_dir, Cmd};
+use crate::process::target_dir;
 use crate::rng::Rng;
-use crate::setup::venv_python;
 use crate::Result;
 use cw_can::frame::{FrameKind, FD_LENGTHS};
 use cw_can::log::{open, Entry, LogFormat};
-use std::fmt::Write as _;
+use cw_can::report::hex;
 
 /// How many disagreements to print in full.
 const SHOW: usize = 5;
@@ -47,13 +46,6 @@ struct Written {
     esi: bool,
     dlc: u8,
     data: Vec<u8>,
-}
-
-fn hex(data: &[u8]) -> String {
-    data.iter().fold(String::new(), |mut s, b| {
-        let _ = write!(s, "{b:02X}");
-        s
-    })
 }
 
 fn unhex(text: &str) -> Vec<u8> {
@@ -187,18 +179,7 @@ pub fn run(options: &Options) -> Result {
     let frames_path = dir.join("frames.jsonl");
     std::fs::write(&frames_path, text)
         .map_err(|e| format!("writing {}: {e}", frames_path.display()))?;
-    let python = venv_python();
-    if !python.exists() {
-        return Err(format!(
-            "{} not found: the python-can venv is missing; run `cargo xtask setup`",
-            python.display()
-        ));
-    }
-    Cmd::new(&python)
-        .arg(root().join("tools").join("log_formats.py"))
-        .arg(&frames_path)
-        .arg(&dir)
-        .run()?;
+    crate::setup::run_python_tool("log_formats.py", &[&frames_path, &dir])?;
     let mut problems = Vec::new();
     let mut python_can_asc_quirks = 0;
     for (ext, format) in [

@@ -50,6 +50,26 @@ pub fn venv_python() -> PathBuf {
     venv_dir().join("bin").join("python")
 }
 
+/// A Python tool of `tools/` run by the venv's interpreter (cantools, python-can), with
+/// `args` after the script.
+///
+/// # Errors
+/// The venv is missing (`cargo xtask setup` makes it), or the tool fails.
+pub fn run_python_tool(script: &str, args: &[&std::path::Path]) -> Result {
+    let python = venv_python();
+    if !python.exists() {
+        return Err(format!(
+            "{} not found: the cantools / python-can venv is missing; run `cargo xtask setup` (or `cargo xtask ci --only setup`)",
+            python.display()
+        ));
+    }
+    let mut cmd = Cmd::new(&python).arg(root().join("tools").join(script));
+    for a in args {
+        cmd = cmd.arg(a);
+    }
+    cmd.run()
+}
+
 /// Runs every check and installation of the `setup` stage.
 pub fn run() -> Result {
     rustup_stable()?;
