@@ -30,6 +30,18 @@ pub enum FrameKind {
     Error,
 }
 
+impl FrameKind {
+    /// The kind's name: `classic`, `fd`, `remote` or `error` (as in JSON and CSV output).
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Classic => "classic",
+            Self::Fd { .. } => "fd",
+            Self::Remote => "remote",
+            Self::Error => "error",
+        }
+    }
+}
+
 /// One frame of a log.
 #[derive(Debug, Clone, PartialEq, Eq, serde::Serialize)]
 pub struct Frame {

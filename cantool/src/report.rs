@@ -111,15 +111,6 @@ fn physical_number(p: Physical) -> Number {
     }
 }
 
-fn kind_name(kind: FrameKind) -> &'static str {
-    match kind {
-        FrameKind::Classic => "classic",
-        FrameKind::Fd { .. } => "fd",
-        FrameKind::Remote => "remote",
-        FrameKind::Error => "error",
-    }
-}
-
 /// The CSV header for [`Format::Csv`].
 pub const CSV_HEADER: &str =
     "timestamp,channel,id,extended,kind,data,message,signal,raw,value,unit,choice";
@@ -171,7 +162,7 @@ impl Report<'_> {
                     channel: &e.channel,
                     id: f.id,
                     extended: f.extended,
-                    kind: kind_name(f.kind),
+                    kind: f.kind.name(),
                     brs,
                     esi,
                     dlc: f.dlc,
@@ -203,7 +194,7 @@ impl Report<'_> {
                     csv_field(&e.channel),
                     f.id,
                     f.extended,
-                    kind_name(f.kind),
+                    f.kind.name(),
                     hex(&f.data)
                 );
                 match &self.message {

@@ -98,15 +98,6 @@ fn generate(rng: &mut Rng, n: usize) -> Vec<Written> {
         .collect()
 }
 
-fn kind_name(kind: FrameKind) -> &'static str {
-    match kind {
-        FrameKind::Classic => "classic",
-        FrameKind::Fd { .. } => "fd",
-        FrameKind::Remote => "remote",
-        FrameKind::Error => "error",
-    }
-}
-
 /// `cw-can`'s entry in python-can's terms; the channel as python-can numbers it.
 fn as_written(e: &Entry, format: LogFormat) -> Written {
     let f = &e.frame;
@@ -129,7 +120,7 @@ fn as_written(e: &Entry, format: LogFormat) -> Written {
         channel,
         id: f.id,
         extended: f.extended,
-        kind: kind_name(f.kind),
+        kind: f.kind.name(),
         brs,
         esi,
         dlc: f.dlc.unwrap_or(0),
