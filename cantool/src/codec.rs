@@ -106,8 +106,7 @@ fn integral(x: f64) -> Option<i128> {
     (x.is_finite() && x.fract() == 0.0 && x.abs() < 2f64.powi(100)).then_some(x as i128)
 }
 
-fn raw_of(signal: &SignalDef, pdu: &[u8; 64]) -> Raw {
-    let bits = signal.layout.unpack_raw(pdu);
+fn raw_of(signal: &SignalDef, pdu: &[u8; 64], bits: u64) -> Raw {
     match signal.encoding {
         Encoding::Integer(_) => Raw::Int(signal.layout.unpack(pdu).as_i128()),
         Encoding::Float32 => Raw::Float(f64::from(f32::from_bits(bits as u32))),
@@ -151,16 +150,25 @@ pub fn decode<'a>(message: &'a MessageDef, data: &[u8]) -> Result<Vec<Decoded<'a
         });
     }
     let pdu = pdu_of(data.get(..message.size).unwrap_or(data));
-    let raw_int = |j: usize| match message.signals.get(j).map(|s| raw_of(s, &pdu)) {
-        Some(Raw::Int(v)) => v,
+    // Every signal's bits, unpacked once: the multiplexers read them to decide which
+    // signals the frame carries, and the output reads them again.
+    let unpacked: Vec<(u64, Raw)> = message
+        .signals
+        .iter()
+        .map(|s| {
+            let bits = s.layout.unpack_raw(&pdu);
+            (bits, raw_of(s, &pdu, bits))
+        })
+        .collect();
+    let raw_int = |j: usize| match unpacked.get(j) {
+        Some((_, Raw::Int(v))) => *v,
         _ => -1,
     };
     let mut out = Vec::new();
-    for (i, signal) in message.signals.iter().enumerate() {
+    for (i, (signal, &(bits, raw))) in message.signals.iter().zip(&unpacked).enumerate() {
         if !message.present(i, &raw_int) {
             continue;
         }
-        let raw = raw_of(signal, &pdu);
         if let (true, Raw::Int(v)) = (signal.is_multiplexer, raw) {
             if message.has_children(i) && !message.selects(i, v) {
                 return Err(DecodeError::UnknownMux {
@@ -176,7 +184,7 @@ pub fn decode<'a>(message: &'a MessageDef, data: &[u8]) -> Result<Vec<Decoded<'a
         out.push(Decoded {
             signal,
             raw,
-            bits: signal.layout.unpack_raw(&pdu),
+            bits,
             physical: physical_of(signal, raw),
             choice,
         });
