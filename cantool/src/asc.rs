@@ -39,6 +39,12 @@ pub fn dlc_to_len(dlc: u8) -> usize {
 /// The entries of an ASC log.
 pub struct AscReader<R> {
     lines: Lines<R>,
+    parser: Parser,
+}
+
+/// What a line's meaning depends on: the number base the log's `base` line set.
+#[derive(Debug, Default)]
+struct Parser {
     decimal: bool,
 }
 
@@ -47,7 +53,7 @@ impl<R: BufRead> AscReader<R> {
     pub fn new(reader: R) -> Self {
         Self {
             lines: Lines::new(reader),
-            decimal: false,
+            parser: Parser::default(),
         }
     }
 }
@@ -75,7 +81,9 @@ impl<R> AscReader<R> {
     pub fn line(&self) -> usize {
         self.lines.line()
     }
+}
 
+impl Parser {
     fn number(&self, text: &str, what: &str) -> Result<u64, String> {
         let radix = if self.decimal { 10 } else { 16 };
         u64::from_str_radix(text, radix).map_err(|_| {
@@ -268,10 +276,10 @@ impl<R: BufRead> Iterator for AscReader<R> {
         loop {
             let (line, text) = self.lines.next_line()?;
             let text = match text {
-                Ok(t) => t.to_string(),
+                Ok(t) => t,
                 Err(e) => return Some(Err(e)),
             };
-            if let Some(result) = self.parse(&text) {
+            if let Some(result) = self.parser.parse(text) {
                 return Some(result.map_err(|what| LineError::line(line, what)));
             }
         }
