@@ -348,23 +348,22 @@ fn fd_by_attribute(dbc: &Dbc, id: MessageId) -> bool {
     dbc.attribute_values_message
         .iter()
         .find(|a| a.name == "VFrameFormat" && a.message_id == id)
-        .is_some_and(|a| match &a.value {
-            AttributeValue::String(name) => is_fd(name),
-            AttributeValue::Uint(i) => match names {
-                Some(names) => usize::try_from(*i)
+        .is_some_and(|a| {
+            // An enumeration's value is an index into its names; without the definition,
+            // 14 and 15 are CANoe's `CAN_FD` and `CAN_FD_BRS`.
+            let index = match &a.value {
+                AttributeValue::String(name) => return is_fd(name),
+                AttributeValue::Uint(i) => i128::from(*i),
+                AttributeValue::Int(i) => i128::from(*i),
+                AttributeValue::Double(_) => return false,
+            };
+            match names {
+                Some(names) => usize::try_from(index)
                     .ok()
                     .and_then(|i| names.get(i))
                     .is_some_and(|n| is_fd(n)),
-                None => matches!(i, 14 | 15),
-            },
-            AttributeValue::Int(i) => match names {
-                Some(names) => usize::try_from(*i)
-                    .ok()
-                    .and_then(|i| names.get(i))
-                    .is_some_and(|n| is_fd(n)),
-                None => matches!(i, 14 | 15),
-            },
-            AttributeValue::Double(_) => false,
+                None => matches!(index, 14 | 15),
+            }
         })
 }
 
