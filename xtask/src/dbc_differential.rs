@@ -51,22 +51,24 @@ const FLOAT_CONVERSIONS: &[(&str, &str)] = &[("1", "0"), ("2", "1"), ("0.5", "-3
 /// How many disagreements to print in full.
 const SHOW: usize = 5;
 
+/// The default `--frames`.
+const FRAMES: u64 = 12_000;
+
 /// Options of `cargo xtask dbc-differential`.
 #[derive(clap::Args)]
 pub struct Options {
     /// At least this many frames (decoded and encoded)
-    #[arg(long, default_value_t = 12_000, value_parser = clap::value_parser!(u64).range(1..))]
+    #[arg(long, default_value_t = FRAMES, value_parser = clap::value_parser!(u64).range(1..))]
     pub frames: u64,
-    /// Generator seed (decimal or 0x hex); a fresh one when not given
-    #[arg(long, value_parser = crate::parse_seed)]
-    pub seed: Option<u64>,
+    #[command(flatten)]
+    pub seed: crate::rng::Seed,
 }
 
 impl Default for Options {
     fn default() -> Self {
         Self {
-            frames: 12_000,
-            seed: None,
+            frames: FRAMES,
+            seed: crate::rng::Seed::default(),
         }
     }
 }
@@ -678,7 +680,7 @@ fn theirs(obj: &serde_json::Value) -> std::result::Result<String, ()> {
 
 /// Generates, runs cantools, compares; fails on any disagreement.
 pub fn run(options: &Options) -> Result {
-    let seed = options.seed.unwrap_or_else(Rng::fresh_seed);
+    let seed = options.seed.or_fresh();
     println!("dbc-differential: seed {seed} (replay with --seed {seed})");
     let mut rng = Rng::new(seed);
     let dir = target_dir().join("xtask-dbc-differential");

@@ -28,22 +28,24 @@ const EDGE_LENGTHS: &[u8] = &[1, 2, 7, 8, 9, 15, 16, 17, 24, 31, 32, 33, 48, 63,
 /// How many cases to report in full when something differs.
 const SHOW_MISMATCHES: usize = 5;
 
+/// The default `--cases`.
+const CASES: u64 = 20_000;
+
 /// Options of `cargo xtask differential`.
 #[derive(clap::Args)]
 pub struct Options {
     /// Number of accepted-layout cases
-    #[arg(long, default_value_t = 20_000, value_parser = clap::value_parser!(u64).range(1..))]
+    #[arg(long, default_value_t = CASES, value_parser = clap::value_parser!(u64).range(1..))]
     pub cases: u64,
-    /// Generator seed (decimal or 0x hex); a fresh one when not given
-    #[arg(long, value_parser = crate::parse_seed)]
-    pub seed: Option<u64>,
+    #[command(flatten)]
+    pub seed: crate::rng::Seed,
 }
 
 impl Default for Options {
     fn default() -> Self {
         Self {
-            cases: 20_000,
-            seed: None,
+            cases: CASES,
+            seed: crate::rng::Seed::default(),
         }
     }
 }
@@ -301,7 +303,7 @@ fn reverse<const N: usize>(case: &Case, cantools: &[u8]) -> Result<Option<String
 
 /// Runs the differential test.
 pub fn run(options: &Options) -> Result {
-    let seed = options.seed.unwrap_or_else(Rng::fresh_seed);
+    let seed = options.seed.or_fresh();
     println!(
         "codec differential: {} cases, seed {seed} (replay: cargo xtask differential --cases {} --seed {seed})",
         options.cases, options.cases

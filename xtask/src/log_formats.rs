@@ -14,22 +14,24 @@ use cw_can::report::hex;
 /// How many disagreements to print in full.
 const SHOW: usize = 5;
 
+/// The default `--frames`.
+const FRAMES: usize = 3_000;
+
 /// Options of `cargo xtask log-formats`.
 #[derive(clap::Args)]
 pub struct Options {
     /// Frames written
-    #[arg(long, default_value_t = 3_000)]
+    #[arg(long, default_value_t = FRAMES)]
     pub frames: usize,
-    /// Generator seed (decimal or 0x hex); a fresh one when not given
-    #[arg(long, value_parser = crate::parse_seed)]
-    pub seed: Option<u64>,
+    #[command(flatten)]
+    pub seed: crate::rng::Seed,
 }
 
 impl Default for Options {
     fn default() -> Self {
         Self {
-            frames: 3_000,
-            seed: None,
+            frames: FRAMES,
+            seed: crate::rng::Seed::default(),
         }
     }
 }
@@ -151,7 +153,7 @@ fn same(a: &Written, b: &Written, channel_kept: bool) -> bool {
 
 /// Writes, reads back with both, compares.
 pub fn run(options: &Options) -> Result {
-    let seed = options.seed.unwrap_or_else(Rng::fresh_seed);
+    let seed = options.seed.or_fresh();
     println!("log-formats: seed {seed} (replay with --seed {seed})");
     let mut rng = Rng::new(seed);
     let frames = generate(&mut rng, options.frames);

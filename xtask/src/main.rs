@@ -102,15 +102,6 @@ enum Command {
     },
 }
 
-/// A generator seed: decimal, or hexadecimal after `0x`.
-fn parse_seed(text: &str) -> Result<u64> {
-    match text.strip_prefix("0x") {
-        Some(hex) => u64::from_str_radix(hex, 16),
-        None => text.parse(),
-    }
-    .map_err(|e| format!("`{text}`: {e}"))
-}
-
 fn main() -> ExitCode {
     // Usage errors are clap's (exit status 2); a failing task prints its error.
     let cli = Cli::parse();

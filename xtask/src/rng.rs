@@ -5,6 +5,30 @@
 use rand::{Rng as _, RngCore as _, SeedableRng as _};
 use rand_xoshiro::Xoshiro256StarStar;
 
+/// The `--seed` option of every randomized run.
+#[derive(Clone, Copy, Default, clap::Args)]
+pub struct Seed {
+    /// Generator seed (decimal or 0x hex); a fresh one when not given
+    #[arg(long = "seed", value_name = "SEED", value_parser = parse_seed)]
+    pub given: Option<u64>,
+}
+
+impl Seed {
+    /// The seed given, or a fresh one from the operating system.
+    pub fn or_fresh(self) -> u64 {
+        self.given.unwrap_or_else(rand::random)
+    }
+}
+
+/// A generator seed: decimal, or hexadecimal after `0x`.
+fn parse_seed(text: &str) -> crate::Result<u64> {
+    match text.strip_prefix("0x") {
+        Some(hex) => u64::from_str_radix(hex, 16),
+        None => text.parse(),
+    }
+    .map_err(|e| format!("`{text}`: {e}"))
+}
+
 /// A seeded generator.
 pub struct Rng(Xoshiro256StarStar);
 
@@ -12,11 +36,6 @@ impl Rng {
     /// A generator whose whole sequence is determined by `seed`.
     pub fn new(seed: u64) -> Self {
         Self(Xoshiro256StarStar::seed_from_u64(seed))
-    }
-
-    /// A seed from the operating system, for runs without `--seed`.
-    pub fn fresh_seed() -> u64 {
-        rand::random()
     }
 
     /// The next 64 random bits.
