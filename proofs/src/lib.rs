@@ -627,6 +627,7 @@ pub const TICK: ServiceCall = ServiceCall::IncrementCounter(CounterId(0));
 
 pub mod configs;
 pub mod modes;
+pub mod steps;
 
 #[cfg(test)]
 mod tests;

@@ -1,23 +1,37 @@
-//! Runs every model to exhaustion and prints the number of states explored.
-use cw_proofs::{check, check_modes, configs, Outcome};
+//! Runs every model to exhaustion (the step exploration to its depth) and prints the
+//! number of states explored.
+use clap::Parser;
+use cw_proofs::{check, check_modes, configs, steps, Outcome};
 use std::process::ExitCode;
 use std::time::Instant;
 
 /// A model's name on the command line and its run.
-type Run = (&'static str, fn(usize) -> Outcome);
+type Run = (&'static str, Box<dyn Fn(usize) -> Outcome>);
+
+/// Model checks of the OSEK kernel and the communication modes.
+#[derive(Parser)]
+struct Cli {
+    /// Run only these models (paper, ceiling, fifo, events, interrupts, steps, modes)
+    models: Vec<String>,
+    /// Length of the step sequences the `steps` exploration covers
+    #[arg(long, default_value_t = 5)]
+    depth: usize,
+}
 
 fn main() -> ExitCode {
+    let cli = Cli::parse();
     let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
-    let runs: [Run; 6] = [
-        ("paper", |n| check(configs::paper(), n)),
-        ("ceiling", |n| check(configs::ceiling(), n)),
-        ("fifo", |n| check(configs::fifo(), n)),
-        ("events", |n| check(configs::events(), n)),
-        ("interrupts", |n| check(configs::interrupts(), n)),
-        ("modes", check_modes),
+    let depth = cli.depth;
+    let runs: [Run; 7] = [
+        ("paper", Box::new(|n| check(configs::paper(), n))),
+        ("ceiling", Box::new(|n| check(configs::ceiling(), n))),
+        ("fifo", Box::new(|n| check(configs::fifo(), n))),
+        ("events", Box::new(|n| check(configs::events(), n))),
+        ("interrupts", Box::new(|n| check(configs::interrupts(), n))),
+        ("steps", Box::new(move |n| steps::check_steps(depth, n))),
+        ("modes", Box::new(check_modes)),
     ];
-    // `cw-proofs NAME...` runs only those models.
-    let only: Vec<String> = std::env::args().skip(1).collect();
+    let only = cli.models;
     if let Some(unknown) = only.iter().find(|o| runs.iter().all(|(n, _)| n != o)) {
         let names: Vec<&str> = runs.iter().map(|(n, _)| *n).collect();
         eprintln!(

@@ -92,6 +92,7 @@ mod irq;
 mod kernel;
 mod queue;
 pub mod spec;
+pub mod steps;
 
 pub use call::{Returned, ServiceCall};
 pub use callevel::Context;
