@@ -21,7 +21,7 @@ pub const FUZZ_TARGETS: &[&str] = &[
 ];
 
 /// How long the `fuzz` stage runs each target (cargo-bolero `-T`).
-const FUZZ_TIME: &str = "10s";
+const FUZZ_TIME: &str = "8s";
 
 /// Random iterations per bolero harness under Miri (bolero reads `BOLERO_RANDOM_ITERATIONS`
 /// in `bolero-engine`'s `rng::Options`; when it is set the 1 s default time limit is lifted,
@@ -62,15 +62,15 @@ const BUDGET_S: &[(&str, u32)] = &[
     ("test", 215),
     ("cross", 20),
     ("miri", 430),
-    ("model", 45),
+    ("model", 50),
     ("coverage", 170),
     ("mutants", 80),
     ("mutation", 255),
     ("qemu", 90),
-    ("differential", 10),
-    ("interop", 25),
+    ("differential", 8),
+    ("interop", 20),
     ("fuzz", 260),
-    ("bench", 80),
+    ("bench", 85),
 ];
 
 fn budget_s(stage: &str) -> u32 {
