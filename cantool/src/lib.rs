@@ -9,7 +9,8 @@
 //! - [`codec`]: signals decoded and encoded with cantools' semantics, the bits by the
 //!   ECU's own proved codec;
 //! - [`slcan`]: a live bus through an SLCAN adapter (serial device or `socket://`);
-//! - [`report`]: the decoded frames as text lines, JSON objects or CSV rows.
+//! - [`report`]: the decoded frames as text lines, JSON objects or CSV rows;
+//! - [`view`]: what the PC's view of the bus shows, from the `DistanceFrame`s alone.
 
 #![forbid(unsafe_code)]
 // Input from outside (a DBC, a log line, a value typed by the engineer) is an error value
@@ -32,3 +33,4 @@ pub mod frame;
 pub mod log;
 pub mod report;
 pub mod slcan;
+pub mod view;
