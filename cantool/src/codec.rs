@@ -9,6 +9,7 @@ use std::fmt;
 use cw_core::com::signal::{spec::value_range, Signedness};
 
 use crate::dbc::{Encoding, MessageDef, SignalDef};
+use crate::frame::{Frame, FrameKind};
 
 /// A signal's raw value: the integer its bits hold, or the IEEE value.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -282,6 +283,26 @@ fn to_raw(signal: &SignalDef, value: &Input) -> Result<Raw, String> {
             raw.map(Raw::Int).ok_or_else(inexact)
         }
     }
+}
+
+/// The frame that carries `values` in `message`: its data as [`encode`] packs it, its id,
+/// and CAN FD when the DBC makes the message an FD frame.
+///
+/// # Errors
+/// As [`encode`].
+pub fn encode_frame(message: &MessageDef, values: &[(String, Input)]) -> Result<Frame, String> {
+    let data = encode(message, values)?;
+    Ok(Frame {
+        kind: if message.fd {
+            FrameKind::Fd {
+                brs: false,
+                esi: false,
+            }
+        } else {
+            FrameKind::Classic
+        },
+        ..Frame::classic(message.id, message.extended, &data)
+    })
 }
 
 /// Encodes physical values into the data of `message` (its size in bytes, the bits no

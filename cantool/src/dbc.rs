@@ -263,6 +263,17 @@ pub fn text_of(bytes: &[u8]) -> String {
 }
 
 impl Database {
+    /// Reads and loads a DBC file.
+    ///
+    /// # Errors
+    /// The file cannot be read, or [`Self::from_bytes`] refuses it; the sentence names the
+    /// file.
+    pub fn load(path: &std::path::Path) -> Result<Self, String> {
+        let bytes =
+            std::fs::read(path).map_err(|e| format!("cannot read {}: {e}", path.display()))?;
+        Self::from_bytes(&bytes).map_err(|e| format!("{}: {e}", path.display()))
+    }
+
     /// Loads a DBC file's bytes (see [`text_of`] for the encodings).
     ///
     /// # Errors

@@ -26,16 +26,17 @@
 )]
 
 use std::io::Write;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
 use cw_can::codec::{self, Input};
 use cw_can::dbc::Database;
-use cw_can::frame::{Frame, FrameKind};
 use cw_can::log::{Entries, LogFormat};
 use cw_can::report::{self, Format};
 use cw_can::slcan::{Limits, SlcanSource};
+use cw_can::view::server::View;
+use std::sync::{Arc, Mutex};
 
 /// Decode CAN logs with a DBC, or encode signal values into a frame.
 #[derive(Parser)]
@@ -82,6 +83,29 @@ enum Command {
         #[arg(required_unless_present = "slcan", conflicts_with = "slcan")]
         logs: Vec<PathBuf>,
     },
+    /// Serve the view of the bus (paper Figure 8) as a local web page: the scene from above
+    /// and from the side, the ECU's LEDs, the distance and the level, a chart, from the
+    /// `DistanceFrame`s alone.
+    View {
+        /// The DBC file (UTF-8 or Windows-1252).
+        #[arg(long)]
+        dbc: PathBuf,
+        /// Replay a log (candump, ASC, BLF), with play, pause, speed and seek on the page.
+        #[arg(long, value_name = "LOG")]
+        replay: PathBuf,
+        /// The log's format [default: by extension: .asc ASC, .blf BLF, else candump].
+        #[arg(long, value_enum)]
+        log_format: Option<LogFormat>,
+        /// Where to listen; port 0 takes a free one. The page's address is printed.
+        #[arg(long, default_value = "127.0.0.1:8080", value_name = "ADDR:PORT")]
+        listen: String,
+        /// Log seconds per second (0.05 to 1000).
+        #[arg(long, default_value_t = 1.0)]
+        speed: f64,
+        /// Start paused (the page's Play starts the replay).
+        #[arg(long)]
+        paused: bool,
+    },
     /// Encode signal values into a frame of a message, printed as `ID#DATA`.
     Encode {
         /// The DBC file (UTF-8 or Windows-1252).
@@ -97,17 +121,14 @@ enum Command {
 /// Something that stops the run (exit status 2).
 struct Fatal(String);
 
-fn load(path: &PathBuf) -> Result<Database, Fatal> {
-    let bytes =
-        std::fs::read(path).map_err(|e| Fatal(format!("cannot read {}: {e}", path.display())))?;
-    Database::from_bytes(&bytes).map_err(|e| Fatal(format!("{}: {e}", path.display())))
+fn load(path: &Path) -> Result<Database, Fatal> {
+    Database::load(path).map_err(Fatal)
 }
 
 fn out_err(e: std::io::Error) -> Fatal {
     Fatal(format!("standard output: {e}"))
 }
 
-/// Decodes every log; returns how many lines were bad.
 /// Where `decode` reads frames from.
 enum Source<'a> {
     Logs(&'a [PathBuf], Option<LogFormat>),
@@ -119,7 +140,8 @@ enum Source<'a> {
     },
 }
 
-fn decode(dbc: &PathBuf, strict: bool, format: Format, source: Source<'_>) -> Result<usize, Fatal> {
+/// Decodes every log; returns how many lines were bad.
+fn decode(dbc: &Path, strict: bool, format: Format, source: Source<'_>) -> Result<usize, Fatal> {
     let db = load(dbc)?;
     let stdout = std::io::stdout();
     let mut out = std::io::BufWriter::new(stdout.lock());
@@ -177,7 +199,7 @@ fn decode(dbc: &PathBuf, strict: bool, format: Format, source: Source<'_>) -> Re
     Ok(bad)
 }
 
-fn encode(dbc: &PathBuf, message: &str, values: &[String]) -> Result<(), Fatal> {
+fn encode(dbc: &Path, message: &str, values: &[String]) -> Result<(), Fatal> {
     let db = load(dbc)?;
     let m = db
         .by_name(message)
@@ -192,20 +214,41 @@ fn encode(dbc: &PathBuf, message: &str, values: &[String]) -> Result<(), Fatal> 
             Ok((name.to_string(), value))
         })
         .collect::<Result<Vec<_>, Fatal>>()?;
-    let data = codec::encode(m, &values).map_err(Fatal)?;
-    let frame = Frame {
-        kind: if m.fd {
-            FrameKind::Fd {
-                brs: false,
-                esi: false,
-            }
-        } else {
-            FrameKind::Classic
-        },
-        ..Frame::classic(m.id, m.extended, &data)
-    };
+    let frame = codec::encode_frame(m, &values).map_err(Fatal)?;
     let mut out = std::io::stdout().lock();
     writeln!(out, "{frame}").map_err(out_err)
+}
+
+/// Serves the view until the process ends.
+fn view(
+    dbc: &Path,
+    replay: &Path,
+    log_format: Option<LogFormat>,
+    listen: &str,
+    speed: f64,
+    paused: bool,
+) -> Result<(), Fatal> {
+    let db = load(dbc)?;
+    let mut feed = cw_can::view::replay(&db, replay, log_format).map_err(Fatal)?;
+    feed.control(cw_can::view::feed::Control {
+        play: Some(!paused),
+        speed: Some(speed),
+        seek: None,
+    })
+    .map_err(Fatal)?;
+    let config = db.by_name("ThresholdConfig").cloned();
+    let view = View::bind(listen, Arc::new(Mutex::new(feed)), config).map_err(Fatal)?;
+    let addr = view.addr().map_err(Fatal)?;
+    let mut out = std::io::stdout().lock();
+    writeln!(
+        out,
+        "cw-can view: http://{addr}/ (replay of {})",
+        replay.display()
+    )
+    .and_then(|()| out.flush())
+    .map_err(out_err)?;
+    drop(out);
+    view.run().map_err(Fatal)
 }
 
 fn main() -> ExitCode {
@@ -239,6 +282,14 @@ fn main() -> ExitCode {
             };
             decode(dbc, *strict, *format, source)
         }
+        Command::View {
+            dbc,
+            replay,
+            log_format,
+            listen,
+            speed,
+            paused,
+        } => view(dbc, replay, *log_format, listen, *speed, *paused).map(|()| 0),
         Command::Encode {
             dbc,
             message,

@@ -77,6 +77,8 @@ mod targets {
     use cw_can::dbc::Database;
     use cw_can::log::{At, CandumpReader};
     use cw_can::report::{self, Format};
+    use cw_can::view::feed::{Control, Feed, CHART_POINTS};
+    use cw_can::view::state::{DistanceFrame, Replay};
     use cw_core::can::{slcan, CanFrame, CanId};
     use cw_core::com::signal::{spec, ByteOrder, SignalLayout, Signedness};
     use cw_core::os::spec::call_and_check;
@@ -310,6 +312,64 @@ mod targets {
                     errors += 1;
                     assert!(errors <= bytes.len(), "an error per object at most");
                 }
+            }
+        });
+    }
+
+    /// Any bytes as a candump log replayed in the view (the first 16 bytes drive the
+    /// replay's controls, the rest is the log, decoded with the ECU's DBC): bad lines and
+    /// frames are named, the clock stays within the log under any play, speed and seek,
+    /// and every snapshot has at most the chart's points and is JSON, never a panic.
+    #[test]
+    fn view_replay() {
+        let db = Database::from_bytes(include_bytes!("../../firmware/ecu.dbc"));
+        let Ok(db) = db else { panic!("ecu.dbc loads") };
+        let Ok(frame) = DistanceFrame::find(&db) else {
+            panic!("ecu.dbc has a DistanceFrame")
+        };
+        bolero::check!().for_each(|bytes: &[u8]| {
+            let (ops, log) = bytes.split_at(bytes.len().min(16));
+            let lines = log.split(|b| *b == b'\n').count();
+            let mut reader = CandumpReader::new(log);
+            let entries: Vec<_> = std::iter::from_fn(|| {
+                let item = reader.next()?;
+                Some(item.map(|e| (At::Line(reader.line()), e)))
+            })
+            .collect();
+            let errors = entries.iter().filter(|e| e.is_err()).count();
+            let replay = Replay::new(&frame, entries, "fuzz.log");
+            assert!(replay.bad().len() >= errors);
+            assert!(replay.bad().len() <= lines);
+            let mut feed = Feed::Replay(replay, "fuzz.log".into());
+            for op in ops.chunks(2) {
+                let (kind, value) = (op.first().copied().unwrap_or(0), op.get(1).copied());
+                let value = f64::from(value.unwrap_or(0));
+                let control = match kind % 4 {
+                    0 => Control {
+                        play: Some(kind & 4 == 0),
+                        ..Control::default()
+                    },
+                    1 => Control {
+                        speed: Some(value / 8.0),
+                        ..Control::default()
+                    },
+                    2 => Control {
+                        seek: Some(value / 16.0 - 1.0),
+                        ..Control::default()
+                    },
+                    _ => {
+                        feed.tick(value / 32.0);
+                        Control::default()
+                    }
+                };
+                let _ = feed.control(control);
+                let snap = feed.snapshot();
+                let Some(clock) = snap.clock else {
+                    panic!("a replay has a clock")
+                };
+                assert!((0.0..=clock.duration).contains(&clock.position));
+                assert!(snap.chart.len() <= CHART_POINTS);
+                assert!(serde_json::to_string(&snap).is_ok());
             }
         });
     }

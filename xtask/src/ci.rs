@@ -18,6 +18,7 @@ pub const FUZZ_TARGETS: &[&str] = &[
     "targets::sensor_uart_stream",
     "targets::dbc_and_log",
     "targets::blf_bytes",
+    "targets::view_replay",
 ];
 
 /// How long the `fuzz` stage runs each target (cargo-bolero `-T`).
@@ -46,6 +47,7 @@ pub const STAGES: &[&str] = &[
     "qemu",
     "differential",
     "interop",
+    "view",
     "fuzz",
     "bench",
 ];
@@ -69,6 +71,7 @@ const BUDGET_S: &[(&str, u32)] = &[
     ("qemu", 90),
     ("differential", 8),
     ("interop", 20),
+    ("view", 30),
     ("fuzz", 260),
     ("bench", 85),
 ];
@@ -310,6 +313,7 @@ fn run_stage(stage: &str) -> Result {
             crate::dbc_differential::run(&crate::dbc_differential::Options::default())
         }
         "interop" => interop(),
+        "view" => crate::view::run(),
         "fuzz" => {
             for target in FUZZ_TARGETS {
                 // libFuzzer engine (the default) with AddressSanitizer: needs the nightly.
@@ -343,7 +347,7 @@ fn run_stage(stage: &str) -> Result {
 }
 
 /// `cargo run --release` of the ECU simulation (`cw-ecu`); its options follow.
-fn ecu_run() -> Cmd {
+pub(crate) fn ecu_run() -> Cmd {
     Cmd::new("cargo").args([
         "run",
         "--quiet",

@@ -20,6 +20,8 @@
 //!   [--flash] [--serial tcp:PORT]`:
 //!   the ECU's Cortex-M4 image on QEMU's mps2-an386, the emulator-in-the-loop tests against
 //!   the host simulation (`tests/`), and python-can against it live;
+//! - `cargo xtask view`: `cw-can view` in headless Chromium on the ECU's Figure 7 log,
+//!   checked against the trace; the screenshots of the paper's Figure 8 in `docs/view/`;
 //! - `cargo xtask qemu-runner IMAGE [ARGS]..`: cargo's runner for the board's target
 //!   (`cargo run` on an image): QEMU with `ARGS` as the image's command line, its defmt
 //!   log decoded as it comes.
@@ -41,6 +43,7 @@ mod profile;
 mod qemu;
 mod rng;
 mod setup;
+mod view;
 
 use std::process::ExitCode;
 
@@ -62,7 +65,7 @@ struct Cli {
 #[derive(Subcommand)]
 enum Command {
     /// Run the checks in order (stages: setup, fmt, clippy, test, cross, miri, model,
-    /// coverage, mutants, mutation, qemu, differential, interop, fuzz, bench); stop at the
+    /// coverage, mutants, mutation, qemu, differential, interop, view, fuzz, bench); stop at the
     /// first failing stage unless --keep-going; each stage prints its time budget
     Ci(ci::Options),
     /// Install what the checks need (the check command's setup stage)
@@ -91,6 +94,9 @@ enum Command {
     Mutation(mutation::Options),
     /// Build the ECU's Cortex-M4 image and run it on QEMU's mps2-an386
     Qemu(qemu::Options),
+    /// Check `cw-can view` in headless Chromium on the ECU's Figure 7 log, and write the
+    /// four screenshots of the paper's Figure 8 to docs/view/
+    View,
     /// Cargo's runner for thumbv7em-none-eabihf: IMAGE on QEMU with ARGS on its
     /// semihosting command line, its defmt log decoded as it comes
     QemuRunner {
@@ -127,6 +133,7 @@ fn run(command: Command) -> Result {
         Command::Mutants => mutants::run(),
         Command::Mutation(options) => mutation::run(&options),
         Command::Qemu(options) => qemu::run(&options),
+        Command::View => view::run(),
         Command::QemuRunner { image, args } => {
             qemu::runner(&std::iter::once(image).chain(args).collect::<Vec<_>>())
         }

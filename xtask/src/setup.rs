@@ -82,6 +82,8 @@ pub fn run() -> Result {
     valgrind()?;
     qemu()?;
     debian_tool("llvm-symbolizer", &["--version"], "llvm")?;
+    // The `view` stage opens `cw-can view` in it, headless.
+    debian_tool("chromium", &["--version"], "chromium")?;
     python_venv()?;
     Ok(())
 }
@@ -303,7 +305,7 @@ fn python_venv() -> Result {
     if up_to_date {
         // The stamp says pip installed exactly these pins; make sure they still import.
         let check = Cmd::new(&python)
-            .args(["-c", "import cantools, can, serial; print('cantools', cantools.__version__, '/ python-can', can.__version__, '/ pyserial', serial.__version__)"])
+            .args(["-c", "import cantools, can, serial, websocket; print('cantools', cantools.__version__, '/ python-can', can.__version__, '/ pyserial', serial.__version__, '/ websocket-client', websocket.__version__)"])
             .capture()?;
         if check.success {
             println!("ok: .venv has {}", check.stdout.trim());
@@ -335,7 +337,7 @@ fn python_venv() -> Result {
         .arg(&requirements_path)
         .run()?;
     Cmd::new(&python)
-        .args(["-c", "import cantools, can, serial; print('cantools', cantools.__version__, '/ python-can', can.__version__, '/ pyserial', serial.__version__)"])
+        .args(["-c", "import cantools, can, serial, websocket; print('cantools', cantools.__version__, '/ python-can', can.__version__, '/ pyserial', serial.__version__, '/ websocket-client', websocket.__version__)"])
         .run()?;
     std::fs::write(&stamp, requirements).map_err(|e| format!("writing {}: {e}", stamp.display()))
 }
