@@ -18,9 +18,12 @@ What is checked:
 2. At the log's start, where the ECU reports a fault: "Fault", both LEDs blinking.
 3. A log with bad lines and a second without frames: the bad lines are counted and named
    on the page, the rest plays; "no signal" in the gap, the obstacle gone, the LEDs off.
-4. Ten event streams at once, five of them cut mid-stream: the server goes on, each cut
-   stream's thread ends, the others keep receiving.
-5. The 30-minute log replayed at 1000x with ten streams open: the server's resident
+4. The host simulation live (`--simulate`), an obstacle at 0.8 m: thresholds typed into
+   the sender panel reach the ECU and the LEDs on the page change; a pair the ECU would
+   refuse is refused on the page.
+5. Ten event streams at once, five of them cut mid-stream: the server goes on, lets go of
+   the cut ones, the others keep receiving.
+6. The 30-minute log replayed at 1000x with ten streams open: the server's resident
    memory stays flat (printed: before, during and after).
 """
 
@@ -57,12 +60,12 @@ def fail(message):
 
 
 class View:
-    """A `cw-can view` process, replaying a log, paused."""
+    """A `cw-can view` process: replaying a log, paused, or on another source."""
 
-    def __init__(self, cw_can, dbc, log, speed=1.0):
+    def __init__(self, cw_can, dbc, log, speed=1.0, source=None):
+        source = source or ["--replay", log, "--paused", "--speed", str(speed)]
         self.proc = subprocess.Popen(
-            [cw_can, "view", "--dbc", dbc, "--replay", log, "--listen", "127.0.0.1:0",
-             "--paused", "--speed", str(speed)],
+            [cw_can, "view", "--dbc", dbc, "--listen", "127.0.0.1:0", *source],
             stdout=subprocess.PIPE, text=True)
         line = self.proc.stdout.readline()
         match = re.search(r"http://(127\.0\.0\.1:\d+)/", line)
@@ -277,6 +280,43 @@ def check_damage(view, browser, bad_lines):
           f"in a second without frames, the obstacle gone and the LEDs off")
 
 
+def check_sender(cw_can, dbc, browser, tmp):
+    """The host simulation live, an obstacle held at 0.8 m: red. The thresholds typed into
+    the sender panel (red below 0.5 m, yellow below 1.0 m) reach the ECU over the bus, and
+    the LEDs on the page turn yellow; a pair the ECU would refuse is refused on the page."""
+    scenario = os.path.join(tmp, "hold.txt")
+    with open(scenario, "w") as f:
+        f.write("hold 800 120000\n")
+    view = View(cw_can, dbc, None, source=["--simulate", scenario])
+    try:
+        browser.open(view.url)
+        browser.wait("document.getElementById('readout').textContent === '0.800 m' && "
+                     "document.getElementById('level').textContent === 'Red' && "
+                     "!document.getElementById('send').disabled",
+                     "the live simulation did not show 0.8 m, red, with the panel on")
+        fill = """(() => {{ document.getElementById('red-below').value = '{}';
+            document.getElementById('yellow-below').value = '{}';
+            document.getElementById('send').click(); return true; }})()"""
+        browser.eval(fill.format(500, 1000))
+        browser.wait("document.getElementById('level').textContent === 'Yellow' && "
+                     "document.getElementById('led-yellow').dataset.on === 'true' && "
+                     "document.getElementById('led-red').dataset.on === 'false'",
+                     "after sending red below 500 mm, yellow below 1000 mm, 0.8 m did not turn yellow")
+        said = browser.eval("document.getElementById('send-result').textContent")
+        if not said.startswith("sent"):
+            fail(f"the panel says {said!r} after a frame the ECU took")
+        browser.eval(fill.format(900, 900))
+        browser.wait("document.getElementById('send-result').textContent === "
+                     "'not sent: red must be below yellow'",
+                     "red below 900 mm, yellow below 900 mm was not refused on the page")
+        if view.state()["shown"]["sample"]["level"] != "Yellow":
+            fail("a refused pair changed the ECU's thresholds")
+    finally:
+        view.close()
+    print("view: live simulation at 0.8 m, red; thresholds 500/1000 mm sent from the page: "
+          "the LEDs turned yellow; 900/900 mm refused on the page")
+
+
 def open_stream(view):
     s = socket.create_connection(tuple(view.addr.rsplit(":", 1)), timeout=TIMEOUT_S)
     s.sendall(f"GET /events HTTP/1.1\r\nHost: {view.addr}\r\n\r\n".encode())
@@ -369,6 +409,7 @@ def main(cw_can, dbc, figure7_log, figure7_trace, long_log, shots_dir):
             views.append(view)
             browser.open(view.url)
             check_damage(view, browser, bad_lines)
+            check_sender(cw_can, dbc, browser, tmp)
         check_clients(views[0])
         view = View(cw_can, dbc, long_log, speed=1000)
         views.append(view)

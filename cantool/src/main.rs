@@ -35,7 +35,10 @@ use cw_can::dbc::Database;
 use cw_can::log::{Entries, LogFormat};
 use cw_can::report::{self, Format};
 use cw_can::slcan::{Limits, SlcanSource};
+use cw_can::view::feed::Control;
+use cw_can::view::live;
 use cw_can::view::server::View;
+use cw_firmware::host::Scenario;
 use std::sync::{Arc, Mutex};
 
 /// Decode CAN logs with a DBC, or encode signal values into a frame.
@@ -85,25 +88,44 @@ enum Command {
     },
     /// Serve the view of the bus (paper Figure 8) as a local web page: the scene from above
     /// and from the side, the ECU's LEDs, the distance and the level, a chart, from the
-    /// `DistanceFrame`s alone.
+    /// `DistanceFrame`s alone; and a panel that sends `ThresholdConfig` to a live bus.
+    #[command(group(clap::ArgGroup::new("source").required(true).args(["replay", "simulate", "slcan"])))]
     View {
         /// The DBC file (UTF-8 or Windows-1252).
         #[arg(long)]
         dbc: PathBuf,
         /// Replay a log (candump, ASC, BLF), with play, pause, speed and seek on the page.
         #[arg(long, value_name = "LOG")]
-        replay: PathBuf,
+        replay: Option<PathBuf>,
+        /// Run the ECU's host simulation of a scenario file live, in real time, with the
+        /// PC on its bus.
+        #[arg(long, value_name = "SCENARIO")]
+        simulate: Option<PathBuf>,
+        /// The simulated sensor's noise seed (`--simulate`).
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// Read a live bus from an SLCAN adapter: a serial device (`/dev/ttyACM0`) or
+        /// `socket://HOST:PORT` (the QEMU image's UART).
+        #[arg(long, value_name = "PORT")]
+        slcan: Option<String>,
+        /// The serial device's baud rate (`--slcan` on a device).
+        #[arg(long, default_value_t = 115_200)]
+        baud: u32,
+        /// Set the adapter's CAN bit rate first: SLCAN's index, 0 (10 kbit/s) to 8
+        /// (1 Mbit/s); 6 is 500 kbit/s.
+        #[arg(long, value_name = "N", value_parser = clap::value_parser!(u8).range(0..=8))]
+        bitrate: Option<u8>,
         /// The log's format [default: by extension: .asc ASC, .blf BLF, else candump].
-        #[arg(long, value_enum)]
+        #[arg(long, value_enum, requires = "replay")]
         log_format: Option<LogFormat>,
         /// Where to listen; port 0 takes a free one. The page's address is printed.
         #[arg(long, default_value = "127.0.0.1:8080", value_name = "ADDR:PORT")]
         listen: String,
-        /// Log seconds per second (0.05 to 1000).
-        #[arg(long, default_value_t = 1.0)]
+        /// The replay's speed, log seconds per second (0.05 to 1000).
+        #[arg(long, default_value_t = 1.0, requires = "replay")]
         speed: f64,
-        /// Start paused (the page's Play starts the replay).
-        #[arg(long)]
+        /// Start the replay paused (the page's Play starts it).
+        #[arg(long, requires = "replay")]
         paused: bool,
     },
     /// Encode signal values into a frame of a message, printed as `ID#DATA`.
@@ -219,34 +241,72 @@ fn encode(dbc: &Path, message: &str, values: &[String]) -> Result<(), Fatal> {
     writeln!(out, "{frame}").map_err(out_err)
 }
 
+/// Where the view's frames come from.
+enum ViewSource<'a> {
+    Replay {
+        log: &'a Path,
+        format: Option<LogFormat>,
+        speed: f64,
+        paused: bool,
+    },
+    Simulate {
+        scenario: &'a Path,
+        seed: u64,
+    },
+    Slcan {
+        port: &'a str,
+        baud: u32,
+        bitrate: Option<u8>,
+    },
+}
+
 /// Serves the view until the process ends.
-fn view(
-    dbc: &Path,
-    replay: &Path,
-    log_format: Option<LogFormat>,
-    listen: &str,
-    speed: f64,
-    paused: bool,
-) -> Result<(), Fatal> {
+fn view(dbc: &Path, source: ViewSource<'_>, listen: &str) -> Result<(), Fatal> {
     let db = load(dbc)?;
-    let mut feed = cw_can::view::replay(&db, replay, log_format).map_err(Fatal)?;
-    feed.control(cw_can::view::feed::Control {
-        play: Some(!paused),
-        speed: Some(speed),
-        seek: None,
-    })
-    .map_err(Fatal)?;
+    let (feed, what) = match source {
+        ViewSource::Replay {
+            log,
+            format,
+            speed,
+            paused,
+        } => {
+            let mut feed = cw_can::view::replay(&db, log, format).map_err(Fatal)?;
+            feed.control(Control {
+                play: Some(!paused),
+                speed: Some(speed),
+                seek: None,
+            })
+            .map_err(Fatal)?;
+            (
+                Arc::new(Mutex::new(feed)),
+                format!("replay of {}", log.display()),
+            )
+        }
+        ViewSource::Simulate { scenario, seed } => {
+            let text = std::fs::read_to_string(scenario)
+                .map_err(|e| Fatal(format!("cannot read scenario {}: {e}", scenario.display())))?;
+            let parsed = Scenario::parse(&text)
+                .map_err(|e| Fatal(format!("scenario {}: {e}", scenario.display())))?;
+            let name = scenario.display().to_string();
+            let feed = live::simulation(&db, parsed, seed, &name).map_err(Fatal)?;
+            (feed, format!("the host simulation of {name}, live"))
+        }
+        ViewSource::Slcan {
+            port,
+            baud,
+            bitrate,
+        } => {
+            let feed = live::slcan(&db, port, baud, bitrate).map_err(Fatal)?;
+            (feed, format!("SLCAN adapter {port}, live"))
+        }
+    };
     let config = db.by_name("ThresholdConfig").cloned();
-    let view = View::bind(listen, Arc::new(Mutex::new(feed)), config).map_err(Fatal)?;
+    let view = View::bind(listen, feed, config).map_err(Fatal)?;
     let addr = view.addr().map_err(Fatal)?;
     let mut out = std::io::stdout().lock();
-    writeln!(
-        out,
-        "cw-can view: http://{addr}/ (replay of {})",
-        replay.display()
-    )
-    .and_then(|()| out.flush())
-    .map_err(out_err)?;
+    writeln!(out, "cw-can view: http://{addr}/ ({what})")
+        .and_then(|()| out.flush())
+        .map_err(out_err)?;
     drop(out);
     view.run().map_err(Fatal)
 }
@@ -285,11 +345,40 @@ fn main() -> ExitCode {
         Command::View {
             dbc,
             replay,
+            simulate,
+            seed,
+            slcan,
+            baud,
+            bitrate,
             log_format,
             listen,
             speed,
             paused,
-        } => view(dbc, replay, *log_format, listen, *speed, *paused).map(|()| 0),
+        } => {
+            let source = match (replay, simulate, slcan) {
+                (Some(log), _, _) => Some(ViewSource::Replay {
+                    log,
+                    format: *log_format,
+                    speed: *speed,
+                    paused: *paused,
+                }),
+                (_, Some(scenario), _) => Some(ViewSource::Simulate {
+                    scenario,
+                    seed: *seed,
+                }),
+                (_, _, Some(port)) => Some(ViewSource::Slcan {
+                    port,
+                    baud: *baud,
+                    bitrate: *bitrate,
+                }),
+                // clap requires one of the three.
+                (None, None, None) => None,
+            };
+            match source {
+                Some(source) => view(dbc, source, listen).map(|()| 0),
+                None => Err(Fatal("give --replay, --simulate or --slcan".into())),
+            }
+        }
         Command::Encode {
             dbc,
             message,

@@ -16,6 +16,8 @@ use std::io::{Read, Write};
 use std::net::TcpStream;
 use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
 
+use cw_core::can::{slcan, CanFrame, CanId};
+
 use crate::asc::dlc_to_len;
 use crate::frame::{Frame, FrameKind};
 use crate::log::{At, Entry, LineError};
@@ -124,6 +126,49 @@ pub struct SlcanSource {
     done: bool,
 }
 
+/// Sends frames to an adapter: each a `t`/`T` line, as python-can's `slcan` writes them.
+pub struct SlcanSender {
+    out: Box<dyn Write + Send>,
+    channel: String,
+}
+
+impl SlcanSender {
+    /// A sender writing to any byte stream (a test's, say).
+    pub fn over(out: Box<dyn Write + Send>, channel: &str) -> Self {
+        Self {
+            out,
+            channel: channel.to_string(),
+        }
+    }
+
+    /// Writes `frame`'s line.
+    ///
+    /// # Errors
+    /// A frame SLCAN's `t`/`T` lines cannot carry (CAN FD, remote, error, over 8 bytes),
+    /// or the adapter's connection fails.
+    pub fn send(&mut self, frame: &Frame) -> Result<(), String> {
+        if frame.kind != FrameKind::Classic {
+            return Err(format!(
+                "{frame}: only classic data frames are sent over SLCAN"
+            ));
+        }
+        let id = if frame.extended {
+            CanId::extended(frame.id)
+        } else {
+            u16::try_from(frame.id).ok().and_then(CanId::standard)
+        };
+        let classic = id
+            .and_then(|id| CanFrame::from_parts(id, &frame.data))
+            .ok_or_else(|| format!("{frame}: not a classic CAN frame"))?;
+        let mut line = [0u8; slcan::FRAME_LINE_MAX];
+        let n = slcan::encode_frame(&classic, &mut line);
+        self.out
+            .write_all(line.get(..n).unwrap_or(&[]))
+            .and_then(|()| self.out.flush())
+            .map_err(|e| format!("{}: cannot write to the adapter: {e}", self.channel))
+    }
+}
+
 /// A byte stream both ways.
 pub trait ReadWrite: Read + Write + Send {}
 impl<T: Read + Write + Send> ReadWrite for T {}
@@ -153,6 +198,47 @@ impl SlcanSource {
             ),
         };
         Self::over(port, url, bitrate, limits)
+    }
+
+    /// [`Self::open`], with a second handle on the same connection for sending frames
+    /// (the view's sender panel).
+    ///
+    /// # Errors
+    /// As [`Self::open`], or the connection cannot be shared.
+    pub fn open_with_sender(
+        url: &str,
+        baud: u32,
+        bitrate: Option<u8>,
+        limits: Limits,
+    ) -> Result<(Self, SlcanSender), String> {
+        let (port, out): (Box<dyn ReadWrite>, Box<dyn Write + Send>) =
+            match url.strip_prefix("socket://") {
+                Some(addr) => {
+                    let stream = TcpStream::connect(addr)
+                        .map_err(|e| format!("cannot connect to {addr}: {e}"))?;
+                    stream
+                        .set_read_timeout(Some(Duration::from_millis(100)))
+                        .map_err(|e| format!("{addr}: {e}"))?;
+                    let out = stream.try_clone().map_err(|e| format!("{addr}: {e}"))?;
+                    (Box::new(stream), Box::new(out))
+                }
+                None => {
+                    let port = serialport::new(url, baud)
+                        .timeout(Duration::from_millis(100))
+                        .open()
+                        .map_err(|e| format!("cannot open {url}: {e}"))?;
+                    let out = port.try_clone().map_err(|e| format!("{url}: {e}"))?;
+                    (Box::new(port), Box::new(out))
+                }
+            };
+        let source = Self::over(port, url, bitrate, limits)?;
+        Ok((
+            source,
+            SlcanSender {
+                out,
+                channel: url.to_string(),
+            },
+        ))
     }
 
     /// The same over any byte stream (a test's, say).
@@ -303,6 +389,54 @@ mod tests {
         assert!(frame("d1009AA").is_err());
         assert!(frame("r1009").is_err());
         assert!(frame("x").is_err());
+    }
+
+    #[test]
+    fn the_sender_writes_the_line_the_adapter_reads_back_on_the_same_connection() {
+        let Ok(listener) = std::net::TcpListener::bind("127.0.0.1:0") else {
+            panic!("a free port")
+        };
+        let Ok(addr) = listener.local_addr() else {
+            panic!("its address")
+        };
+        let adapter = std::thread::spawn(move || {
+            let Ok((mut s, _)) = listener.accept() else {
+                panic!("a connection")
+            };
+            let mut got = Vec::new();
+            let mut buf = [0u8; 64];
+            while !got.ends_with(b"t2004F401E803\r") {
+                match s.read(&mut buf) {
+                    Ok(0) | Err(_) => break,
+                    Ok(n) => got.extend_from_slice(buf.get(..n).unwrap_or(&[])),
+                }
+            }
+            got
+        });
+        let url = format!("socket://{addr}");
+        let Ok((_source, mut sender)) =
+            SlcanSource::open_with_sender(&url, 0, Some(6), Limits::default())
+        else {
+            panic!("the fake adapter opens")
+        };
+        let config = Frame::classic(0x200, false, &[0xF4, 0x01, 0xE8, 0x03]);
+        assert_eq!(sender.send(&config), Ok(()));
+        let fd = Frame {
+            kind: FrameKind::Fd {
+                brs: false,
+                esi: false,
+            },
+            ..config.clone()
+        };
+        assert!(sender.send(&fd).is_err(), "SLCAN's t lines are classic");
+        assert!(
+            sender.send(&Frame::classic(0x800, false, &[])).is_err(),
+            "an 11-bit id"
+        );
+        match adapter.join() {
+            Ok(got) => assert_eq!(got, b"C\rS6\rO\rt2004F401E803\r"),
+            Err(_) => panic!("the fake adapter failed"),
+        }
     }
 
     #[test]

@@ -332,3 +332,52 @@ fn communication_is_not_restarted_during_post_run() {
     );
     assert!(sim.frames().iter().all(|f| f.time_us < 911_000));
 }
+
+#[test]
+fn a_live_run_taking_frames_and_forgetting_its_records_sees_the_same_bus() {
+    let text = "hold 800 1500\nhold 1800 1500";
+    let whole = run(text);
+    let scenario = Scenario::parse(text).expect("test scenario parses");
+    let mut live = Simulation::new(scenario, 1).expect("ECU configuration is consistent");
+    let mut frames = Vec::new();
+    while live.now_ms() < 3000 {
+        let next = live.now_ms() + 10;
+        live.run_until_ms(next);
+        frames.extend(live.take_frames());
+        live.forget_history();
+        assert!(live.trace().is_empty() && live.task_starts().is_empty());
+        assert_eq!(live.red_led().change_count(), 0);
+        assert!(live.sonar_trigger().change_count() <= 2);
+    }
+    assert_eq!(frames, whole.frames(), "the same frames at the same times");
+    assert_eq!(live.red_led().is_high_now(), whole.red_led().is_high_now());
+    assert_eq!(
+        live.yellow_led().level_at(0),
+        live.yellow_led().is_high_now()
+    );
+}
+
+#[test]
+fn thresholds_the_pc_sends_live_are_taken_by_the_ecu() {
+    let scenario = Scenario::parse("hold 800 2000").expect("test scenario parses");
+    let mut sim = Simulation::new(scenario, 1).expect("ECU configuration is consistent");
+    sim.run_until_ms(500);
+    assert_eq!(sim.ecu().level(), WarningLevel::Red);
+    // RedBelow 500 mm, YellowBelow 1000 mm: 800 mm is yellow now.
+    let frame = cw_core::can::CanFrame::from_parts(
+        cw_core::can::CanId::standard(0x200).expect("0x200 is a standard id"),
+        &[0xF4, 0x01, 0xE8, 0x03],
+    )
+    .expect("4 bytes fit");
+    sim.send_from_pc(&frame);
+    sim.run_until_ms(1000);
+    assert_eq!(
+        sim.ecu().thresholds(),
+        cw_core::warning::Thresholds::new(500, 1000).expect("valid")
+    );
+    assert_eq!(sim.ecu().level(), WarningLevel::Yellow);
+    assert!(
+        sim.frames().iter().any(|r| r.frame == frame),
+        "the PC's frame is on the bus"
+    );
+}

@@ -79,6 +79,19 @@ impl SimPin {
         self.state.borrow().history.len()
     }
 
+    /// Lets go of the first `count` level changes (at most all), for a run that would
+    /// otherwise keep them all (a live simulation): the level after the last one forgotten
+    /// becomes the start level, so [`Self::level_at`] gives it for any time before the
+    /// changes kept. The changes kept are numbered from 0 again.
+    pub fn forget_changes(&self, count: usize) {
+        let mut state = self.state.borrow_mut();
+        let count = count.min(state.history.len());
+        if let Some(&(_, high)) = count.checked_sub(1).and_then(|i| state.history.get(i)) {
+            state.initial_high = high;
+        }
+        state.history.drain(..count);
+    }
+
     /// Whether the pin drives high now.
     pub fn is_high_now(&self) -> bool {
         self.state.borrow().high
@@ -224,6 +237,27 @@ mod tests {
         assert!(pin.level_at(199));
         assert!(pin.level_at(200));
         assert!(pin.level_at(u64::MAX));
+    }
+
+    #[test]
+    fn forgotten_changes_leave_the_level_they_set_as_the_start() {
+        let clock = VirtualClock::new();
+        let mut pin = SimPin::new("Trigger", &clock);
+        for t in 1..=3 {
+            clock.advance_us(10);
+            firmware_sets(&mut pin, t % 2 == 1);
+        }
+        // Changes: 10 high, 20 low, 30 high. Forget the first two.
+        pin.forget_changes(2);
+        assert_eq!(pin.history(), [(30, true)]);
+        assert!(
+            !pin.level_at(0),
+            "the level the forgotten changes left: low"
+        );
+        assert!(pin.level_at(30));
+        pin.forget_changes(99);
+        assert_eq!(pin.change_count(), 0);
+        assert!(pin.level_at(0) && pin.is_high_now());
     }
 
     #[test]

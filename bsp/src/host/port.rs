@@ -61,6 +61,11 @@ impl<K: OsKernel> HostPort<K> {
     pub fn job_starts(&self) -> Ref<'_, Vec<(TaskId, u64)>> {
         self.starts.borrow()
     }
+
+    /// Lets go of the job starts so far (a live simulation, which would keep them all).
+    pub fn forget_job_starts(&self) {
+        *self.starts.borrow_mut() = Vec::new();
+    }
 }
 
 impl<K: OsKernel> Port for HostPort<K> {

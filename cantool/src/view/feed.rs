@@ -38,6 +38,7 @@ pub struct Live {
     bad_count: usize,
     send: Option<Sender>,
     wall_clock: bool,
+    origin: Option<f64>,
 }
 
 impl Live {
@@ -55,7 +56,16 @@ impl Live {
             bad_count: 0,
             send,
             wall_clock,
+            origin: None,
         }
+    }
+
+    /// The frames' time that the page counts from (a simulation's start); without one, the
+    /// page shows a frame's time of day.
+    #[must_use]
+    pub fn with_origin(mut self, origin: f64) -> Self {
+        self.origin = Some(origin);
+        self
     }
 
     /// A frame arrived. Samples older than the chart's window are let go, so a live feed
@@ -144,6 +154,9 @@ pub struct Snapshot {
     pub name: String,
     /// The time now on the frames' clock, seconds.
     pub now: f64,
+    /// The frames' time the page counts from (a replay's first entry, a simulation's
+    /// start); none: the page shows the time of day.
+    pub origin: Option<f64>,
     /// The replay's clock (none for a live bus).
     pub clock: Option<Clock>,
     /// The picture.
@@ -215,6 +228,7 @@ impl Feed {
                 source: "replay",
                 name: name.clone(),
                 now: replay.now(),
+                origin: Some(replay.now() - replay.position()),
                 clock: Some(Clock {
                     start: replay.now() - replay.position(),
                     position: replay.position(),
@@ -235,6 +249,7 @@ impl Feed {
                     source: live.kind,
                     name: live.name.clone(),
                     now: live.now,
+                    origin: live.origin,
                     clock: None,
                     shown: state::shown(newest, live.now),
                     chart: chart(

@@ -6,10 +6,14 @@
 //! - [`state`]: what the page shows, from the frames alone (no signal, fault, the LEDs the
 //!   level names), and a log under a replay clock;
 //! - [`feed`]: a replayed log or a live bus, and the snapshot the page draws;
-//! - `server` (feature `server`, on by default): the HTTP server (the page, its event
-//!   stream, its requests).
+//! - `live` (feature `server`, on by default): live feeds, the host simulation in real
+//!   time and an SLCAN adapter;
+//! - `server` (feature `server`): the HTTP server (the page, its event stream, its
+//!   requests).
 
 pub mod feed;
+#[cfg(feature = "server")]
+pub mod live;
 #[cfg(feature = "server")]
 pub mod server;
 pub mod state;

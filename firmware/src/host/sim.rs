@@ -7,7 +7,7 @@ use cw_bsp::host::{
     BusRecord, CanEvent, HcSr04, HostCan, HostCanConfig, HostPort, Noise, SimDelay, SimInput,
     SimPin, Tester, VirtualBus, VirtualClock,
 };
-use cw_core::can::Hrh;
+use cw_core::can::{CanFrame, Hrh};
 use cw_core::os::TaskId;
 use cw_core::sonar::{Echo, SonarConfig};
 use cw_core::warning::{Measurement, WarningLevel};
@@ -332,6 +332,36 @@ impl Simulation {
     /// Echo captures the firmware asked for without a trigger pulse before them.
     pub fn untriggered_captures(&self) -> u32 {
         self.board.sonar.borrow().untriggered
+    }
+
+    /// The PC sends `frame` now (the view's sender panel); it goes on the bus at the next
+    /// step, as a scenario's `frame` line does.
+    pub fn send_from_pc(&mut self, frame: &CanFrame) {
+        self.pc.send(frame);
+    }
+
+    /// The frames completed since the last call (or the start), taken out of the record:
+    /// what a live view reads as it goes.
+    pub fn take_frames(&mut self) -> Vec<BusRecord> {
+        core::mem::take(&mut self.frames)
+    }
+
+    /// Lets go of every record kept so far (the trace, the task starts, the pins'
+    /// histories, what the PC received), so that a simulation that runs for hours in real
+    /// time holds constant memory. Frames not yet taken stay.
+    pub fn forget_history(&mut self) {
+        self.trace = Vec::new();
+        self.ecu.port().forget_job_starts();
+        for pin in [&self.board.red, &self.board.yellow] {
+            pin.forget_changes(pin.change_count());
+        }
+        // The sensor reads the trigger's edges since it last looked: only those it has
+        // seen go.
+        let mut sonar = self.board.sonar.borrow_mut();
+        self.board.trigger.forget_changes(sonar.seen_edges);
+        sonar.seen_edges = 0;
+        drop(sonar);
+        drop(self.pc.take_received());
     }
 
     /// Runs until virtual time `end_ms`.

@@ -167,9 +167,11 @@ function render(s) {
   setObstacle(mm);
   $("readout").textContent = sample ? describe(sample.reading) : "\u2014";
   $("level").textContent = sample ? sample.level : "\u2014";
-  // A replay's frames by their time in the log; a live bus's by their own clock.
-  const t0 = s.clock ? s.clock.start : 0;
-  $("frame-time").textContent = sample ? `${(sample.t - t0).toFixed(3)} s` : "\u2014";
+  // A replay's frames by their time in the log, a simulation's by its time; an adapter's
+  // by the time of day they arrived.
+  $("frame-time").textContent = !sample ? "\u2014"
+    : s.origin !== null ? `${(sample.t - s.origin).toFixed(3)} s`
+    : new Date(sample.t * 1000).toISOString().slice(11, 23);
   $("bad-count").textContent = s.bad_count;
   $("bad").replaceChildren(...s.bad.map((b) => {
     const li = document.createElement("li");
