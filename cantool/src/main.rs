@@ -5,6 +5,9 @@
 //! cw-can decode --dbc firmware/ecu.dbc can.log            # or - for standard input
 //! cw-can decode --dbc firmware/ecu.dbc --format json can.log
 //! cw-can encode --dbc firmware/ecu.dbc ThresholdConfig RedBelow=500 YellowBelow=1000
+//! cw-can view --dbc firmware/ecu.dbc --replay can.log           # http://127.0.0.1:8080/
+//! cw-can view --dbc firmware/ecu.dbc --simulate scenarios/figure7.txt
+//! cw-can view --dbc firmware/ecu.dbc --slcan socket://127.0.0.1:5555
 //! ```
 //!
 //! Exit status: 0 when every line was read and decoded; 1 when some line was not (each
@@ -65,17 +68,8 @@ enum Command {
         /// The logs' format [default: by extension: .asc ASC, .blf BLF, else candump].
         #[arg(long, value_enum)]
         log_format: Option<LogFormat>,
-        /// Read a live bus from an SLCAN adapter instead of logs: a serial device
-        /// (`/dev/ttyACM0`) or `socket://HOST:PORT`, as python-can names them.
-        #[arg(long, value_name = "PORT")]
-        slcan: Option<String>,
-        /// The serial device's baud rate (`--slcan` on a device).
-        #[arg(long, default_value_t = 115_200)]
-        baud: u32,
-        /// Set the adapter's CAN bit rate first: SLCAN's index, 0 (10 kbit/s) to 8
-        /// (1 Mbit/s); 6 is 500 kbit/s.
-        #[arg(long, value_name = "N", value_parser = clap::value_parser!(u8).range(0..=8))]
-        bitrate: Option<u8>,
+        #[command(flatten)]
+        adapter: Adapter,
         /// With `--slcan`: stop after this many frames.
         #[arg(long, value_name = "N")]
         frames: Option<usize>,
@@ -104,17 +98,8 @@ enum Command {
         /// The simulated sensor's noise seed (`--simulate`).
         #[arg(long, default_value_t = 1)]
         seed: u64,
-        /// Read a live bus from an SLCAN adapter: a serial device (`/dev/ttyACM0`) or
-        /// `socket://HOST:PORT` (the QEMU image's UART).
-        #[arg(long, value_name = "PORT")]
-        slcan: Option<String>,
-        /// The serial device's baud rate (`--slcan` on a device).
-        #[arg(long, default_value_t = 115_200)]
-        baud: u32,
-        /// Set the adapter's CAN bit rate first: SLCAN's index, 0 (10 kbit/s) to 8
-        /// (1 Mbit/s); 6 is 500 kbit/s.
-        #[arg(long, value_name = "N", value_parser = clap::value_parser!(u8).range(0..=8))]
-        bitrate: Option<u8>,
+        #[command(flatten)]
+        adapter: Adapter,
         /// The log's format [default: by extension: .asc ASC, .blf BLF, else candump].
         #[arg(long, value_enum, requires = "replay")]
         log_format: Option<LogFormat>,
@@ -138,6 +123,22 @@ enum Command {
         /// `SIGNAL=VALUE`: a number or a name from the signal's value table.
         values: Vec<String>,
     },
+}
+
+/// A live bus through an SLCAN adapter (`decode` and `view`).
+#[derive(clap::Args)]
+struct Adapter {
+    /// Read a live bus from an SLCAN adapter: a serial device (`/dev/ttyACM0`) or
+    /// `socket://HOST:PORT` (the QEMU image's UART), as python-can names them.
+    #[arg(long, value_name = "PORT")]
+    slcan: Option<String>,
+    /// The serial device's baud rate (`--slcan` on a device).
+    #[arg(long, default_value_t = 115_200)]
+    baud: u32,
+    /// Set the adapter's CAN bit rate first: SLCAN's index, 0 (10 kbit/s) to 8
+    /// (1 Mbit/s); 6 is 500 kbit/s.
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u8).range(0..=8))]
+    bitrate: Option<u8>,
 }
 
 /// Something that stops the run (exit status 2).
@@ -319,9 +320,12 @@ fn main() -> ExitCode {
             strict,
             format,
             log_format,
-            slcan,
-            baud,
-            bitrate,
+            adapter:
+                Adapter {
+                    slcan,
+                    baud,
+                    bitrate,
+                },
             frames,
             seconds,
             logs,
@@ -347,9 +351,12 @@ fn main() -> ExitCode {
             replay,
             simulate,
             seed,
-            slcan,
-            baud,
-            bitrate,
+            adapter:
+                Adapter {
+                    slcan,
+                    baud,
+                    bitrate,
+                },
             log_format,
             listen,
             speed,

@@ -169,6 +169,33 @@ impl SlcanSender {
     }
 }
 
+/// A connection to an adapter, and a second handle on it for writing.
+type Connection = (Box<dyn ReadWrite>, Box<dyn Write + Send>);
+
+/// Opens `url` (`socket://HOST:PORT`, or a serial device at `baud`) with a 100 ms read
+/// timeout.
+fn connect(url: &str, baud: u32) -> Result<Connection, String> {
+    match url.strip_prefix("socket://") {
+        Some(addr) => {
+            let stream =
+                TcpStream::connect(addr).map_err(|e| format!("cannot connect to {addr}: {e}"))?;
+            stream
+                .set_read_timeout(Some(Duration::from_millis(100)))
+                .map_err(|e| format!("{addr}: {e}"))?;
+            let out = stream.try_clone().map_err(|e| format!("{addr}: {e}"))?;
+            Ok((Box::new(stream), Box::new(out)))
+        }
+        None => {
+            let port = serialport::new(url, baud)
+                .timeout(Duration::from_millis(100))
+                .open()
+                .map_err(|e| format!("cannot open {url}: {e}"))?;
+            let out = port.try_clone().map_err(|e| format!("{url}: {e}"))?;
+            Ok((Box::new(port), Box::new(out)))
+        }
+    }
+}
+
 /// A byte stream both ways.
 pub trait ReadWrite: Read + Write + Send {}
 impl<T: Read + Write + Send> ReadWrite for T {}
@@ -181,22 +208,7 @@ impl SlcanSource {
     /// # Errors
     /// The connection or the device cannot be opened, or the commands not written.
     pub fn open(url: &str, baud: u32, bitrate: Option<u8>, limits: Limits) -> Result<Self, String> {
-        let port: Box<dyn ReadWrite> = match url.strip_prefix("socket://") {
-            Some(addr) => {
-                let stream = TcpStream::connect(addr)
-                    .map_err(|e| format!("cannot connect to {addr}: {e}"))?;
-                stream
-                    .set_read_timeout(Some(Duration::from_millis(100)))
-                    .map_err(|e| format!("{addr}: {e}"))?;
-                Box::new(stream)
-            }
-            None => Box::new(
-                serialport::new(url, baud)
-                    .timeout(Duration::from_millis(100))
-                    .open()
-                    .map_err(|e| format!("cannot open {url}: {e}"))?,
-            ),
-        };
+        let (port, _) = connect(url, baud)?;
         Self::over(port, url, bitrate, limits)
     }
 
@@ -204,33 +216,14 @@ impl SlcanSource {
     /// (the view's sender panel).
     ///
     /// # Errors
-    /// As [`Self::open`], or the connection cannot be shared.
+    /// As [`Self::open`].
     pub fn open_with_sender(
         url: &str,
         baud: u32,
         bitrate: Option<u8>,
         limits: Limits,
     ) -> Result<(Self, SlcanSender), String> {
-        let (port, out): (Box<dyn ReadWrite>, Box<dyn Write + Send>) =
-            match url.strip_prefix("socket://") {
-                Some(addr) => {
-                    let stream = TcpStream::connect(addr)
-                        .map_err(|e| format!("cannot connect to {addr}: {e}"))?;
-                    stream
-                        .set_read_timeout(Some(Duration::from_millis(100)))
-                        .map_err(|e| format!("{addr}: {e}"))?;
-                    let out = stream.try_clone().map_err(|e| format!("{addr}: {e}"))?;
-                    (Box::new(stream), Box::new(out))
-                }
-                None => {
-                    let port = serialport::new(url, baud)
-                        .timeout(Duration::from_millis(100))
-                        .open()
-                        .map_err(|e| format!("cannot open {url}: {e}"))?;
-                    let out = port.try_clone().map_err(|e| format!("{url}: {e}"))?;
-                    (Box::new(port), Box::new(out))
-                }
-            };
+        let (port, out) = connect(url, baud)?;
         let source = Self::over(port, url, bitrate, limits)?;
         Ok((
             source,

@@ -356,3 +356,38 @@ fn a_live_source_stops_after_the_frames_asked_for() {
     );
     assert_eq!(out.status.code(), Some(2), "nothing listens there");
 }
+
+#[test]
+fn view_needs_one_source_and_refuses_what_it_cannot_open() {
+    let dbc = ecu_dbc();
+    let dbc = dbc.to_str().expect("the DBC's path is UTF-8");
+    let none = run(&["view", "--dbc", dbc], "");
+    assert_eq!(none.status.code(), Some(2));
+    assert!(text(&none.stderr).contains("--replay <LOG>|--simulate <SCENARIO>|--slcan <PORT>"));
+    let two = run(
+        &["view", "--dbc", dbc, "--replay", "a.log", "--slcan", "x"],
+        "",
+    );
+    assert_eq!(two.status.code(), Some(2));
+    let missing = run(
+        &["view", "--dbc", dbc, "--replay", "/nonexistent/a.log"],
+        "",
+    );
+    assert_eq!(missing.status.code(), Some(2));
+    assert!(
+        text(&missing.stderr).contains("cannot read /nonexistent/a.log"),
+        "{}",
+        text(&missing.stderr)
+    );
+    let scenario = run(
+        &["view", "--dbc", dbc, "--simulate", "/nonexistent/s.txt"],
+        "",
+    );
+    assert_eq!(scenario.status.code(), Some(2));
+    assert!(text(&scenario.stderr).contains("cannot read scenario /nonexistent/s.txt"));
+    let speed = run(
+        &["view", "--dbc", dbc, "--simulate", "x.txt", "--speed", "2"],
+        "",
+    );
+    assert_eq!(speed.status.code(), Some(2), "--speed is a replay's");
+}

@@ -60,19 +60,19 @@ pub const STAGES: &[&str] = &[
 const BUDGET_S: &[(&str, u32)] = &[
     ("setup", 330),
     ("fmt", 10),
-    ("clippy", 70),
-    ("test", 215),
+    ("clippy", 90),
+    ("test", 245),
     ("cross", 20),
     ("miri", 430),
     ("model", 50),
     ("coverage", 170),
     ("mutants", 80),
     ("mutation", 255),
-    ("qemu", 90),
+    ("qemu", 95),
     ("differential", 8),
     ("interop", 20),
     ("view", 30),
-    ("fuzz", 260),
+    ("fuzz", 290),
     ("bench", 85),
 ];
 

@@ -14,7 +14,10 @@
 //! and a silence; python-can's `slcan` interface receives the distance frames and sends
 //! malformed lines and a `ThresholdConfig` frame that the ECU must apply. The image's
 //! counts of malformed lines, received frames, sensor frames, bad checksums, blind-zone
-//! readings and stray bytes must equal what was sent.
+//! readings and stray bytes must equal what was sent. Then `cw-can decode --slcan` reads
+//! Figure 7 live from the scenario image's UART, and `cw-can view --slcan` serves the
+//! view of a real-time run: its sender panel's `ThresholdConfig` must reach the image and
+//! change the level the image sends.
 //!
 //! `--scenario FILE` (repeatable; default `scenarios/figure7.txt`) names the scenarios the
 //! image plays: it reads each over semihosting (`-semihosting-config ...,arg=--scenario,
@@ -207,6 +210,18 @@ fn keep_report(report: &str, path: &Path) -> Result {
 /// Runs the image on QEMU; the SLCAN output and the LED trace go to `out`, the image's
 /// semihosting report to `out/image.txt` (and the terminal).
 fn run_image(image: &Path, out: &Path, serial: Option<&str>, scenario: Option<&Path>) -> Result {
+    run_image_at(image, out, serial, scenario, false)
+}
+
+/// [`run_image`], in real time when `realtime` (`sleep=on`: the host's clock while the core
+/// sleeps).
+fn run_image_at(
+    image: &Path,
+    out: &Path,
+    serial: Option<&str>,
+    scenario: Option<&Path>,
+    realtime: bool,
+) -> Result {
     std::fs::create_dir_all(out).map_err(|e| format!("creating {}: {e}", out.display()))?;
     let slcan = out.join("slcan.txt");
     let leds = out.join("fpgaio.log");
@@ -215,8 +230,13 @@ fn run_image(image: &Path, out: &Path, serial: Option<&str>, scenario: Option<&P
     }
     let serial = serial.map_or_else(|| format!("file:{}", slcan.display()), str::to_string);
     let mut qemu = std::process::Command::new("qemu-system-arm");
+    let icount = if realtime {
+        "shift=0,sleep=on"
+    } else {
+        "shift=0,sleep=off"
+    };
     qemu.args(qemu_machine(scenario, false))
-        .args(["-icount", "shift=0,sleep=off"])
+        .args(["-icount", icount])
         .args(["-serial", &serial])
         .args(["-d", "trace:mps2_fpgaio_write", "-D"])
         .arg(&leds)
@@ -334,6 +354,7 @@ pub fn run(options: &Options) -> Result {
     if options.live {
         live(&image, &out)?;
         cw_can_live(&image, &out)?;
+        cw_can_view_live(&image, &out)?;
     }
     Ok(())
 }
@@ -394,6 +415,159 @@ fn cw_can_live(image: &Path, out: &Path) -> Result {
     }
     println!(
         "qemu: cw-can decoded {distance} DistanceFrames live from the image's SLCAN port (Figure 7), every line"
+    );
+    Ok(())
+}
+
+/// One HTTP/1.1 request to `addr` (the view's server): the status and the body.
+fn http(addr: &str, method: &str, path: &str, json: &str) -> Result<(u16, String)> {
+    use std::io::{Read, Write};
+    let mut s = std::net::TcpStream::connect(addr).map_err(|e| format!("{addr}: {e}"))?;
+    let request = format!(
+        "{method} {path} HTTP/1.1\r\nHost: {addr}\r\nConnection: close\r\n\
+         Content-Type: application/json\r\nContent-Length: {}\r\n\r\n{json}",
+        json.len()
+    );
+    let mut reply = String::new();
+    s.write_all(request.as_bytes())
+        .and_then(|()| s.read_to_string(&mut reply))
+        .map_err(|e| format!("{addr}{path}: {e}"))?;
+    let status = reply
+        .get(9..12)
+        .and_then(|c| c.parse().ok())
+        .ok_or_else(|| format!("{addr}{path}: no HTTP status in {reply:?}"))?;
+    let body = reply.split_once("\r\n\r\n").map_or("", |(_, b)| b);
+    Ok((status, body.to_string()))
+}
+
+/// What the view shows, from its `/state`: (distance mm, level, red, yellow), when live.
+fn shown(state: &serde_json::Value) -> Option<(u64, String, bool, bool)> {
+    let shown = state.get("shown")?;
+    if shown.get("status")?.as_str()? != "Live" {
+        return None;
+    }
+    let sample = shown.get("sample")?;
+    Some((
+        sample.get("reading")?.get("mm")?.as_u64()?,
+        sample.get("level")?.as_str()?.to_string(),
+        shown.get("red")?.as_bool()?,
+        shown.get("yellow")?.as_bool()?,
+    ))
+}
+
+/// `cw-can view` on the running image's bus, in real time: the scenario image holds the
+/// obstacle at 0.5 m, then 2.5 m, with its SLCAN UART on a TCP port, and `cw-can view
+/// --slcan socket://...` serves the page. Its `/state` must show 0.5 m red, then 2.5 m with
+/// both LEDs off; the sender panel's request (red below 2.0 m, yellow below 3.0 m) must
+/// reach the image over SLCAN and turn 2.5 m yellow; when the image ends, the view names
+/// the stream's end.
+fn cw_can_view_live(image: &Path, out: &Path) -> Result {
+    use std::io::BufRead;
+    let tool = target_dir().join("debug").join("cw-can");
+    let dir = out.join("cw-can-view");
+    std::fs::create_dir_all(&dir).map_err(|e| format!("creating {}: {e}", dir.display()))?;
+    let scenario = dir.join("hold.txt");
+    std::fs::write(&scenario, "hold 500 1500\nhold 2500 4000\n")
+        .map_err(|e| format!("writing {}: {e}", scenario.display()))?;
+    let port = free_port()?;
+    let serial = format!("tcp:127.0.0.1:{port},server=on,wait=on");
+    let (image, image_dir) = (image.to_path_buf(), dir.clone());
+    let qemu = std::thread::spawn(move || {
+        run_image_at(&image, &image_dir, Some(&serial), Some(&scenario), true)
+    });
+    let url = format!("socket://127.0.0.1:{port}");
+    let dbc = root().join("firmware").join("ecu.dbc");
+    println!(
+        "$ {} view --dbc {} --slcan {url} --listen 127.0.0.1:0",
+        tool.display(),
+        dbc.display()
+    );
+    // QEMU listens once it has started; try until it does.
+    let mut attempt = 0;
+    let (mut view, addr) = loop {
+        let mut view = std::process::Command::new(&tool)
+            .args(["view", "--dbc"])
+            .arg(&dbc)
+            .args(["--slcan", &url, "--listen", "127.0.0.1:0"])
+            .stdin(std::process::Stdio::null())
+            .stdout(std::process::Stdio::piped())
+            .stderr(std::process::Stdio::piped())
+            .spawn()
+            .map_err(|e| format!("running {}: {e}", tool.display()))?;
+        let mut line = String::new();
+        if let Some(stdout) = view.stdout.take() {
+            let _ = std::io::BufReader::new(stdout).read_line(&mut line);
+        }
+        if let Some(addr) = line
+            .split("http://")
+            .nth(1)
+            .and_then(|rest| rest.split('/').next())
+        {
+            break (view, addr.to_string());
+        }
+        let _ = view.wait();
+        attempt += 1;
+        if attempt >= 100 {
+            return Err(format!("qemu: cw-can view could not reach {url}"));
+        }
+        std::thread::sleep(std::time::Duration::from_millis(100));
+    };
+    let result = (|| -> Result {
+        let deadline = std::time::Instant::now() + std::time::Duration::from_secs(30);
+        let mut seen: Vec<(u64, String, bool, bool)> = Vec::new();
+        let mut sent = false;
+        let steps = [
+            (500, "Red", true, false),
+            (2500, "Off", false, false),
+            (2500, "Yellow", false, true),
+        ];
+        while !steps
+            .iter()
+            .all(|step| seen.iter().any(|s| (s.0, s.1.as_str(), s.2, s.3) == *step))
+        {
+            if std::time::Instant::now() > deadline {
+                return Err(format!(
+                    "qemu: cw-can view over SLCAN did not show {steps:?} in 30 s; it showed {seen:?}"
+                ));
+            }
+            let (status, body) = http(&addr, "GET", "/state", "")?;
+            let state: serde_json::Value = serde_json::from_str(&body)
+                .map_err(|e| format!("qemu: /state answered {status}: {e}: {body}"))?;
+            if let Some(now) = shown(&state) {
+                if !seen.contains(&now) {
+                    seen.push(now.clone());
+                }
+                if !sent && (now.0, now.1.as_str()) == (2500, "Off") {
+                    let (status, body) = http(
+                        &addr,
+                        "POST",
+                        "/send",
+                        r#"{"red_below_mm": 2000, "yellow_below_mm": 3000}"#,
+                    )?;
+                    if status != 200 {
+                        return Err(format!("qemu: POST /send answered {status}: {body}"));
+                    }
+                    sent = true;
+                }
+            }
+            std::thread::sleep(std::time::Duration::from_millis(20));
+        }
+        Ok(())
+    })();
+    qemu.join()
+        .map_err(|_| "qemu: the image's thread panicked".to_string())??;
+    let ended = http(&addr, "GET", "/state", "")
+        .map(|(_, body)| body.contains("the adapter's stream ended"));
+    let _ = view.kill();
+    let _ = view.wait();
+    result?;
+    if ended != Ok(true) {
+        return Err(format!(
+            "qemu: the view did not name the end of the image's stream: {ended:?}"
+        ));
+    }
+    println!(
+        "qemu: cw-can view over the image's SLCAN port, in real time: 0.5 m red, 2.5 m off; thresholds 2000/3000 mm sent from the view reached the image: 2.5 m yellow; the stream's end named"
     );
     Ok(())
 }
