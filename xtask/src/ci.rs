@@ -60,7 +60,7 @@ pub const STAGES: &[&str] = &[
 const BUDGET_S: &[(&str, u32)] = &[
     ("setup", 330),
     ("fmt", 10),
-    ("clippy", 90),
+    ("clippy", 80),
     ("test", 245),
     ("cross", 20),
     ("miri", 430),
@@ -68,10 +68,10 @@ const BUDGET_S: &[(&str, u32)] = &[
     ("coverage", 170),
     ("mutants", 80),
     ("mutation", 255),
-    ("qemu", 95),
+    ("qemu", 110),
     ("differential", 8),
     ("interop", 20),
-    ("view", 30),
+    ("view", 15),
     ("fuzz", 290),
     ("bench", 85),
 ];
