@@ -190,6 +190,7 @@ PAGE_STATE = """(() => {
     badCount: document.getElementById('bad-count').textContent,
     bad: [...document.querySelectorAll('#bad li')].map((li) => li.textContent),
     red: led('led-red'), yellow: led('led-yellow'),
+    lines: ['red', 'yellow'].map((c) => document.getElementById(`threshold-${c}`).dataset.mm),
     top: { obstacle: box('#top-obstacle'), m0: tick('top', 0), m1: tick('top', 1) },
     side: { obstacle: box('#side-obstacle'), m0: tick('side', 0), m1: tick('side', 1) },
   };
@@ -227,6 +228,8 @@ def check_holds(view, browser, trace_path, shots_dir):
         for led in ("red", "yellow"):
             if page[led]["on"] != (row[led] == "1") or page[led]["blink"]:
                 fail(f"{where}: the {led} LED is {page[led]}, the trace drives it {row[led]}")
+        if page["lines"] != ["1000", "2000"]:
+            fail(f"{where}: the chart draws the thresholds at {page['lines']} mm, not the paper's")
         for view_name in ("top", "side"):
             g = page[view_name]
             px_per_m = g["m1"] - g["m0"]
@@ -302,6 +305,10 @@ def check_sender(cw_can, dbc, browser, tmp):
                      "document.getElementById('led-yellow').dataset.on === 'true' && "
                      "document.getElementById('led-red').dataset.on === 'false'",
                      "after sending red below 500 mm, yellow below 1000 mm, 0.8 m did not turn yellow")
+        lines = browser.eval("[document.getElementById('threshold-red').dataset.mm, "
+                             "document.getElementById('threshold-yellow').dataset.mm]")
+        if lines != ["500", "1000"]:
+            fail(f"the chart draws the thresholds at {lines} mm after 500/1000 mm went on the bus")
         said = browser.eval("document.getElementById('send-result').textContent")
         if not said.startswith("sent"):
             fail(f"the panel says {said!r} after a frame the ECU took")
@@ -314,7 +321,7 @@ def check_sender(cw_can, dbc, browser, tmp):
     finally:
         view.close()
     print("view: live simulation at 0.8 m, red; thresholds 500/1000 mm sent from the page: "
-          "the LEDs turned yellow; 900/900 mm refused on the page")
+          "the LEDs turned yellow, the chart's lines moved to 0.5 and 1.0 m; 900/900 mm refused on the page")
 
 
 def open_stream(view):

@@ -78,7 +78,7 @@ mod targets {
     use cw_can::log::{At, CandumpReader};
     use cw_can::report::{self, Format};
     use cw_can::view::feed::{Control, Feed, CHART_POINTS};
-    use cw_can::view::state::{DistanceFrame, Replay};
+    use cw_can::view::state::{Replay, ViewFrames};
     use cw_core::can::{slcan, CanFrame, CanId};
     use cw_core::com::signal::{spec, ByteOrder, SignalLayout, Signedness};
     use cw_core::os::spec::call_and_check;
@@ -324,7 +324,7 @@ mod targets {
     fn view_replay() {
         let db = Database::from_bytes(include_bytes!("../../firmware/ecu.dbc"));
         let Ok(db) = db else { panic!("ecu.dbc loads") };
-        let Ok(frame) = DistanceFrame::find(&db) else {
+        let Ok(frame) = ViewFrames::find(&db) else {
             panic!("ecu.dbc has a DistanceFrame")
         };
         bolero::check!().for_each(|bytes: &[u8]| {

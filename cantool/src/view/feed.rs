@@ -9,7 +9,7 @@ use serde::{Deserialize, Serialize};
 
 #[cfg(test)]
 use super::state::Status;
-use super::state::{self, Level, Reading, Replay, Sample, Shown};
+use super::state::{self, Level, Reading, Replay, Sample, Shown, Thresholds};
 use crate::frame::Frame;
 
 /// The chart's window: the last 10 s of frames.
@@ -39,6 +39,7 @@ pub struct Live {
     send: Option<Sender>,
     wall_clock: bool,
     origin: Option<f64>,
+    thresholds: Thresholds,
 }
 
 impl Live {
@@ -57,6 +58,7 @@ impl Live {
             send,
             wall_clock,
             origin: None,
+            thresholds: Thresholds::PAPER,
         }
     }
 
@@ -76,6 +78,13 @@ impl Live {
         self.recent.insert(at, sample);
         self.now = self.now.max(sample.t);
         self.forget();
+    }
+
+    /// A `ThresholdConfig` the ECU would take was on the bus: the newest one is drawn.
+    pub fn configure(&mut self, thresholds: Thresholds) {
+        if thresholds.t >= self.thresholds.t {
+            self.thresholds = thresholds;
+        }
     }
 
     /// A bad line or frame, named.
@@ -161,6 +170,8 @@ pub struct Snapshot {
     pub clock: Option<Clock>,
     /// The picture.
     pub shown: Shown,
+    /// The thresholds the chart draws.
+    pub thresholds: Thresholds,
     /// The chart's points, oldest first, over the last [`CHART_SECONDS`].
     pub chart: Vec<Point>,
     /// How many lines or frames were bad.
@@ -237,6 +248,7 @@ impl Feed {
                     playing: replay.playing(),
                 }),
                 shown: replay.shown(),
+                thresholds: replay.thresholds(),
                 chart: chart(replay.window(CHART_SECONDS).iter(), replay.now()),
                 bad_count: replay.bad().len(),
                 bad: newest_bad(replay.bad().iter()),
@@ -252,6 +264,7 @@ impl Feed {
                     origin: live.origin,
                     clock: None,
                     shown: state::shown(newest, live.now),
+                    thresholds: live.thresholds,
                     chart: chart(
                         live.recent
                             .iter()

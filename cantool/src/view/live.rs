@@ -16,7 +16,7 @@ use cw_core::can::{CanFrame, CanId};
 use cw_firmware::host::{Scenario, Simulation};
 
 use super::feed::{Feed, Live};
-use super::state::DistanceFrame;
+use super::state::ViewFrames;
 use crate::dbc::Database;
 use crate::frame::Frame;
 use crate::log::Entry;
@@ -31,9 +31,12 @@ fn with_live(feed: &Mutex<Feed>, f: impl FnOnce(&mut Live)) {
     }
 }
 
-/// What one entry from the bus makes of the live feed: a sample, a bad frame, or
-/// nothing (another message).
-fn take(live: &mut Live, frame: &DistanceFrame<'_>, name: &str, entry: &Entry) {
+/// What one entry from the bus makes of the live feed: a sample, thresholds, a bad frame,
+/// or nothing (another message).
+fn take(live: &mut Live, frame: &ViewFrames<'_>, name: &str, entry: &Entry) {
+    if let Some(thresholds) = frame.thresholds(entry) {
+        live.configure(thresholds);
+    }
     match frame.sample(entry) {
         None => {}
         Some(Ok(sample)) => live.push(sample),
@@ -65,7 +68,7 @@ pub fn simulation(
     seed: u64,
     name: &str,
 ) -> Result<Shared, String> {
-    DistanceFrame::find(db)?;
+    ViewFrames::find(db)?;
     let (to_bus, from_pc) = mpsc::channel::<CanFrame>();
     let send = move |frame: &Frame| {
         let frame = classic(frame)?;
@@ -78,7 +81,7 @@ pub fn simulation(
     let feed: Shared = Arc::new(Mutex::new(Feed::Live(live)));
     let (db, shared, name) = (db.clone(), Arc::clone(&feed), name.to_string());
     thread::spawn(move || {
-        let Ok(frame) = DistanceFrame::find(&db) else {
+        let Ok(frame) = ViewFrames::find(&db) else {
             return;
         };
         // The simulation holds shared handles of one thread: it is made in its own.
@@ -136,7 +139,7 @@ pub fn simulation(
 /// # Errors
 /// The DBC has no `DistanceFrame`, or the adapter cannot be opened.
 pub fn slcan(db: &Database, url: &str, baud: u32, bitrate: Option<u8>) -> Result<Shared, String> {
-    DistanceFrame::find(db)?;
+    ViewFrames::find(db)?;
     let (source, mut sender) =
         SlcanSource::open_with_sender(url, baud, bitrate, Limits::default())?;
     let feed: Shared = Arc::new(Mutex::new(Feed::Live(Live::new(
@@ -147,7 +150,7 @@ pub fn slcan(db: &Database, url: &str, baud: u32, bitrate: Option<u8>) -> Result
     ))));
     let (db, shared, name) = (db.clone(), Arc::clone(&feed), url.to_string());
     thread::spawn(move || {
-        let Ok(frame) = DistanceFrame::find(&db) else {
+        let Ok(frame) = ViewFrames::find(&db) else {
             return;
         };
         for item in source {

@@ -23,7 +23,7 @@ use std::path::Path;
 use crate::dbc::Database;
 use crate::log::LogFormat;
 use feed::Feed;
-use state::{DistanceFrame, Replay};
+use state::{Replay, ViewFrames};
 
 /// A log, read whole and paused at its start, as a feed.
 ///
@@ -31,7 +31,7 @@ use state::{DistanceFrame, Replay};
 /// The DBC has no `DistanceFrame`, or the log cannot be opened. Bad lines are not errors:
 /// the replay names them and plays the rest.
 pub fn replay(db: &Database, log: &Path, format: Option<LogFormat>) -> Result<Feed, String> {
-    let frame = DistanceFrame::find(db)?;
+    let frame = ViewFrames::find(db)?;
     let name = log.display().to_string();
     let entries = crate::log::open(log, format)?;
     Ok(Feed::Replay(Replay::new(&frame, entries, &name), name))

@@ -64,7 +64,7 @@ fn lock(feed: &Mutex<Feed>) -> MutexGuard<'_, Feed> {
 /// The sender panel's request.
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
-struct Thresholds {
+struct SendRequest {
     red_below_mm: u32,
     yellow_below_mm: u32,
 }
@@ -231,7 +231,7 @@ async fn control(State(app): State<App>, Json(control): Json<Control>) -> Respon
     done(lock(&app.feed).control(control))
 }
 
-async fn send(State(app): State<App>, Json(t): Json<Thresholds>) -> Response {
+async fn send(State(app): State<App>, Json(t): Json<SendRequest>) -> Response {
     let Some(config) = app.config.as_deref() else {
         return done(Err("the DBC has no `ThresholdConfig` message".into()));
     };

@@ -63,17 +63,41 @@ pub struct Sample {
     pub level: Level,
 }
 
-/// Where the view's frames are in the DBC: the message and the names it gives values.
-#[derive(Debug, Clone, Copy)]
-pub struct DistanceFrame<'a> {
-    message: &'a MessageDef,
+/// The warning thresholds the page draws: those of the newest `ThresholdConfig` on the bus
+/// that the ECU would take, or the paper's before any.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Thresholds {
+    /// When the frame that carried them was seen (none: the paper's, no frame yet).
+    pub t: Option<f64>,
+    /// Red below this distance, millimetres.
+    pub red_below_mm: u32,
+    /// Yellow below this distance, millimetres.
+    pub yellow_below_mm: u32,
 }
 
-impl<'a> DistanceFrame<'a> {
-    /// The DBC's `DistanceFrame`, with its `Distance` and `WarningLevel` signals.
+impl Thresholds {
+    /// The paper's: red below 1.0 m, yellow below 2.0 m (what the ECU starts with).
+    pub const PAPER: Self = Self {
+        t: None,
+        red_below_mm: 1000,
+        yellow_below_mm: 2000,
+    };
+}
+
+/// Where the view's frames are in the DBC: `DistanceFrame`, and `ThresholdConfig` when the
+/// DBC has it, with the names they give their signals and values.
+#[derive(Debug, Clone, Copy)]
+pub struct ViewFrames<'a> {
+    message: &'a MessageDef,
+    config: Option<&'a MessageDef>,
+}
+
+impl<'a> ViewFrames<'a> {
+    /// The DBC's `DistanceFrame`, with its `Distance` and `WarningLevel` signals, and its
+    /// `ThresholdConfig` when it has one with `RedBelow` and `YellowBelow`.
     ///
     /// # Errors
-    /// A DBC without them.
+    /// A DBC without a `DistanceFrame` and its two signals.
     pub fn find(db: &'a Database) -> Result<Self, String> {
         let message = db
             .by_name("DistanceFrame")
@@ -83,7 +107,35 @@ impl<'a> DistanceFrame<'a> {
                 return Err(format!("`DistanceFrame` has no signal `{name}`"));
             }
         }
-        Ok(Self { message })
+        let config = db.by_name("ThresholdConfig").filter(|m| {
+            ["RedBelow", "YellowBelow"]
+                .iter()
+                .all(|name| m.signals.iter().any(|s| s.name == *name))
+        });
+        Ok(Self { message, config })
+    }
+
+    /// The thresholds a `ThresholdConfig` entry carries, when the ECU would take them
+    /// (red above 0 and below yellow, its own rule); `None` for any other frame, and for
+    /// one that does not decode or that the ECU refuses.
+    pub fn thresholds(&self, entry: &Entry) -> Option<Thresholds> {
+        let config = self.config?;
+        let frame = &entry.frame;
+        if !frame.is_data() || frame.id != config.id || frame.extended != config.extended {
+            return None;
+        }
+        let signals = codec::decode(config, &frame.data).ok()?;
+        let value = |name: &str| match signals.iter().find(|d| d.signal.name == name)?.physical {
+            Physical::Int(v) => u32::try_from(v).ok(),
+            Physical::Float(_) => None,
+        };
+        let (red, yellow) = (value("RedBelow")?, value("YellowBelow")?);
+        cw_core::warning::Thresholds::new(red, yellow).ok()?;
+        Some(Thresholds {
+            t: Some(entry.timestamp),
+            red_below_mm: red,
+            yellow_below_mm: yellow,
+        })
     }
 
     /// The sample an entry carries: `None` for any other frame.
@@ -187,6 +239,7 @@ pub fn shown(newest: Option<&Sample>, now: f64) -> Shown {
 #[derive(Debug, Clone)]
 pub struct Replay {
     samples: Vec<Sample>,
+    configs: Vec<Thresholds>,
     start: f64,
     duration: f64,
     position: f64,
@@ -203,11 +256,12 @@ impl Replay {
     /// paused at the start. Bad lines and frames are kept as messages naming them
     /// ([`Replay::bad`]); the rest plays.
     pub fn new(
-        frame: &DistanceFrame<'_>,
+        frame: &ViewFrames<'_>,
         entries: impl IntoIterator<Item = Result<(At, Entry), LineError>>,
         name: &str,
     ) -> Self {
         let mut samples: Vec<Sample> = Vec::new();
+        let mut configs: Vec<Thresholds> = Vec::new();
         let mut bad = Vec::new();
         let (mut first, mut last) = (f64::INFINITY, f64::NEG_INFINITY);
         for entry in entries {
@@ -220,6 +274,10 @@ impl Replay {
             };
             first = first.min(entry.timestamp);
             last = last.max(entry.timestamp);
+            if let Some(c) = frame.thresholds(&entry) {
+                let at = configs.partition_point(|p| p.t <= c.t);
+                configs.insert(at, c);
+            }
             match frame.sample(&entry) {
                 None => {}
                 Some(Err(e)) => bad.push(format!("{name}:{at}: {e}")),
@@ -234,6 +292,7 @@ impl Replay {
         let start = if first.is_finite() { first } else { 0.0 };
         Self {
             samples,
+            configs,
             start,
             duration: (last - start).max(0.0),
             position: 0.0,
@@ -333,6 +392,16 @@ impl Replay {
     /// The picture now.
     pub fn shown(&self) -> Shown {
         shown(self.newest(), self.now())
+    }
+
+    /// The thresholds of the newest `ThresholdConfig` at or before now, or the paper's.
+    pub fn thresholds(&self) -> Thresholds {
+        let now = Some(self.now());
+        let n = self.configs.partition_point(|c| c.t <= now);
+        n.checked_sub(1)
+            .and_then(|i| self.configs.get(i))
+            .copied()
+            .unwrap_or(Thresholds::PAPER)
     }
 
     /// The samples of the last `seconds` up to now, oldest first (the chart's window).

@@ -62,7 +62,7 @@ function chartX(ago) {
   return CHART.right - (ago / CHART.seconds) * (CHART.right - CHART.left);
 }
 
-// The chart's axes and the thresholds (the paper's: red below 1.0 m, yellow below 2.0 m).
+// The chart's axes; the threshold lines are placed by each snapshot.
 function drawGrid() {
   const g = $("chart-grid");
   for (let m = 0; m <= CHART.metres; m++) {
@@ -74,10 +74,24 @@ function drawGrid() {
     const x = chartX(s);
     g.appendChild(el("text", { x, y: CHART.bottom + 36, class: "x" }, s ? `-${s} s` : "now"));
   }
-  for (const [mm, cls, label] of [[1000, "red", "red below 1.0 m"], [2000, "yellow", "yellow below 2.0 m"]]) {
+  for (const cls of ["red", "yellow"]) {
+    g.appendChild(el("line", { id: `threshold-${cls}`, x1: CHART.left, x2: CHART.right, class: `threshold ${cls}` }));
+    g.appendChild(el("text", { id: `threshold-${cls}-label`, x: CHART.left + 6, class: `threshold-label ${cls}` }));
+  }
+}
+
+// The thresholds of the newest ThresholdConfig on the bus, or the paper's before any.
+function drawThresholds(t) {
+  const from = t.t === null ? "the paper's" : "from the bus";
+  for (const [cls, mm] of [["red", t.red_below_mm], ["yellow", t.yellow_below_mm]]) {
     const y = chartY(mm);
-    g.appendChild(el("line", { x1: CHART.left, x2: CHART.right, y1: y, y2: y, class: `threshold ${cls}` }));
-    g.appendChild(el("text", { x: CHART.left + 6, y: y - 5, class: `threshold-label ${cls}` }, label));
+    const line = $(`threshold-${cls}`);
+    line.setAttribute("y1", y);
+    line.setAttribute("y2", y);
+    line.dataset.mm = mm;
+    const label = $(`threshold-${cls}-label`);
+    label.setAttribute("y", y - 5);
+    label.textContent = `${cls} below ${(mm / 1000).toFixed(mm % 100 ? 3 : 1)} m (${from})`;
   }
 }
 
@@ -179,6 +193,7 @@ function render(s) {
     return li;
   }));
   drawChart(s.chart);
+  drawThresholds(s.thresholds);
   const clock = s.clock;
   $("controls").hidden = !clock;
   if (clock) {

@@ -175,3 +175,26 @@ fn any_live_bus_keeps_its_window_and_shows_what_the_rules_say() {
             assert_eq!(snap.shown.sample.map(|s| s.t), expected.sample.map(|s| s.t));
         });
 }
+
+#[test]
+fn a_live_bus_draws_the_newest_thresholds() {
+    let mut live = Live::new("slcan", "x", None, false);
+    let th = |t: f64, red: u32| Thresholds {
+        t: Some(t),
+        red_below_mm: red,
+        yellow_below_mm: 3000,
+    };
+    assert_eq!(
+        Feed::Live(Live::new("slcan", "x", None, false))
+            .snapshot()
+            .thresholds,
+        Thresholds::PAPER
+    );
+    live.configure(th(2.0, 700));
+    live.configure(th(1.0, 600));
+    assert_eq!(
+        Feed::Live(live).snapshot().thresholds,
+        th(2.0, 700),
+        "an older frame does not win"
+    );
+}

@@ -54,6 +54,14 @@ fn the_simulation_runs_live_and_takes_the_pcs_thresholds() {
     until(&feed, "800 mm is yellow below 1000 mm", |s| {
         s.shown.sample.map(|x| x.level) == Some(Level::Yellow) && s.shown.yellow && !s.shown.red
     });
+    // The PC's frame was on the bus: the chart draws its thresholds.
+    let drawn = feed
+        .lock()
+        .unwrap_or_else(PoisonError::into_inner)
+        .snapshot()
+        .thresholds;
+    assert_eq!((drawn.red_below_mm, drawn.yellow_below_mm), (500, 1000));
+    assert!(drawn.t.is_some());
     let fd = Frame {
         kind: crate::frame::FrameKind::Fd {
             brs: false,

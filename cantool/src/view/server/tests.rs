@@ -11,7 +11,7 @@ use crate::dbc::Database;
 use crate::frame::Frame;
 use crate::log::Entry;
 use crate::view::feed::Live;
-use crate::view::state::{DistanceFrame, Replay};
+use crate::view::state::{Replay, ViewFrames};
 
 const ECU_DBC: &[u8] = include_bytes!("../../../../firmware/ecu.dbc");
 
@@ -22,7 +22,7 @@ fn db() -> Database {
 /// Three seconds of `DistanceFrame`s every 40 ms at 1.5 m, level Yellow.
 fn replay() -> Feed {
     let db = db();
-    let frame = DistanceFrame::find(&db).unwrap_or_else(|e| panic!("{e}"));
+    let frame = ViewFrames::find(&db).unwrap_or_else(|e| panic!("{e}"));
     let entries = (0..75).map(|i| {
         let mut data = [0u8; 8];
         data[..4].copy_from_slice(&1500u32.to_le_bytes());

@@ -24,7 +24,7 @@ fn entry(t: f64, distance: u32, level: u8) -> Entry {
 }
 
 fn sample(db: &Database, e: &Entry) -> Result<Sample, String> {
-    let Ok(frame) = DistanceFrame::find(db) else {
+    let Ok(frame) = ViewFrames::find(db) else {
         panic!("ecu.dbc has a DistanceFrame")
     };
     match frame.sample(e) {
@@ -59,7 +59,7 @@ fn distance_frames_decode_with_the_dbcs_names() {
         Err("warning level 7 is not one the DBC names".into())
     );
     // Other frames are not the view's.
-    let Ok(frame) = DistanceFrame::find(&db) else {
+    let Ok(frame) = ViewFrames::find(&db) else {
         panic!("ecu.dbc has a DistanceFrame")
     };
     let other = Entry {
@@ -83,7 +83,7 @@ fn a_dbc_without_the_frame_or_its_signals_is_refused() {
         panic!("a valid DBC")
     };
     assert_eq!(
-        DistanceFrame::find(&other).map(|_| ()),
+        ViewFrames::find(&other).map(|_| ()),
         Err("the DBC has no message `DistanceFrame`".into())
     );
     let Ok(renamed) = Database::from_bytes(
@@ -92,7 +92,7 @@ fn a_dbc_without_the_frame_or_its_signals_is_refused() {
         panic!("a valid DBC")
     };
     assert_eq!(
-        DistanceFrame::find(&renamed).map(|_| ()),
+        ViewFrames::find(&renamed).map(|_| ()),
         Err("`DistanceFrame` has no signal `Distance`".into())
     );
 }
@@ -156,7 +156,7 @@ fn a_fault_blinks_both_leds_and_the_level_alone_lights_them() {
 
 fn replay_of(log: &str) -> Replay {
     let db = db();
-    let Ok(frame) = DistanceFrame::find(&db) else {
+    let Ok(frame) = ViewFrames::find(&db) else {
         panic!("ecu.dbc has a DistanceFrame")
     };
     let mut reader = CandumpReader::new(log.as_bytes());
@@ -256,7 +256,7 @@ enum Op {
 #[test]
 fn any_replay_under_any_operations_shows_what_the_rules_say() {
     let db = db();
-    let Ok(frame) = DistanceFrame::find(&db) else {
+    let Ok(frame) = ViewFrames::find(&db) else {
         panic!("ecu.dbc has a DistanceFrame")
     };
     bolero::check!()
@@ -301,4 +301,35 @@ fn any_replay_under_any_operations_shows_what_the_rules_say() {
                     .all(|s| s.t <= now && s.t >= now - 1.0));
             }
         });
+}
+
+#[test]
+fn the_chart_draws_the_newest_thresholds_the_ecu_would_take() {
+    // 200#: RedBelow, YellowBelow, little-endian. 500/1000 at 1 s, 900/900 (refused by
+    // the ECU's rule) at 2 s, 0/700 (refused) at 3 s, 1500/2500 stamped 0.5 s but read last.
+    let mut replay = replay_of(
+        "(0.000000) can0 100#E803000001000000\n\
+         (1.000000) can0 200#F401E803\n\
+         (2.000000) can0 200#84038403\n\
+         (3.000000) can0 200#0000BC02\n\
+         (4.000000) can0 100#E803000001000000\n\
+         (0.500000) can0 200#DC05C409\n",
+    );
+    let at = |replay: &mut Replay, t: f64| {
+        replay.seek(t);
+        let th = replay.thresholds();
+        (th.red_below_mm, th.yellow_below_mm, th.t)
+    };
+    assert_eq!(replay.thresholds(), Thresholds::PAPER);
+    assert_eq!(at(&mut replay, 0.7), (1500, 2500, Some(0.5)));
+    assert_eq!(at(&mut replay, 1.0), (500, 1000, Some(1.0)));
+    assert_eq!(
+        at(&mut replay, 3.5),
+        (500, 1000, Some(1.0)),
+        "refused ones are not drawn"
+    );
+    assert!(
+        replay.bad().is_empty(),
+        "a refused configuration is no bad frame"
+    );
 }
