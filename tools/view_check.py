@@ -32,6 +32,7 @@ import csv
 import json
 import os
 import re
+import select
 import shutil
 import socket
 import subprocess
@@ -67,7 +68,8 @@ class View:
         self.proc = subprocess.Popen(
             [cw_can, "view", "--dbc", dbc, "--listen", "127.0.0.1:0", *source],
             stdout=subprocess.PIPE, text=True)
-        line = self.proc.stdout.readline()
+        ready, _, _ = select.select([self.proc.stdout], [], [], TIMEOUT_S)
+        line = self.proc.stdout.readline() if ready else ""
         match = re.search(r"http://(127\.0\.0\.1:\d+)/", line)
         if not match:
             self.proc.kill()
@@ -279,8 +281,12 @@ def check_damage(view, browser, bad_lines):
     page = paused_at(view, browser, EPOCH_S + 6.5 - start)
     if page["status"] != "live" or page["readout"] != "1.500 m":
         fail(f"after the gap the replay should go on at 1.5 m: {page['status']!r}, {page['readout']!r}")
+    # The chart's line stops at the gap and starts again after it.
+    pieces = browser.eval("document.getElementById('chart-distance').getAttribute('d').split('M').length - 1")
+    if pieces != 2:
+        fail(f"the chart draws the distance in {pieces} pieces across a second without frames, not 2")
     print(f"view: {bad_lines} bad lines counted and named, the rest played; 'no signal' "
-          f"in a second without frames, the obstacle gone and the LEDs off")
+          f"in a second without frames, the obstacle gone, the LEDs off, the chart's line broken")
 
 
 def check_sender(cw_can, dbc, browser, tmp):
@@ -316,12 +322,21 @@ def check_sender(cw_can, dbc, browser, tmp):
         browser.wait("document.getElementById('send-result').textContent === "
                      "'not sent: red must be below yellow'",
                      "red below 900 mm, yellow below 900 mm was not refused on the page")
-        if view.state()["shown"]["sample"]["level"] != "Yellow":
-            fail("a refused pair changed the ECU's thresholds")
+        sample = view.state()["shown"]["sample"] or {}
+        if sample.get("level") != "Yellow":
+            fail(f"after a refused pair the view shows {sample}, not the yellow level")
+        # The server goes away: the page shows nothing of the bus, not its last picture.
+        view.close()
+        browser.wait("document.getElementById('status').textContent === 'no connection to cw-can' && "
+                     "document.getElementById('led-red').dataset.on === 'false' && "
+                     "document.getElementById('led-yellow').dataset.on === 'false' && "
+                     "document.getElementById('readout').textContent === '\u2014'",
+                     "with its server gone the page still shows a picture")
     finally:
         view.close()
     print("view: live simulation at 0.8 m, red; thresholds 500/1000 mm sent from the page: "
-          "the LEDs turned yellow, the chart's lines moved to 0.5 and 1.0 m; 900/900 mm refused on the page")
+          "the LEDs turned yellow, the chart's lines moved to 0.5 and 1.0 m; 900/900 mm refused on the page; "
+          "the server stopped: 'no connection', nothing shown")
 
 
 def open_stream(view):
@@ -343,7 +358,7 @@ def read_events(stream, count):
 
 
 def streams_settle(view, expected):
-    """Waits until the server counts `expected` event streams (each has a thread)."""
+    """Waits until the server counts `expected` event streams."""
     deadline = time.monotonic() + TIMEOUT_S
     while view.state()["streams"] != expected:
         if time.monotonic() > deadline:

@@ -173,7 +173,8 @@ impl SlcanSender {
 type Connection = (Box<dyn ReadWrite>, Box<dyn Write + Send>);
 
 /// Opens `url` (`socket://HOST:PORT`, or a serial device at `baud`) with a 100 ms read
-/// timeout.
+/// timeout (a serial device's also bounds its writes; a socket's writes give up after 1 s,
+/// so an adapter that stops reading cannot hold the view).
 fn connect(url: &str, baud: u32) -> Result<Connection, String> {
     match url.strip_prefix("socket://") {
         Some(addr) => {
@@ -181,6 +182,7 @@ fn connect(url: &str, baud: u32) -> Result<Connection, String> {
                 TcpStream::connect(addr).map_err(|e| format!("cannot connect to {addr}: {e}"))?;
             stream
                 .set_read_timeout(Some(Duration::from_millis(100)))
+                .and_then(|()| stream.set_write_timeout(Some(Duration::from_secs(1))))
                 .map_err(|e| format!("{addr}: {e}"))?;
             let out = stream.try_clone().map_err(|e| format!("{addr}: {e}"))?;
             Ok((Box::new(stream), Box::new(out)))

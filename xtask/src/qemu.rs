@@ -422,7 +422,11 @@ fn cw_can_live(image: &Path, out: &Path) -> Result {
 /// One HTTP/1.1 request to `addr` (the view's server): the status and the body.
 fn http(addr: &str, method: &str, path: &str, json: &str) -> Result<(u16, String)> {
     use std::io::{Read, Write};
-    let mut s = std::net::TcpStream::connect(addr).map_err(|e| format!("{addr}: {e}"))?;
+    let timeout = std::time::Duration::from_secs(5);
+    let socket: std::net::SocketAddr = addr.parse().map_err(|e| format!("{addr}: {e}"))?;
+    let mut s = std::net::TcpStream::connect_timeout(&socket, timeout)
+        .and_then(|s| s.set_read_timeout(Some(timeout)).map(|()| s))
+        .map_err(|e| format!("{addr}: {e}"))?;
     let request = format!(
         "{method} {path} HTTP/1.1\r\nHost: {addr}\r\nConnection: close\r\n\
          Content-Type: application/json\r\nContent-Length: {}\r\n\r\n{json}",
@@ -556,18 +560,43 @@ fn cw_can_view_live(image: &Path, out: &Path) -> Result {
     })();
     qemu.join()
         .map_err(|_| "qemu: the image's thread panicked".to_string())??;
-    let ended = http(&addr, "GET", "/state", "")
-        .map(|(_, body)| body.contains("the adapter's stream ended"));
+    // The view's reader sees the end of the stream a moment after QEMU exits.
+    let mut ended = Ok(false);
+    for _ in 0..100 {
+        ended = http(&addr, "GET", "/state", "")
+            .map(|(_, body)| body.contains("the adapter's stream ended"));
+        if ended != Ok(false) {
+            break;
+        }
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    // The chart draws what the view sent: an adapter does not hand its own frames back.
+    let drawn = http(&addr, "GET", "/state", "").map(|(_, body)| {
+        serde_json::from_str::<serde_json::Value>(&body)
+            .ok()
+            .and_then(|state| {
+                let t = state.get("thresholds")?;
+                Some((
+                    t.get("red_below_mm")?.as_u64()?,
+                    t.get("yellow_below_mm")?.as_u64()?,
+                ))
+            })
+    });
     let _ = view.kill();
     let _ = view.wait();
     result?;
+    if drawn != Ok(Some((2000, 3000))) {
+        return Err(format!(
+            "qemu: the view's chart draws the thresholds {drawn:?}, not the 2000/3000 mm it sent"
+        ));
+    }
     if ended != Ok(true) {
         return Err(format!(
             "qemu: the view did not name the end of the image's stream: {ended:?}"
         ));
     }
     println!(
-        "qemu: cw-can view over the image's SLCAN port, in real time: 0.5 m red, 2.5 m off; thresholds 2000/3000 mm sent from the view reached the image: 2.5 m yellow; the stream's end named"
+        "qemu: cw-can view over the image's SLCAN port, in real time: 0.5 m red, 2.5 m off; thresholds 2000/3000 mm sent from the view reached the image: 2.5 m yellow, and the chart draws them; the stream's end named"
     );
     Ok(())
 }

@@ -115,6 +115,15 @@ impl Live {
     }
 }
 
+/// Why a frame did not go on the bus.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum SendError {
+    /// The feed has no bus to send to (a replay, a read-only bus, an ended simulation).
+    NoBus(String),
+    /// The bus failed to take the frame (the adapter's connection).
+    Bus(String),
+}
+
 /// What the page asks of a replay; absent fields are left as they are.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -303,17 +312,30 @@ impl Feed {
         Ok(())
     }
 
-    /// Puts `frame` on the bus.
+    /// Puts `frame`, which carries `thresholds`, on the bus; the chart draws them from
+    /// then on (an adapter does not hand back the frames it sends).
     ///
     /// # Errors
-    /// A replay (it has no bus), a feed with no way to send, or the bus's refusal.
-    pub fn send(&mut self, frame: &Frame) -> Result<(), String> {
+    /// [`SendError::NoBus`] for a replay or a feed with no way to send;
+    /// [`SendError::Bus`] when the bus fails to take it.
+    pub fn send(&mut self, frame: &Frame, thresholds: Thresholds) -> Result<(), SendError> {
         match self {
-            Self::Replay(..) => Err("a replayed log has no bus to send to".into()),
-            Self::Live(Live { send: None, .. }) => Err("this bus is read only".into()),
-            Self::Live(Live {
-                send: Some(send), ..
-            }) => send(frame),
+            Self::Replay(..) => Err(SendError::NoBus(
+                "a replayed log has no bus to send to".into(),
+            )),
+            Self::Live(Live { send: None, .. }) => {
+                Err(SendError::NoBus("this bus is read only".into()))
+            }
+            Self::Live(live) => {
+                if let Some(send) = live.send.as_mut() {
+                    send(frame).map_err(SendError::Bus)?;
+                }
+                live.configure(Thresholds {
+                    t: Some(live.now),
+                    ..thresholds
+                });
+                Ok(())
+            }
         }
     }
 }

@@ -44,6 +44,15 @@ fn take(live: &mut Live, frame: &ViewFrames<'_>, name: &str, entry: &Entry) {
     }
 }
 
+/// Starts a source's thread.
+fn spawn(name: &str, body: impl FnOnce() + Send + 'static) -> Result<(), String> {
+    thread::Builder::new()
+        .name(format!("view-{name}"))
+        .spawn(body)
+        .map(|_| ())
+        .map_err(|e| format!("cannot start the {name} thread: {e}"))
+}
+
 /// A frame the sender panel built, as the simulated bus carries it.
 fn classic(frame: &Frame) -> Result<CanFrame, String> {
     let id = if frame.extended {
@@ -80,7 +89,7 @@ pub fn simulation(
         .with_origin(DEFAULT_EPOCH_S as f64);
     let feed: Shared = Arc::new(Mutex::new(Feed::Live(live)));
     let (db, shared, name) = (db.clone(), Arc::clone(&feed), name.to_string());
-    thread::spawn(move || {
+    spawn("simulation", move || {
         let Ok(frame) = ViewFrames::find(&db) else {
             return;
         };
@@ -121,13 +130,15 @@ pub fn simulation(
                 thread::sleep(wait);
             }
         }
-        // The scenario is over: the clock goes on, and the view says "no signal".
+        // The scenario is over: nothing more goes on its bus, the clock goes on, and the
+        // view says "no signal".
+        drop(from_pc);
         while Arc::strong_count(&shared) > 1 {
             let now = epoch + started.elapsed().as_secs_f64();
             with_live(&shared, |live| live.set_now(now));
             thread::sleep(Duration::from_millis(10));
         }
-    });
+    })?;
     Ok(feed)
 }
 
@@ -149,7 +160,7 @@ pub fn slcan(db: &Database, url: &str, baud: u32, bitrate: Option<u8>) -> Result
         true,
     ))));
     let (db, shared, name) = (db.clone(), Arc::clone(&feed), url.to_string());
-    thread::spawn(move || {
+    spawn("slcan", move || {
         let Ok(frame) = ViewFrames::find(&db) else {
             return;
         };
@@ -162,7 +173,7 @@ pub fn slcan(db: &Database, url: &str, baud: u32, bitrate: Option<u8>) -> Result
         with_live(&shared, |live| {
             live.bad(format!("{name}: the adapter's stream ended"));
         });
-    });
+    })?;
     Ok(feed)
 }
 

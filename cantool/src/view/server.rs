@@ -11,11 +11,18 @@
 //! | `POST /control` | a [`Control`] as JSON: play, pause, speed, seek (a replay) |
 //! | `POST /send` | `{"red_below_mm": R, "yellow_below_mm": Y}`: a `ThresholdConfig` frame on the bus |
 //!
-//! A refused request is answered with its reason: 400 or 422 for a body that is no such
-//! JSON, 413 above [`BODY_MAX`] bytes, 409 for what the feed refuses (a live bus has no
-//! clock, a replay no bus), 503 when [`MAX_STREAMS`] event streams already run. A client
-//! that leaves ends its stream; the server keeps nothing of it, so its memory is bounded
-//! whatever the clients do.
+//! A refused request is answered with its reason: 415 for a body not sent as
+//! `application/json`, 400 for malformed JSON, 422 for JSON of the wrong shape or a
+//! threshold pair the ECU would refuse, 413 above [`BODY_MAX`] bytes, 409 for what the
+//! feed cannot do (a live bus has no clock, a replay no bus), 502 when the bus fails to
+//! take a frame, 503 when [`MAX_STREAMS`] event streams already run. A client that leaves
+//! ends its stream; the server keeps nothing of it, so its memory is bounded whatever the
+//! clients do.
+//!
+//! Listening on a loopback address, the server answers only requests addressed to a
+//! loopback name (`127.0.0.1`, `localhost`, `[::1]`), so that a web page whose domain is
+//! re-resolved to this machine (DNS rebinding) is refused; and it refuses a `POST` whose
+//! `Origin` is another site's (403).
 
 use std::convert::Infallible;
 use std::net::SocketAddr;
@@ -23,8 +30,9 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex, MutexGuard, PoisonError};
 use std::time::Duration;
 
-use axum::extract::{DefaultBodyLimit, State};
-use axum::http::{header, StatusCode};
+use axum::extract::{DefaultBodyLimit, Request, State};
+use axum::http::{header, Method, StatusCode};
+use axum::middleware::Next;
 use axum::response::sse::{Event, Sse};
 use axum::response::{IntoResponse, Response};
 use axum::routing::{get, post};
@@ -33,7 +41,8 @@ use futures_util::stream::{self, Stream};
 use serde::Deserialize;
 use tokio::sync::watch;
 
-use super::feed::{Control, Feed, Snapshot};
+use super::feed::{Control, Feed, SendError, Snapshot};
+use super::state::Thresholds;
 use crate::codec::{self, Input};
 use crate::dbc::MessageDef;
 
@@ -74,6 +83,7 @@ struct SendRequest {
 struct App {
     feed: Shared,
     config: Option<Arc<MessageDef>>,
+    loopback_only: bool,
     streams: Arc<AtomicUsize>,
     stop: watch::Receiver<bool>,
 }
@@ -82,6 +92,7 @@ impl App {
     fn snapshot(&self) -> Snapshot {
         let mut snapshot = lock(&self.feed).snapshot();
         snapshot.streams = self.streams.load(Ordering::SeqCst);
+        snapshot.can_send &= self.config.is_some();
         snapshot
     }
 }
@@ -115,12 +126,18 @@ impl View {
         let listener = std::net::TcpListener::bind(addr)
             .and_then(|l| l.set_nonblocking(true).map(|()| l))
             .map_err(|e| format!("cannot listen on {addr}: {e}"))?;
+        let loopback_only = listener
+            .local_addr()
+            .map_err(|e| format!("{addr}: {e}"))?
+            .ip()
+            .is_loopback();
         let (stop, stopped) = watch::channel(false);
         Ok(Self {
             listener,
             app: App {
                 feed,
                 config: config.map(Arc::new),
+                loopback_only,
                 streams: Arc::new(AtomicUsize::new(0)),
                 stop: stopped,
             },
@@ -171,6 +188,7 @@ impl View {
                 .route("/control", post(control))
                 .route("/send", post(send))
                 .layer(DefaultBodyLimit::max(BODY_MAX))
+                .layer(axum::middleware::from_fn_with_state(app.clone(), guard))
                 .with_state(app);
             axum::serve(listener, router)
                 .with_graceful_shutdown(async move {
@@ -179,6 +197,43 @@ impl View {
                 .await
                 .map_err(|e| format!("the view's server failed: {e}"))
         })
+    }
+}
+
+/// Whether `host` (a `Host` header: a name, and maybe a port) names this machine's
+/// loopback interface.
+fn loopback_name(host: &str) -> bool {
+    let name = match host.strip_prefix('[') {
+        Some(v6) => v6.split(']').next().unwrap_or(""),
+        None => host.split(':').next().unwrap_or(""),
+    };
+    matches!(name, "127.0.0.1" | "localhost" | "::1")
+}
+
+/// Why a request is refused, if it is: addressed to another name than a loopback one
+/// (when listening on loopback), or a `POST` from another site's page.
+fn refused(app: &App, request: &Request) -> Option<String> {
+    let header = |name| {
+        request
+            .headers()
+            .get(name)
+            .map(|v: &axum::http::HeaderValue| v.to_str().unwrap_or("\u{fffd}"))
+    };
+    let host = header(header::HOST).unwrap_or("");
+    if app.loopback_only && !loopback_name(host) {
+        return Some(format!(
+            "this view answers 127.0.0.1 or localhost, not `{host}`"
+        ));
+    }
+    let origin = header(header::ORIGIN).filter(|_| request.method() == Method::POST)?;
+    (origin != format!("http://{host}"))
+        .then(|| format!("a request from `{origin}` may not control this view"))
+}
+
+async fn guard(State(app): State<App>, request: Request, next: Next) -> Response {
+    match refused(&app, &request) {
+        Some(why) => (StatusCode::FORBIDDEN, why).into_response(),
+        None => next.run(request).await,
     }
 }
 
@@ -252,8 +307,15 @@ async fn send(State(app): State<App>, Json(t): Json<SendRequest>) -> Response {
             ("YellowBelow".into(), Input::Int(t.yellow_below_mm.into())),
         ],
     );
-    match frame {
-        Ok(frame) => done(lock(&app.feed).send(&frame)),
+    let thresholds = Thresholds {
+        t: None,
+        red_below_mm: t.red_below_mm,
+        yellow_below_mm: t.yellow_below_mm,
+    };
+    match frame.map(|frame| lock(&app.feed).send(&frame, thresholds)) {
+        Ok(Ok(())) => (StatusCode::OK, "ok").into_response(),
+        Ok(Err(SendError::NoBus(why))) => (StatusCode::CONFLICT, why).into_response(),
+        Ok(Err(SendError::Bus(why))) => (StatusCode::BAD_GATEWAY, why).into_response(),
         Err(e) => (StatusCode::UNPROCESSABLE_ENTITY, e).into_response(),
     }
 }

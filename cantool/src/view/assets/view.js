@@ -13,7 +13,8 @@ const FLOOR_M = 4;
 const TILE_M = 0.5;
 // The chart: 10 s across 840 px, 0 to 4 m over 160 px.
 const CHART = { left: 60, right: 900, top: 30, bottom: 190, seconds: 10, metres: 4 };
-const LEVELS = ["Off", "Yellow", "Red", "Fault"];
+// The view's rule: no frame for 200 ms is "no signal".
+const NO_SIGNAL_S = 0.2;
 
 const $ = (id) => document.getElementById(id);
 
@@ -86,12 +87,16 @@ function drawThresholds(t) {
   for (const [cls, mm] of [["red", t.red_below_mm], ["yellow", t.yellow_below_mm]]) {
     const y = chartY(mm);
     const line = $(`threshold-${cls}`);
+    // Above the chart's 4 m: the line sits on its top edge and its label says so.
+    const above = mm > CHART.metres * 1000;
     line.setAttribute("y1", y);
     line.setAttribute("y2", y);
     line.dataset.mm = mm;
     const label = $(`threshold-${cls}-label`);
     label.setAttribute("y", y - 5);
-    label.textContent = `${cls} below ${(mm / 1000).toFixed(mm % 100 ? 3 : 1)} m (${from})`;
+    label.textContent = `${cls} below ${(mm / 1000).toFixed(mm % 100 ? 3 : 1)} m (${from}${above ? ", above the chart" : ""})`;
+    // The yellow label goes under its line when the two lines are close.
+    if (cls === "yellow" && Math.abs(chartY(t.red_below_mm) - y) < 16) label.setAttribute("y", y + 14);
   }
 }
 
@@ -109,8 +114,16 @@ function drawChart(points) {
       }));
     }
   };
+  let previous = null;
   for (const [ago, mm, level] of points) {
     if (ago > CHART.seconds) continue;
+    // 200 ms without a frame is "no signal": the line and the band stop there.
+    if (previous !== null && previous - ago > NO_SIGNAL_S) {
+      flush(previous - NO_SIGNAL_S);
+      run = null;
+      pen = false;
+    }
+    previous = ago;
     if (mm === null) {
       pen = false;
     } else {
@@ -140,11 +153,15 @@ function setObstacle(mm) {
   const side = $("side-obstacle");
   const beams = [$("top-beam"), $("side-beam")];
   if (mm === null) {
+    $("beyond").style.display = "none";
     for (const e of [top, side, ...beams]) e.style.display = "none";
     top.dataset.distanceMm = side.dataset.distanceMm = "";
     return;
   }
-  const x = xAt(mm / 1000);
+  // Beyond the floor (the sensor's 4 m): the obstacle waits at its end, marked.
+  const beyond = mm > FLOOR_M * 1000;
+  $("beyond").style.display = beyond ? "" : "none";
+  const x = xAt(Math.min(mm, FLOOR_M * 1000) / 1000);
   const r = Number(top.getAttribute("r"));
   top.setAttribute("cx", x + r);
   side.setAttribute("x", x);
@@ -203,10 +220,14 @@ function render(s) {
     $("seek").max = clock.duration;
     if (!seeking) $("seek").value = clock.position;
     $("time").textContent = `${clock.position.toFixed(2)} / ${clock.duration.toFixed(2)} s`;
-    if (document.activeElement !== $("speed")) $("speed").value = String(clock.speed);
+    const speed = String(clock.speed);
+    if (![...$("speed").options].some((o) => o.value === speed)) {
+      $("speed").appendChild(new Option(speed, speed));
+    }
+    if (document.activeElement !== $("speed")) $("speed").value = speed;
   }
   $("send").disabled = !s.can_send;
-  $("send").title = s.can_send ? "" : "a replayed log has no bus to send to";
+  $("send").title = s.can_send ? "" : s.clock ? "a replayed log has no bus to send to" : "no bus to send to";
 }
 
 async function post(path, body) {
@@ -220,23 +241,42 @@ async function post(path, body) {
   return text;
 }
 
+// Without the server the page knows nothing of the bus: it shows nothing, not the last
+// picture.
+function disconnected() {
+  document.body.dataset.status = "NoSignal";
+  $("status").textContent = "no connection to cw-can";
+  $("status").className = "status NoSignal";
+  setLed("led-red", false, false);
+  setLed("led-yellow", false, false);
+  setObstacle(null);
+  for (const id of ["readout", "level", "frame-time"]) $(id).textContent = "\u2014";
+  drawChart([]);
+}
+
 function connect() {
   const events = new EventSource("/events");
   events.onmessage = (e) => render(JSON.parse(e.data));
-  // The browser reconnects by itself; meanwhile the page says so.
   events.onerror = () => {
-    document.body.dataset.status = "NoSignal";
-    $("status").textContent = "no connection to cw-can";
-    $("status").className = "status NoSignal";
+    disconnected();
+    // The browser retries by itself, except after an answer that is not a stream (503
+    // when the server has too many): then the page tries again in a while.
+    if (events.readyState === EventSource.CLOSED) setTimeout(connect, 2000);
   };
 }
 
+// A refused control is shown, not lost.
+function report(promise) {
+  promise.then(() => { $("control-result").textContent = ""; })
+    .catch((err) => { $("control-result").textContent = err.message; });
+}
+
 function wire() {
-  $("play").onclick = () => post("/control", { play: $("play").dataset.playing !== "true" });
-  $("speed").onchange = () => post("/control", { speed: Number($("speed").value) });
+  $("play").onclick = () => report(post("/control", { play: $("play").dataset.playing !== "true" }));
+  $("speed").onchange = () => report(post("/control", { speed: Number($("speed").value) }));
   $("seek").oninput = () => { seeking = true; };
   $("seek").onchange = () => {
-    post("/control", { seek: Number($("seek").value) }).finally(() => { seeking = false; });
+    report(post("/control", { seek: Number($("seek").value) }).finally(() => { seeking = false; }));
   };
   $("send-form").onsubmit = (e) => {
     e.preventDefault();

@@ -98,7 +98,10 @@ fn a_dense_window_is_thinned_evenly() {
 fn a_replay_refuses_to_send_and_a_live_bus_to_seek() {
     let mut live = Feed::Live(Live::new("slcan", "x", None, true));
     let frame = Frame::classic(0x200, false, &[1, 2, 3, 4]);
-    assert_eq!(live.send(&frame), Err("this bus is read only".into()));
+    assert_eq!(
+        live.send(&frame, Thresholds::PAPER),
+        Err(SendError::NoBus("this bus is read only".into()))
+    );
     assert!(live.control(Control::default()).is_err());
     // Stamped by this PC's clock: the time now is the clock's.
     live.tick(0.01);

@@ -29,10 +29,15 @@ fn until(feed: &Shared, what: &str, mut done: impl FnMut(&super::super::feed::Sn
     }
 }
 
-fn send(feed: &Shared, frame: &Frame) -> Result<(), String> {
+fn send(feed: &Shared, frame: &Frame) -> Result<(), crate::view::feed::SendError> {
+    let thresholds = crate::view::state::Thresholds {
+        t: None,
+        red_below_mm: 500,
+        yellow_below_mm: 1000,
+    };
     feed.lock()
         .unwrap_or_else(PoisonError::into_inner)
-        .send(frame)
+        .send(frame, thresholds)
 }
 
 /// RedBelow 500 mm, YellowBelow 1000 mm.

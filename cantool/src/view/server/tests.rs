@@ -64,7 +64,7 @@ impl Running {
             ""
         };
         let head = format!(
-            "{method} {path} HTTP/1.1\r\nHost: test\r\nConnection: close\r\n{kind}Content-Length: {}\r\n\r\n",
+            "{method} {path} HTTP/1.1\r\nHost: 127.0.0.1\r\nConnection: close\r\n{kind}Content-Length: {}\r\n\r\n",
             body.len()
         );
         s.write_all(head.as_bytes())
@@ -100,7 +100,7 @@ impl Running {
 /// An event stream's socket, after its first event.
 fn stream(addr: SocketAddr) -> (u16, TcpStream) {
     let mut s = TcpStream::connect(addr).unwrap_or_else(|e| panic!("{e}"));
-    s.write_all(b"GET /events HTTP/1.1\r\nHost: test\r\n\r\n")
+    s.write_all(b"GET /events HTTP/1.1\r\nHost: localhost\r\n\r\n")
         .unwrap_or_else(|e| panic!("{e}"));
     let mut seen = Vec::new();
     let mut buf = [0u8; 4096];
@@ -256,12 +256,67 @@ fn the_sender_panel_puts_threshold_config_on_a_live_bus() {
     );
     assert_eq!(status, 422);
     assert!(why.contains("YellowBelow"), "{why}");
+    assert_eq!(
+        view.state()["thresholds"]["red_below_mm"],
+        500,
+        "drawn once sent"
+    );
     let sent = sent.lock().unwrap_or_else(PoisonError::into_inner).clone();
     // RedBelow 500 = 0x01F4 and YellowBelow 900 = 0x0384, little-endian, id 0x200.
     assert_eq!(
         sent,
         vec![Frame::classic(0x200, false, &[0xF4, 0x01, 0x84, 0x03])]
     );
+    view.stop();
+}
+
+/// A raw request; the status.
+fn raw(addr: SocketAddr, request: &str) -> u16 {
+    let mut s = TcpStream::connect(addr).unwrap_or_else(|e| panic!("{e}"));
+    s.write_all(request.as_bytes())
+        .unwrap_or_else(|e| panic!("{e}"));
+    let mut reply = String::new();
+    s.read_to_string(&mut reply)
+        .unwrap_or_else(|e| panic!("{e}"));
+    reply.get(9..12).and_then(|c| c.parse().ok()).unwrap_or(0)
+}
+
+#[test]
+fn other_sites_and_other_names_are_refused() {
+    let view = Running::start(replay());
+    let get = |host: &str| {
+        raw(
+            view.addr,
+            &format!("GET /state HTTP/1.1\r\nHost: {host}\r\nConnection: close\r\n\r\n"),
+        )
+    };
+    for host in ["127.0.0.1", "127.0.0.1:8080", "localhost:1", "[::1]:8080"] {
+        assert_eq!(get(host), 200, "{host}");
+    }
+    // A rebound name, or none.
+    for host in [
+        "evil.example",
+        "evil.example:8080",
+        "127.0.0.1.evil.example",
+        "",
+    ] {
+        assert_eq!(get(host), 403, "{host}");
+    }
+    let post = |origin: &str| {
+        let body = r#"{"play": true}"#;
+        raw(
+            view.addr,
+            &format!(
+                "POST /control HTTP/1.1\r\nHost: 127.0.0.1:8080\r\nOrigin: {origin}\r\n\
+                 Connection: close\r\nContent-Type: application/json\r\n\
+                 Content-Length: {}\r\n\r\n{body}",
+                body.len()
+            ),
+        )
+    };
+    assert_eq!(post("http://evil.example"), 403);
+    assert_eq!(view.state()["clock"]["playing"], false, "nothing changed");
+    assert_eq!(post("http://127.0.0.1:8080"), 200, "the page itself");
     view.stop();
 }
 
