@@ -75,6 +75,21 @@ impl Frame {
     pub fn is_data(&self) -> bool {
         matches!(self.kind, FrameKind::Classic | FrameKind::Fd { .. })
     }
+
+    /// The frame as the ECU's stack carries it (`cw_core::can::CanFrame`): a classic data
+    /// frame of at most 8 bytes with a valid id, or `None`.
+    pub fn to_classic(&self) -> Option<cw_core::can::CanFrame> {
+        use cw_core::can::{CanFrame, CanId};
+        if self.kind != FrameKind::Classic {
+            return None;
+        }
+        let id = if self.extended {
+            CanId::extended(self.id)
+        } else {
+            u16::try_from(self.id).ok().and_then(CanId::standard)
+        }?;
+        CanFrame::from_parts(id, &self.data)
+    }
 }
 
 fn hex(out: &mut fmt::Formatter<'_>, data: &[u8]) -> fmt::Result {

@@ -16,7 +16,7 @@ use std::io::{Read, Write};
 use std::net::TcpStream;
 use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
 
-use cw_core::can::{slcan, CanFrame, CanId};
+use cw_core::can::slcan;
 
 use crate::asc::dlc_to_len;
 use crate::frame::{Frame, FrameKind};
@@ -147,19 +147,9 @@ impl SlcanSender {
     /// A frame SLCAN's `t`/`T` lines cannot carry (CAN FD, remote, error, over 8 bytes),
     /// or the adapter's connection fails.
     pub fn send(&mut self, frame: &Frame) -> Result<(), String> {
-        if frame.kind != FrameKind::Classic {
-            return Err(format!(
-                "{frame}: only classic data frames are sent over SLCAN"
-            ));
-        }
-        let id = if frame.extended {
-            CanId::extended(frame.id)
-        } else {
-            u16::try_from(frame.id).ok().and_then(CanId::standard)
-        };
-        let classic = id
-            .and_then(|id| CanFrame::from_parts(id, &frame.data))
-            .ok_or_else(|| format!("{frame}: not a classic CAN frame"))?;
+        let classic = frame.to_classic().ok_or_else(|| {
+            format!("{frame}: only classic data frames of at most 8 bytes are sent over SLCAN")
+        })?;
         let mut line = [0u8; slcan::FRAME_LINE_MAX];
         let n = slcan::encode_frame(&classic, &mut line);
         self.out

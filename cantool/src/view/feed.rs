@@ -25,6 +25,9 @@ pub const BAD_SHOWN: usize = 5;
 /// The most bad lines a live feed keeps (the newest); the count covers them all.
 const BAD_KEPT: usize = 64;
 
+/// The feed, shared by the server's tasks and a live source's thread.
+pub type Shared = std::sync::Arc<std::sync::Mutex<Feed>>;
+
 /// A frame for the bus, from the page's sender panel.
 pub type Sender = Box<dyn FnMut(&Frame) -> Result<(), String> + Send>;
 
@@ -323,13 +326,12 @@ impl Feed {
             Self::Replay(..) => Err(SendError::NoBus(
                 "a replayed log has no bus to send to".into(),
             )),
-            Self::Live(Live { send: None, .. }) => {
-                Err(SendError::NoBus("this bus is read only".into()))
-            }
             Self::Live(live) => {
-                if let Some(send) = live.send.as_mut() {
-                    send(frame).map_err(SendError::Bus)?;
-                }
+                let send = live
+                    .send
+                    .as_mut()
+                    .ok_or_else(|| SendError::NoBus("this bus is read only".into()))?;
+                send(frame).map_err(SendError::Bus)?;
                 live.configure(Thresholds {
                     t: Some(live.now),
                     ..thresholds

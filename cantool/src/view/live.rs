@@ -12,18 +12,15 @@ use std::thread;
 use std::time::{Duration, Instant};
 
 use cw_bsp::host::candump::DEFAULT_EPOCH_S;
-use cw_core::can::{CanFrame, CanId};
+use cw_core::can::CanFrame;
 use cw_firmware::host::{Scenario, Simulation};
 
-use super::feed::{Feed, Live};
+use super::feed::{Feed, Live, Shared};
 use super::state::ViewFrames;
 use crate::dbc::Database;
 use crate::frame::Frame;
 use crate::log::Entry;
 use crate::slcan::{Limits, SlcanSource};
-
-/// The feed, shared with the server.
-pub type Shared = Arc<Mutex<Feed>>;
 
 fn with_live(feed: &Mutex<Feed>, f: impl FnOnce(&mut Live)) {
     if let Feed::Live(live) = &mut *feed.lock().unwrap_or_else(PoisonError::into_inner) {
@@ -53,18 +50,6 @@ fn spawn(name: &str, body: impl FnOnce() + Send + 'static) -> Result<(), String>
         .map_err(|e| format!("cannot start the {name} thread: {e}"))
 }
 
-/// A frame the sender panel built, as the simulated bus carries it.
-fn classic(frame: &Frame) -> Result<CanFrame, String> {
-    let id = if frame.extended {
-        CanId::extended(frame.id)
-    } else {
-        u16::try_from(frame.id).ok().and_then(CanId::standard)
-    };
-    id.filter(|_| frame.kind == crate::frame::FrameKind::Classic)
-        .and_then(|id| CanFrame::from_parts(id, &frame.data))
-        .ok_or_else(|| format!("{frame}: the simulated bus carries classic data frames only"))
-}
-
 /// The host simulation of `scenario` (named `name`), in real time from now, as a live
 /// feed; the sender panel's frames go on its bus from the PC. When the scenario ends, the
 /// simulation stops and the view shows no signal.
@@ -80,7 +65,9 @@ pub fn simulation(
     ViewFrames::find(db)?;
     let (to_bus, from_pc) = mpsc::channel::<CanFrame>();
     let send = move |frame: &Frame| {
-        let frame = classic(frame)?;
+        let frame = frame.to_classic().ok_or_else(|| {
+            format!("{frame}: the simulated bus carries classic data frames only")
+        })?;
         to_bus
             .send(frame)
             .map_err(|_| "the simulation has ended".to_string())

@@ -41,7 +41,7 @@ use futures_util::stream::{self, Stream};
 use serde::Deserialize;
 use tokio::sync::watch;
 
-use super::feed::{Control, Feed, SendError, Snapshot};
+use super::feed::{Control, Feed, SendError, Shared, Snapshot};
 use super::state::Thresholds;
 use crate::codec::{self, Input};
 use crate::dbc::MessageDef;
@@ -61,9 +61,6 @@ pub const BODY_MAX: usize = 4096;
 const PAGE: &str = include_str!("assets/index.html");
 const SCRIPT: &str = include_str!("assets/view.js");
 const STYLE: &str = include_str!("assets/view.css");
-
-/// The feed, shared by the server's tasks.
-pub type Shared = Arc<Mutex<Feed>>;
 
 /// The feed, whatever a task that held it did (each change to it is whole).
 fn lock(feed: &Mutex<Feed>) -> MutexGuard<'_, Feed> {

@@ -119,12 +119,8 @@ impl<'a> ViewFrames<'a> {
     /// (red above 0 and below yellow, its own rule); `None` for any other frame, and for
     /// one that does not decode or that the ECU refuses.
     pub fn thresholds(&self, entry: &Entry) -> Option<Thresholds> {
-        let config = self.config?;
-        let frame = &entry.frame;
-        if !frame.is_data() || frame.id != config.id || frame.extended != config.extended {
-            return None;
-        }
-        let signals = codec::decode(config, &frame.data).ok()?;
+        let config = self.config.filter(|m| carries(m, &entry.frame))?;
+        let signals = codec::decode(config, &entry.frame.data).ok()?;
         let value = |name: &str| match signals.iter().find(|d| d.signal.name == name)?.physical {
             Physical::Int(v) => u32::try_from(v).ok(),
             Physical::Float(_) => None,
@@ -144,10 +140,7 @@ impl<'a> ViewFrames<'a> {
     /// A `DistanceFrame` that does not decode, or whose level the DBC does not name.
     pub fn sample(&self, entry: &Entry) -> Option<Result<Sample, String>> {
         let frame = &entry.frame;
-        if !frame.is_data()
-            || frame.id != self.message.id
-            || frame.extended != self.message.extended
-        {
+        if !carries(self.message, frame) {
             return None;
         }
         Some(
@@ -156,6 +149,11 @@ impl<'a> ViewFrames<'a> {
                 .and_then(|signals| sample_of(entry.timestamp, &signals)),
         )
     }
+}
+
+/// Whether `frame` is one of `message`'s (a data frame with its id).
+fn carries(message: &MessageDef, frame: &crate::frame::Frame) -> bool {
+    frame.is_data() && frame.id == message.id && frame.extended == message.extended
 }
 
 fn sample_of(t: f64, signals: &[Decoded<'_>]) -> Result<Sample, String> {
