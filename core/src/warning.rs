@@ -79,7 +79,7 @@ impl Thresholds {
     }
 
     /// [`Self::new`]'s checks. (A function of its own because cargo-mutants leaves
-    /// functions named `new` alone: see `docs/mutants.md`.)
+    /// functions named `new` alone: see `docs/src/mutants.md`.)
     const fn checked(red_below_mm: u32, yellow_below_mm: u32) -> Result<Self, ThresholdError> {
         if red_below_mm == 0 {
             return Err(ThresholdError::RedIsZero);

@@ -9,12 +9,12 @@
 //! Test modules (`mod tests`) are not counted, nor the test files. The oracles
 //! (`mod spec`, `os/spec.rs`) are counted, apart from the kernels.
 //!
-//! Every branch not covered must be listed in `docs/coverage.md` with the reason, as a list
+//! Every branch not covered must be listed in `docs/src/coverage.md` with the reason, as a list
 //! item ``- `FILE: FUNCTION: `CONDITION` never true`: why``; a branch not listed fails the
 //! command, and so does a listed one that is covered now (the list stays exact). The
 //! oracles' branches are reported, not judged: which of their sides the random inputs of
 //! the OS harnesses reach differs between runs (bolero draws new inputs each time).
-//! `--write` rewrites the generated part of `docs/coverage.md` (between its markers) with
+//! `--write` rewrites the generated part of `docs/src/coverage.md` (between its markers) with
 //! the per-file table.
 //!
 //! MC/DC is not measured: the nightly's rustc no longer has `-Z coverage-options=mcdc`
@@ -28,7 +28,7 @@ use std::collections::{BTreeMap, BTreeSet};
 use std::fmt::Write as _;
 
 /// The committed report with the reasons for uncovered branches.
-const REPORT: &str = "docs/coverage.md";
+const REPORT: &str = "docs/src/coverage.md";
 const BEGIN: &str = "<!-- coverage:begin (cargo xtask coverage --write) -->";
 const END: &str = "<!-- coverage:end -->";
 
@@ -43,7 +43,7 @@ const SKIPPED_TESTS: &[&str] = mutation::SKIPPED_TESTS;
 /// Options of `cargo xtask coverage`.
 #[derive(clap::Args)]
 pub struct Options {
-    /// Update docs/coverage.md's table from this run
+    /// Update docs/src/coverage.md's table from this run
     #[arg(long)]
     write: bool,
 }

@@ -12,16 +12,16 @@
 //!   on one large log;
 //! - `cargo xtask callgrind`: instructions per call of the codec and scheduler probes;
 //! - `cargo xtask coverage [--write]`: branch coverage of the core, every branch not taken
-//!   both ways explained in `docs/coverage.md`;
+//!   both ways explained in `docs/src/coverage.md`;
 //! - `cargo xtask mutants`: kernel mutants the OSEK conformance suite must catch;
 //! - `cargo xtask mutation [--shard K/N | --ci] [--file PATH]..`: cargo-mutants over the
-//!   verified kernels, every survivor killed or listed as equivalent in `docs/mutants.md`;
+//!   verified kernels, every survivor killed or listed as equivalent in `docs/src/mutants.md`;
 //! - `cargo xtask qemu [--scenario FILE].. [--compare] [--live] [--events] [--profile]
 //!   [--flash] [--serial tcp:PORT]`:
 //!   the ECU's Cortex-M4 image on QEMU's mps2-an386, the emulator-in-the-loop tests against
 //!   the host simulation (`tests/`), and python-can against it live;
 //! - `cargo xtask view`: `cw-can view` in headless Chromium on the ECU's Figure 7 log,
-//!   checked against the trace; the screenshots of the paper's Figure 8 in `docs/view/`;
+//!   checked against the trace; the screenshots of the paper's Figure 8 in `docs/src/view/`;
 //! - `cargo xtask qemu-runner IMAGE [ARGS]..`: cargo's runner for the board's target
 //!   (`cargo run` on an image): QEMU with `ARGS` as the image's command line, its defmt
 //!   log decoded as it comes.
@@ -83,19 +83,19 @@ enum Command {
     /// Count instructions per call of each probe in core/examples/callgrind_probe.rs
     Callgrind(callgrind::Options),
     /// Branch coverage of core/ (cargo-llvm-cov on the pinned nightly); fails on a branch
-    /// not taken both ways that docs/coverage.md does not explain, or one it lists that is
+    /// not taken both ways that docs/src/coverage.md does not explain, or one it lists that is
     /// covered now
     Coverage(coverage::Options),
     /// Plant each kernel mutant in a copy of the workspace and require the OSEK
     /// conformance sequences named for it to fail
     Mutants,
     /// cargo-mutants over the verified kernels; fails on a survivor not listed as
-    /// equivalent in docs/mutants.md; prints each file's score
+    /// equivalent in docs/src/mutants.md; prints each file's score
     Mutation(mutation::Options),
     /// Build the ECU's Cortex-M4 image and run it on QEMU's mps2-an386
     Qemu(qemu::Options),
     /// Check `cw-can view` in headless Chromium on the ECU's Figure 7 log, and write the
-    /// four screenshots of the paper's Figure 8 to docs/view/
+    /// four screenshots of the paper's Figure 8 to docs/src/view/
     View,
     /// Cargo's runner for thumbv7em-none-eabihf: IMAGE on QEMU with ARGS on its
     /// semihosting command line, its defmt log decoded as it comes

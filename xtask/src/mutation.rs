@@ -2,7 +2,7 @@
 //! small change cargo-mutants makes to the source (an operator swapped, a condition
 //! negated, a function body replaced by a constant); cw-core's unit tests and OSEK
 //! conformance suite must fail on it ("caught"). A mutant that builds and passes every
-//! test ("missed") must be listed in `docs/mutants.md` as equivalent (no input can tell it
+//! test ("missed") must be listed in `docs/src/mutants.md` as equivalent (no input can tell it
 //! from the original), with the reason; any other missed mutant fails the command.
 //!
 //! - `cargo xtask mutation`: every mutant of every kernel file (about 1,200; hours on two
@@ -88,7 +88,7 @@ const BOLERO_ITERATIONS: &str = "1000";
 pub const CI_SHARDS: u32 = 100;
 
 /// The committed list of equivalent mutants.
-const EQUIVALENTS: &str = "docs/mutants.md";
+const EQUIVALENTS: &str = "docs/src/mutants.md";
 
 /// Which mutants to run.
 #[derive(clap::Args)]
@@ -150,7 +150,7 @@ fn key(line: &str) -> Option<String> {
     Some(format!("{file}: {what}"))
 }
 
-/// The equivalent mutants listed in `docs/mutants.md`: each list item that starts with a
+/// The equivalent mutants listed in `docs/src/mutants.md`: each list item that starts with a
 /// key in backticks (``- `core/src/x.rs: replace ... in f`: why``).
 fn equivalents(text: &str) -> Vec<String> {
     text.lines()

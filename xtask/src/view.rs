@@ -4,13 +4,13 @@
 //! headless Chromium over the DevTools protocol and checks the scene, the LEDs and the
 //! readout at 0.5, 1.0, 1.5 and 2.0 m against the trace, the fault and "no signal"
 //! pictures, bad lines, ten clients (five cut mid-stream) and the server's memory over the
-//! long replay. The four screenshots (the paper's Figure 8 a-d) go to `docs/view/`.
+//! long replay. The four screenshots (the paper's Figure 8 a-d) go to `docs/src/view/`.
 
 use crate::ci::ecu_run;
 use crate::process::{root, target_dir, Cmd};
 use crate::Result;
 
-/// Runs the check; the screenshots are written to `docs/view/`.
+/// Runs the check; the screenshots are written to `docs/src/view/`.
 ///
 /// # Errors
 /// A build, the simulation or a check fails.
@@ -43,7 +43,7 @@ pub fn run() -> Result {
         .run()?;
     let cw_can = target_dir().join("debug").join("cw-can");
     let dbc = root().join("firmware").join("ecu.dbc");
-    let shots = root().join("docs").join("view");
+    let shots = root().join("docs").join("src").join("view");
     crate::setup::run_python_tool(
         "view_check.py",
         &[&cw_can, &dbc, &log, &trace, &long, &shots],

@@ -109,7 +109,7 @@ impl<const TX: usize, const RX: usize> CanIfConfig<TX, RX> {
     }
 
     /// [`Self::new`]'s checks and lookup table. (A function of its own because
-    /// cargo-mutants leaves functions named `new` alone: see `docs/mutants.md`.)
+    /// cargo-mutants leaves functions named `new` alone: see `docs/src/mutants.md`.)
     const fn checked(
         tx: [TxPduConfig; TX],
         rx: [RxPduConfig; RX],

@@ -242,7 +242,7 @@ impl<const N: usize, const TX: usize, const RX: usize, const S: usize> ComConfig
     }
 
     /// [`Self::new`]'s checks and derived tables. (A function of its own because
-    /// cargo-mutants leaves functions named `new` alone: see `docs/mutants.md`.)
+    /// cargo-mutants leaves functions named `new` alone: see `docs/src/mutants.md`.)
     const fn checked(
         main_period_ms: u32,
         tx: [TxIpduConfig; TX],
@@ -660,7 +660,7 @@ where
     }
 
     /// [`Self::new`]'s work. (A function of its own because cargo-mutants leaves functions
-    /// named `new` alone: see `docs/mutants.md`.)
+    /// named `new` alone: see `docs/src/mutants.md`.)
     fn init(cfg: C) -> Self {
         let mut com = Self {
             cfg,

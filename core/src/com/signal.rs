@@ -134,7 +134,7 @@ impl<const N: usize> SignalLayout<N> {
     }
 
     /// [`Self::new`]'s checks and placement. (A function of its own because cargo-mutants
-    /// leaves functions named `new` alone: see `docs/mutants.md`.)
+    /// leaves functions named `new` alone: see `docs/src/mutants.md`.)
     const fn checked(
         start_bit: u16,
         length_bits: u8,
