@@ -1,5 +1,8 @@
 //! Boards of the collision-warning ECU: the only home of hardware access.
 //!
+//! The book: [the Cortex-M4 image](../../book/cortex-m4.html) (the Cortex-M port and the mps2
+//! board) and [the ECU](../../book/ecu.html) (the host board).
+//!
 //! The firmware (`firmware/`) composes the hardware-free services of `cw-core` with one
 //! board from this crate. Whatever the board, it provides the same things:
 //!

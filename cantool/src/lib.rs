@@ -1,6 +1,8 @@
 //! `cw-can`, the engineer's PC on the bus (paper §4.4): read CAN logs and decode them
 //! with a DBC, encode signal values into a frame, as cantools and python-can do.
 //!
+//! The book: [CAN tools](../../book/cw-can.html) and [the view of the bus](../../book/view.html).
+//!
 //! - [`frame`]: a frame as logs hold it (classic, FD, remote, error; up to 64 bytes) and
 //!   can-utils' compact text form;
 //! - [`log`]: candump logs, line by line, a bad line named and skipped;

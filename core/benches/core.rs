@@ -2,7 +2,7 @@
 //! paper's 32-bit little-endian distance with a compile-time layout, and a Motorola signal
 //! with a run-time layout), `ActivateTask` with and without dispatch, and a counter tick
 //! with nothing due and with an alarm due. Instruction counts per call come from
-//! `cargo xtask callgrind` (see the README).
+//! `cargo xtask callgrind` (see the book: `docs/src/performance.md`).
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use cw_core::com::signal::{ByteOrder, SignalLayout, Signedness};

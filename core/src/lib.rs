@@ -1,5 +1,9 @@
 //! Hardware-free, verified core of the collision-warning ECU.
 //!
+//! The book's chapters on this crate: [the core](../../book/core.html), [the OS](../../book/os.html),
+//! [the communication stack](../../book/com-stack.html) and [verification](../../book/verification.html)
+//! (the links work once `cargo xtask book` has built the book into `target/book`).
+//!
 //! This crate holds the parts of the ECU described in Kim et al., *Design and
 //! Implementation Procedure for an Advanced Driver Assistance System Based on an Open
 //! Source AUTOSAR* (the collision-warning system on an NXP MPC5748G), that do not touch

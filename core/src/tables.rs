@@ -5,7 +5,7 @@
 //!
 //! - `&'static T`, a reference chosen at run time: one compiled module serves any
 //!   configuration (the unit tests, the model checker and the fuzz targets use this);
-//! - a zero-sized type declared with [`static_tables!`] that names one `static`: every
+//! - a zero-sized type declared with [`static_tables!`](crate::static_tables!) that names one `static`: every
 //!   lookup of a constant id then folds to the configured value at build time, so a layer
 //!   costs only the work its configuration asks for. This is AUTOSAR's pre-compile
 //!   configuration variant; the ECU uses it.

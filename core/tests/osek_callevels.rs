@@ -312,29 +312,34 @@ fn cl_startos_outside_the_os_only() {
     assert_eq!(os.start_os(OSDEFAULTAPPMODE), Err(OsError::CallLevel));
 }
 
-/// The README's table of services says the same as this file's.
+/// The OS chapter's table of services (`docs/src/os.md`) says the same as this file's.
 #[test]
 #[cfg_attr(
     miri,
     ignore = "text parsing: nothing for Miri; the test stage runs it natively"
 )]
-fn cl_readme_table_matches() {
-    let readme = include_str!("../../README.md");
+fn cl_os_chapter_table_matches() {
+    let chapter = include_str!("../../docs/src/os.md");
     for &(service, osek, autosar) in &TABLE {
         let row_start = format!("| `{}` |", service.name());
-        let Some(line) = readme.lines().find(|l| l.starts_with(&row_start)) else {
-            panic!("README.md has no row for {}", service.name());
+        let Some(line) = chapter.lines().find(|l| l.starts_with(&row_start)) else {
+            panic!("docs/src/os.md has no row for {}", service.name());
         };
         let cells: Vec<&str> = line.split('|').map(str::trim).collect();
         // | service | OSEK | AUTOSAR | status codes | tests |
         let (Some(o), Some(a)) = (cells.get(2), cells.get(3)) else {
-            panic!("README.md row for {} is short: {line}", service.name());
+            panic!("docs/src/os.md row for {} is short: {line}", service.name());
         };
-        assert_eq!(*o, osek, "README OSEK call levels of {}", service.name());
+        assert_eq!(
+            *o,
+            osek,
+            "docs/src/os.md: OSEK call levels of {}",
+            service.name()
+        );
         assert_eq!(
             *a,
             autosar,
-            "README AUTOSAR call levels of {}",
+            "docs/src/os.md: AUTOSAR call levels of {}",
             service.name()
         );
     }

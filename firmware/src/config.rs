@@ -35,7 +35,7 @@
 //! priority: the paper's task set needs no more), with extended status (every misuse is
 //! refused and reported to `ErrorHook`, which the ECU counts; the call-level check is one
 //! test of a cached mask, so the fast paths cost the same as in standard status: see the
-//! README's instruction counts), and AUTOSAR's behaviour where OSEK and AUTOSAR differ (the
+//! book's instruction counts, `docs/src/performance.md`), and AUTOSAR's behaviour where OSEK and AUTOSAR differ (the
 //! paper's stack is an AUTOSAR one).
 
 use cw_core::can::{CanId, Hrh, Hth};

@@ -4,7 +4,7 @@
 //! Execution model: the kernel decides who runs; the port (`cw_bsp::port::Port`) carries
 //! it out. On a microcontroller the port switches stacks (PendSV) and interrupts arrive
 //! at any instruction; in the host simulation a preempting task runs as a nested call
-//! ([`Ecu::dispatch`]) and interrupts come between jobs. The task bodies and ISRs below
+//! (`Ecu::dispatch`) and interrupts come between jobs. The task bodies and ISRs below
 //! are the same for both.
 //!
 //! Because tasks and ISRs preempt each other, the ECU's state is split by who uses it:
@@ -72,7 +72,7 @@ impl Hooks<Kernel> for EcuHooks {
 }
 
 /// The spans of the ECU's own paths that a port can measure (`Port::span`): the
-/// instruction counts of the README's Cortex-M4 figures.
+/// instruction counts of the Cortex-M4 figures in the book (`docs/src/performance.md`).
 pub mod span {
     /// From the sonar task's `ActivateTask(OsComTask)` call to `OsComTask`'s first line
     /// (the kernel service, the port's task switch, the job's entry).

@@ -2,6 +2,9 @@
 //! SWCs ([`swc`]), its RTE ([`rte`]), the I/O hardware abstraction ([`iohwab`]) and the
 //! ECU that runs them on a [`board::Board`] ([`ecu`]). Everything here is `no_std` and builds for `thumbv7em-none-eabihf`; the host
 //! simulation (feature `host`) adds the simulated board and the command-line tool.
+//!
+//! The book: [the ECU](../../book/ecu.html), [its scenarios](../../book/scenarios.html) and
+//! [the Cortex-M4 image](../../book/cortex-m4.html).
 #![cfg_attr(not(any(test, feature = "host")), no_std)]
 #![forbid(unsafe_code)]
 

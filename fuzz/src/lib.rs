@@ -4,6 +4,8 @@
 //! short smoke time. The properties checked are the core's own contracts
 //! (`cw_core::com::signal::spec::codec_contract`, `cw_core::os::spec::call_and_check`).
 //!
+//! The book: [verification](../../book/verification.html) (what each target covers).
+//!
 //! Corpora live under `src/__fuzz__/<target>/corpus` and are committed.
 
 use cw_core::os::spec::Service;

@@ -1,6 +1,9 @@
 //! Model checking of the OSEK kernel in `cw-core` (this module), and of the ECU's
 //! communication modes ([`modes`]).
 //!
+//! The book: [verification](../../book/verification.html) (the models and what they cover) and
+//! [Kani](../../book/kani.html) (the exhaustive step sequences).
+//!
 //! [`OsModel`] is a stateright model whose state *is* the real kernel
 //! ([`cw_core::os::Os`]) together with a [`VirtualInterrupts`] controller, and whose
 //! transitions call the real services: nothing about the scheduler is re-implemented here.

@@ -1,6 +1,8 @@
 //! Emulator in the loop: the ECU's Cortex-M4 image on QEMU's mps2-an386 against the host
 //! simulation, on the same scenario file.
 //!
+//! The book: [the Cortex-M4 image](../../book/cortex-m4.html#the-same-ecu-emulator-in-the-loop).
+//!
 //! - [`run_image`] runs the image (`-icount shift=0`: one instruction per ns, so its
 //!   milliseconds are its own) with the scenario on its semihosting command line; UART0
 //!   (the SLCAN CAN controller) goes to a file, the image's report (its `defmt` log,

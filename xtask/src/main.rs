@@ -1,4 +1,5 @@
-//! Task runner of the workspace (`cargo xtask ...`, alias in `.cargo/config.toml`).
+//! Task runner of the workspace (`cargo xtask ...`, alias in `.cargo/config.toml`). The book
+//! describes each check: [the check command](../../book/check.html).
 //!
 //! - `cargo xtask ci [--only S,..] [--skip S,..] [--keep-going]`: every check, in order,
 //!   from installing the tools (`setup`) to the instruction counts (`bench`);
@@ -22,6 +23,12 @@
 //!   the host simulation (`tests/`), and python-can against it live;
 //! - `cargo xtask view`: `cw-can view` in headless Chromium on the ECU's Figure 7 log,
 //!   checked against the trace; the screenshots of the paper's Figure 8 in `docs/src/view/`;
+//! - `cargo xtask docs [--file PATH].. [--no-examples]`: the book (mdBook) and the API docs
+//!   (`cargo doc`, warnings denied) built, every relative link of the README, the book and
+//!   the crate pages resolved, and every `console` example of the README and the book run
+//!   and compared with its output as shown;
+//! - `cargo xtask book [--open]`: the book built and its links checked (no examples), in
+//!   `target/book/`;
 //! - `cargo xtask qemu-runner IMAGE [ARGS]..`: cargo's runner for the board's target
 //!   (`cargo run` on an image): QEMU with `ARGS` as the image's command line, its defmt
 //!   log decoded as it comes.
@@ -35,6 +42,7 @@ mod coverage;
 mod dbc_differential;
 mod decode_speed;
 mod differential;
+mod docs;
 mod log_formats;
 mod mutants;
 mod mutation;
@@ -65,8 +73,8 @@ struct Cli {
 #[derive(Subcommand)]
 enum Command {
     /// Run the checks in order (stages: setup, fmt, clippy, test, cross, miri, model,
-    /// coverage, mutants, mutation, qemu, differential, interop, view, fuzz, bench); stop at the
-    /// first failing stage unless --keep-going; each stage prints its time budget
+    /// coverage, mutants, mutation, qemu, differential, interop, view, docs, fuzz, bench); stop
+    /// at the first failing stage unless --keep-going; each stage prints its time budget
     Ci(ci::Options),
     /// Install what the checks need (the check command's setup stage)
     Setup,
@@ -97,6 +105,12 @@ enum Command {
     /// Check `cw-can view` in headless Chromium on the ECU's Figure 7 log, and write the
     /// four screenshots of the paper's Figure 8 to docs/src/view/
     View,
+    /// Build the book and the API docs (warnings denied), check every relative link of the
+    /// README, the book and the crate pages, and run every `console` example of the README
+    /// and the book, comparing its output with the one shown (the check command's docs stage)
+    Docs(docs::Options),
+    /// Build the book (installing mdBook if missing) and check its links; print where it is
+    Book(docs::BookOptions),
     /// Cargo's runner for thumbv7em-none-eabihf: IMAGE on QEMU with ARGS on its
     /// semihosting command line, its defmt log decoded as it comes
     QemuRunner {
@@ -134,6 +148,8 @@ fn run(command: Command) -> Result {
         Command::Mutation(options) => mutation::run(&options),
         Command::Qemu(options) => qemu::run(&options),
         Command::View => view::run(),
+        Command::Docs(options) => docs::run(&options),
+        Command::Book(options) => docs::book(&options),
         Command::QemuRunner { image, args } => {
             qemu::runner(&std::iter::once(image).chain(args).collect::<Vec<_>>())
         }

@@ -3,9 +3,16 @@
 
 use crate::Result;
 use std::ffi::OsStr;
-use std::io::ErrorKind;
+use std::io::{ErrorKind, Read, Write};
+use std::os::unix::process::CommandExt;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
+use std::sync::{mpsc, Arc, Mutex, PoisonError};
+use std::time::{Duration, Instant};
+
+/// How long [`Cmd::within`] waits, once the program has exited, for the processes it left
+/// behind to close its output before it kills them.
+const LINGER: Duration = Duration::from_secs(10);
 
 /// Root of the workspace (the parent of this crate's directory).
 pub fn root() -> PathBuf {
@@ -31,6 +38,20 @@ pub struct Captured {
     pub stdout: String,
     /// Its standard error, lossily decoded.
     pub stderr: String,
+}
+
+/// Output of a command run by [`Cmd::within`].
+pub struct Timed {
+    /// Its exit code; `None` when a signal ended it (also when it overran its time limit).
+    pub code: Option<i32>,
+    /// Its standard output, lossily decoded.
+    pub stdout: String,
+    /// Its standard error, lossily decoded.
+    pub stderr: String,
+    /// It overran its time limit, and its process group was killed.
+    pub timed_out: bool,
+    /// It exited, but processes it started kept its output open; they were killed.
+    pub lingered: bool,
 }
 
 /// A command to run, with the shell-like line shown to the user.
@@ -90,6 +111,13 @@ impl Cmd {
         self
     }
 
+    /// Shows the command as `shown` instead (when the caller has a clearer form of it, such
+    /// as the line a shell script is run for).
+    pub fn show_as(mut self, shown: impl Into<String>) -> Self {
+        self.shown = shown.into();
+        self
+    }
+
     fn spawn_error(&self, e: &std::io::Error) -> String {
         if e.kind() == ErrorKind::NotFound {
             format!(
@@ -132,6 +160,85 @@ impl Cmd {
         })
     }
 
+    /// Prints the command without ending the line (the caller adds the outcome), runs it in
+    /// a process group of its own capturing its output, and kills the group when it runs
+    /// longer than `limit`, or when the program has exited but processes it started keep its
+    /// output open for [`LINGER`] more. An exit status other than 0 is not an error here,
+    /// failing to start is. (Being in a group of its own, the command does not get the
+    /// terminal's Ctrl-C: stopping the runner leaves it to finish on its own.)
+    pub fn within(mut self, limit: Duration) -> Result<Timed> {
+        print!("$ {}", self.shown);
+        // The line is finished by the caller; show it while the command runs.
+        let _ = std::io::stdout().flush();
+        let start = Instant::now();
+        let mut child = self
+            .inner
+            .process_group(0)
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .map_err(|e| self.spawn_error(&e))?;
+        let (done_tx, done) = mpsc::channel();
+        let mut pipes = Vec::new();
+        if let Some(out) = child.stdout.take() {
+            pipes.push(drain(out, done_tx.clone()));
+        }
+        if let Some(err) = child.stderr.take() {
+            pipes.push(drain(err, done_tx));
+        }
+        let group = child.id();
+        let kill_group = || {
+            // The whole group: the shell and everything it started.
+            let _ = Command::new("kill")
+                .args(["-KILL", "--", &format!("-{group}")])
+                .stdin(Stdio::null())
+                .stdout(Stdio::null())
+                .stderr(Stdio::null())
+                .status();
+        };
+        let mut timed_out = false;
+        let status = loop {
+            if let Some(status) = child
+                .try_wait()
+                .map_err(|e| format!("waiting for `{}`: {e}", self.shown))?
+            {
+                break status;
+            }
+            if start.elapsed() >= limit {
+                timed_out = true;
+                kill_group();
+                break child
+                    .wait()
+                    .map_err(|e| format!("waiting for `{}`: {e}", self.shown))?;
+            }
+            std::thread::sleep(Duration::from_millis(20));
+        };
+        // Both pipes at their end, unless something the program left running holds them.
+        let mut lingered = false;
+        let mut open = pipes.len();
+        while open > 0 {
+            if done.recv_timeout(LINGER).is_ok() {
+                open -= 1;
+            } else if lingered || timed_out {
+                break;
+            } else {
+                lingered = true;
+                kill_group();
+            }
+        }
+        let text = |buffer: &Arc<Mutex<Vec<u8>>>| {
+            let bytes = buffer.lock().unwrap_or_else(PoisonError::into_inner);
+            String::from_utf8_lossy(&bytes).into_owned()
+        };
+        Ok(Timed {
+            code: if timed_out { None } else { status.code() },
+            stdout: pipes.first().map(text).unwrap_or_default(),
+            stderr: pipes.get(1).map(text).unwrap_or_default(),
+            timed_out,
+            lingered,
+        })
+    }
+
     /// Like [`Cmd::capture`], but also fails unless the command exits 0, showing its stderr.
     pub fn read(self) -> Result<String> {
         let shown = self.shown.clone();
@@ -142,6 +249,25 @@ impl Cmd {
             Err(format!("`{shown}` failed:\n{}{}", out.stdout, out.stderr))
         }
     }
+}
+
+/// Reads `pipe` to its end on a thread of its own, into the returned buffer (what was read
+/// so far stays there if the end never comes); says `()` on `done` at the end.
+fn drain(mut pipe: impl Read + Send + 'static, done: mpsc::Sender<()>) -> Arc<Mutex<Vec<u8>>> {
+    let buffer = Arc::new(Mutex::new(Vec::new()));
+    let filled = Arc::clone(&buffer);
+    std::thread::spawn(move || {
+        let mut chunk = [0u8; 8192];
+        // A read error ends the output like its end does.
+        while let Ok(n @ 1..) = pipe.read(&mut chunk) {
+            filled
+                .lock()
+                .unwrap_or_else(PoisonError::into_inner)
+                .extend_from_slice(&chunk[..n]);
+        }
+        let _ = done.send(());
+    });
+    buffer
 }
 
 /// Quotes a word for display when a shell would need it.

@@ -40,6 +40,14 @@ pub const CARGO_LLVM_COV_VERSION: &str = "0.9.1";
 /// The defmt-print version that decodes the image's log (defmt 1.x, wire format 4).
 pub const DEFMT_PRINT_VERSION: &str = "1.2.0";
 
+/// The mdBook version that builds the book (`cargo xtask docs`, `cargo xtask book`).
+pub const MDBOOK_VERSION: &str = "0.5.4";
+
+/// mdBook's features: only the search index. The default features also have `serve` and
+/// `watch` (`mdbook serve`), which pull in an HTTP server and a file watcher that building
+/// and checking the book never use.
+const MDBOOK_FEATURES: &[&str] = &["--no-default-features", "--features", "search"];
+
 /// Python virtual environment for the cantools / python-can tools (gitignored).
 pub fn venv_dir() -> PathBuf {
     root().join(".venv")
@@ -79,6 +87,7 @@ pub fn run() -> Result {
     cargo_mutants()?;
     cargo_llvm_cov()?;
     defmt_print()?;
+    mdbook()?;
     valgrind()?;
     qemu()?;
     debian_tool("llvm-symbolizer", &["--version"], "llvm")?;
@@ -184,6 +193,7 @@ fn cargo_bolero() -> Result {
         &["bolero", "--version"],
         "cargo-bolero",
         CARGO_BOLERO_VERSION,
+        &[],
     )
 }
 
@@ -194,6 +204,7 @@ fn cargo_mutants() -> Result {
         &["mutants", "--version"],
         "cargo-mutants",
         CARGO_MUTANTS_VERSION,
+        &[],
     )
 }
 
@@ -204,6 +215,7 @@ fn cargo_llvm_cov() -> Result {
         &["llvm-cov", "--version"],
         "cargo-llvm-cov",
         CARGO_LLVM_COV_VERSION,
+        &[],
     )
 }
 
@@ -214,20 +226,62 @@ fn defmt_print() -> Result {
         &["--version"],
         "defmt-print",
         DEFMT_PRINT_VERSION,
+        &[],
     )
 }
 
-/// Checks that `program probe..` names crate `krate` at `version` on its first line; if
-/// not, installs that version with `cargo install --locked` and checks again.
-fn cargo_tool(program: &str, probe: &[&str], krate: &str, version: &str) -> Result {
-    let wanted = format!("{krate} {version}");
-    let first_line = |out: &str| out.lines().next().unwrap_or("").trim().to_string();
-    let found = match Cmd::new(program).args(probe).capture() {
-        Ok(out) if out.success => Some(first_line(&out.stdout)),
+/// The book's builder (`cargo xtask docs`, `cargo xtask book`), installed if missing.
+pub fn mdbook() -> Result {
+    cargo_tool(
+        "mdbook",
+        &["--version"],
+        "mdbook",
+        MDBOOK_VERSION,
+        MDBOOK_FEATURES,
+    )
+}
+
+/// Fails unless mdBook is installed at [`MDBOOK_VERSION`], naming `cargo xtask setup`
+/// (which installs it); installs nothing.
+pub fn require_mdbook() -> Result {
+    match tool_line("mdbook", &["--version"]) {
+        Some(line) if says_version(&line, "mdbook", MDBOOK_VERSION) => Ok(()),
+        found => Err(format!(
+            "mdBook {MDBOOK_VERSION} is needed to build the book, found {}; \
+             `cargo xtask setup` installs it",
+            found.map_or_else(|| "none".into(), |f| format!("`{f}`"))
+        )),
+    }
+}
+
+/// The first line `program probe..` prints, when it runs and exits 0.
+fn tool_line(program: &str, probe: &[&str]) -> Option<String> {
+    match Cmd::new(program).args(probe).capture() {
+        Ok(out) if out.success => Some(out.stdout.lines().next().unwrap_or("").trim().into()),
         _ => None,
-    };
-    if found.as_deref() == Some(wanted.as_str()) {
-        println!("ok: {wanted}");
+    }
+}
+
+/// Whether a tool's version line names `krate` at `version`: `cargo-bolero 0.13.5`, or with
+/// a `v` as mdBook prints it, `mdbook v0.5.4`.
+fn says_version(line: &str, krate: &str, version: &str) -> bool {
+    line == format!("{krate} {version}") || line == format!("{krate} v{version}")
+}
+
+/// Checks that `program probe..` names crate `krate` at `version` on its first line (see
+/// [`says_version`]); if not, installs that version with `cargo install --locked`, followed
+/// by `install_args` (features), and checks again.
+fn cargo_tool(
+    program: &str,
+    probe: &[&str],
+    krate: &str,
+    version: &str,
+    install_args: &[&str],
+) -> Result {
+    let wanted = format!("{krate} {version}");
+    let found = tool_line(program, probe);
+    if let Some(line) = found.as_deref().filter(|l| says_version(l, krate, version)) {
+        println!("ok: {line}");
         return Ok(());
     }
     println!(
@@ -236,9 +290,12 @@ fn cargo_tool(program: &str, probe: &[&str], krate: &str, version: &str) -> Resu
     );
     Cmd::new("cargo")
         .args(["install", "--locked", krate, "--version", version])
+        .args(install_args)
         .run()?;
-    let found = first_line(&Cmd::new(program).args(probe).read()?);
-    if found == wanted {
+    let out = Cmd::new(program).args(probe).read()?;
+    let found = out.lines().next().unwrap_or("").trim();
+    if says_version(found, krate, version) {
+        println!("ok: {found}");
         Ok(())
     } else {
         Err(format!(
@@ -340,4 +397,22 @@ fn python_venv() -> Result {
         .args(["-c", "import cantools, can, serial, websocket; print('cantools', cantools.__version__, '/ python-can', can.__version__, '/ pyserial', serial.__version__, '/ websocket-client', websocket.__version__)"])
         .run()?;
     std::fs::write(&stamp, requirements).map_err(|e| format!("writing {}: {e}", stamp.display()))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_version_line_names_the_crate_and_version_with_or_without_a_v() {
+        assert!(says_version(
+            "cargo-bolero 0.13.5",
+            "cargo-bolero",
+            "0.13.5"
+        ));
+        assert!(says_version("mdbook v0.5.4", "mdbook", "0.5.4"));
+        assert!(!says_version("mdbook v0.5.3", "mdbook", "0.5.4"));
+        assert!(!says_version("mdbook v0.5.40", "mdbook", "0.5.4"));
+        assert!(!says_version("mdbook", "mdbook", "0.5.4"));
+    }
 }

@@ -35,7 +35,7 @@
 //! handler: it cannot run OSEK's extended tasks (`WaitEvent` blocks with the task's
 //! context kept), and the verified kernel's decision would be duplicated by a second
 //! scheduler that must be shown to agree with it. Here the kernel is the only scheduler,
-//! and the cost is a software context switch (its instructions are counted in the README).
+//! and the cost is a software context switch (its instructions are counted in the book: `docs/src/performance.md`).
 //!
 //! NVIC priorities (3 priority bits are assumed, the fewest a Cortex-M4 implements): an
 //! OSEK category-2 ISR of priority `p` gets `0xE0 - 0x20 * p`; PendSV gets `0xE0`, the

@@ -8,7 +8,7 @@
 //!
 //! - the host port ([`crate::host::HostPort`]): tasks are nested calls on one stack, and
 //!   interrupts are taken between them;
-//! - the Cortex-M port ([`crate::cortex_m`], on `thumbv7em` targets): PendSV switches
+//! - the Cortex-M port (`crate::cortex_m`, built for `thumbv7em` targets only): PendSV switches
 //!   stacks, SysTick and the peripherals' interrupts arrive at any instruction.
 //!
 //! State that several tasks and ISRs share lives in a [`Resource`]: it is reachable only

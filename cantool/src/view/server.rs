@@ -6,7 +6,7 @@
 //! | request | answer |
 //! |---|---|
 //! | `GET /`, `/view.js`, `/view.css` | the page |
-//! | `GET /state` | one [`Snapshot`](super::feed::Snapshot) as JSON |
+//! | `GET /state` | one [`Snapshot`] as JSON |
 //! | `GET /events` | a snapshot every [`EVENT_PERIOD`] as `text/event-stream` |
 //! | `POST /control` | a [`Control`] as JSON: play, pause, speed, seek (a replay) |
 //! | `POST /send` | `{"red_below_mm": R, "yellow_below_mm": Y}`: a `ThresholdConfig` frame on the bus |

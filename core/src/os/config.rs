@@ -526,7 +526,7 @@ pub enum ConfigError {
         alarm: u8,
     },
     /// An alarm's action names a missing task, sets an event of a basic task, or uses a
-    /// callback id of [`MAX_CALLBACKS`] or more.
+    /// callback id of `MAX_CALLBACKS` (32) or more.
     AlarmAction {
         /// Alarm index.
         alarm: u8,

@@ -1672,7 +1672,7 @@ fn every_step_stands_for_the_services_it_names() {
 
 /// Random sequences of up to 64 steps keep the invariants and transition rules (a bolero
 /// test and fuzz target). Not a Kani proof: one symbolic step of any kind does not finish
-/// under Kani in 300 s (README, "Kani"). Every sequence of up to 5 of these steps (each of
+/// under Kani in 300 s (the book: `docs/src/kani.md`). Every sequence of up to 5 of these steps (each of
 /// the 4,338 services they stand for) on the small configuration is explored exhaustively
 /// by `cw-proofs steps` instead, and the model checker's configurations to the end.
 #[test]
@@ -1780,7 +1780,7 @@ fn first_step_keeps_the_invariants(s: Step) {
 // Kani proofs of one step from the state after `StartOS`, each for one kind of step with
 // every argument symbolic (ids beyond the configuration included, so refusals are proved
 // too). These are the steps that start the system: the kernel dispatches a task, enters or
-// leaves an ISR, and advances a counter. Bounds and verification times: README, "Kani".
+// leaves an ISR, and advances a counter. Bounds and verification times: the book, `docs/src/kani.md`.
 
 /// `ActivateTask` of any task id: a valid one is dispatched, an invalid one refused with
 /// `E_OS_ID` and nothing changed.
@@ -1884,7 +1884,7 @@ two_step_proof! {
 // One harness per group of step kinds: any first ISR, then any step of the group with any
 // arguments. Bolero tests and fuzz inputs; not Kani proofs: one kind of second step after
 // one concrete first step verifies (the two proofs above), but any second step after any
-// first one does not finish under Kani in 300 s (README, "Kani"), and a marked harness that
+// first one does not finish under Kani in 300 s (the book: `docs/src/kani.md`), and a marked harness that
 // does not finish proves nothing.
 
 /// Task management: ActivateTask, TerminateTask, ChainTask, Schedule, a body's return.

@@ -303,7 +303,7 @@ pub mod spec {
     }
 
     /// The streaming [`Decoder`], fed `bytes` one at a time, gives exactly the verdicts
-    /// of [`reference`], at the same bytes, and the same stray and pending counts.
+    /// of [`reference()`], at the same bytes, and the same stray and pending counts.
     pub fn matches_reference(bytes: &[u8]) -> bool {
         let mut decoder = Decoder::new();
         let mut agree = true;

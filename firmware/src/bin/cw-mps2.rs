@@ -4,7 +4,7 @@
 //! what only measures or replays: no scenario reader, no task trace or spans, no
 //! end-of-run report. It runs until the OS shuts down.
 //!
-//! Build and run live: `cargo xtask qemu --flash` (README, "The production image").
+//! Build and run live: `cargo xtask qemu --flash` (the book: `docs/src/cortex-m4.md`, "The production image").
 #![no_std]
 #![no_main]
 

@@ -1,6 +1,6 @@
 //! The collision-warning ECU as a bare-metal image for QEMU's mps2-an386 (Cortex-M4).
 //!
-//! Build and run: `cargo xtask qemu` (README, "The ECU on an emulated Cortex-M4").
+//! Build and run: `cargo xtask qemu` (the book: `docs/src/cortex-m4.md`).
 #![no_std]
 #![no_main]
 

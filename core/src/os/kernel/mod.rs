@@ -751,7 +751,7 @@ where
         self.sync_threshold();
         self.sync_task_context();
         // Not in Kani builds: there the proofs check every invariant after every step, and
-        // this second check inside each dispatch triples the cost of a proof (README, "Kani").
+        // this second check inside each dispatch triples the cost of a proof (the book: `docs/src/kani.md`).
         #[cfg(not(kani))]
         debug_assert!(super::spec::kernel_invariants(self));
         self.pre_task_hook();
