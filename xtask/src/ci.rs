@@ -74,7 +74,7 @@ const BUDGET_S: &[(&str, u32)] = &[
     ("interop", 20),
     ("view", 15),
     // Not measured yet: set from a clean-clone run.
-    ("docs", 240),
+    ("docs", 180),
     ("fuzz", 290),
     ("bench", 85),
 ];
