@@ -2377,6 +2377,125 @@ mod tests {
         assert_eq!(parse_status("-1"), None);
     }
 
+    /// Any text at all, as a Markdown page, an HTML page or a transcript: every reader
+    /// returns (links, anchors, ids, examples or errors naming lines) and none panics,
+    /// whatever the bytes (multi-byte characters next to the markup the readers look for,
+    /// unclosed fences, brackets and tags, lines of `$ ` and `? `).
+    #[test]
+    fn any_text_is_read_without_a_panic() {
+        bolero::check!()
+            .with_type::<String>()
+            .for_each(|text: &String| {
+                let _ = markdown_links(text);
+                let _ = heading_anchors(text);
+                let _ = html_links(text);
+                let _ = html_ids(text);
+                if let Err(errors) = transcripts(text) {
+                    assert!(!errors.is_empty(), "an error without a line");
+                }
+                let _ = prose(text);
+            });
+    }
+
+    /// The same over text made of the markup the readers act on, so that random input
+    /// reaches their deeper states (fences inside lists, links with titles and angle
+    /// brackets, code spans of any length, tags with attributes, headings of every form).
+    #[test]
+    fn markup_soup_is_read_without_a_panic() {
+        const PIECES: &[&str] = &[
+            "```",
+            "````",
+            "~~~",
+            "console",
+            "\n",
+            "    ",
+            "- ",
+            "> ",
+            "# ",
+            "## ",
+            "===",
+            "---",
+            "[",
+            "]",
+            "(",
+            ")",
+            "<",
+            ">",
+            "![",
+            "](",
+            "\"",
+            "'",
+            "`",
+            "``",
+            "\\",
+            "#",
+            "a.md",
+            "../x",
+            "é",
+            "中",
+            "🦀",
+            "$ ",
+            "? ",
+            "? 2",
+            "? failed",
+            " \\",
+            "...",
+            "[..]",
+            "<a href=\"",
+            "<img src='",
+            "id=\"",
+            "&amp;",
+            "&#x41;",
+            "<!--",
+            "-->",
+            "*",
+            "_",
+            "{#id}",
+            " ",
+            "x",
+        ];
+        bolero::check!()
+            .with_type::<Vec<u8>>()
+            .for_each(|picks: &Vec<u8>| {
+                let text: String = picks
+                    .iter()
+                    .map(|&p| PIECES[usize::from(p) % PIECES.len()])
+                    .collect();
+                let _ = markdown_links(&text);
+                let _ = heading_anchors(&text);
+                let _ = html_links(&text);
+                let _ = html_ids(&text);
+                let _ = transcripts(&text);
+                let _ = prose(&text);
+            });
+    }
+
+    /// A printed text matches itself shown as it is, when it holds no wildcard (no
+    /// `[..]`, no line that is `...`); `...` alone matches anything printed; and a line
+    /// shown with `[..]` in place of any run of its characters matches that line.
+    #[test]
+    fn wildcards_match_what_they_stand_for() {
+        bolero::check!()
+            .with_type::<(String, String, String)>()
+            .for_each(|(text, head, tail): &(String, String, String)| {
+                assert!(output_matches("...", text));
+                let literal =
+                    !text.contains("[..]") && !text.lines().any(|l| l.trim_end() == "...");
+                if literal {
+                    assert!(output_matches(text, text), "{text:?} does not match itself");
+                }
+                let (head, tail) = (head.replace('\n', " "), tail.replace('\n', " "));
+                let line = text.replace('\n', " ");
+                if !head.contains("[..]") && !tail.contains("[..]") {
+                    let pattern = format!("{head}[..]{tail}");
+                    assert!(
+                        line_matches(&pattern, &format!("{head}{line}{tail}")),
+                        "{pattern:?} does not match its own expansion"
+                    );
+                }
+            });
+    }
+
     #[test]
     fn output_matches_literally_ignoring_trailing_whitespace_and_lines() {
         assert!(output_matches("a\nb", "a  \nb\n\n\n"));
