@@ -73,7 +73,6 @@ const BUDGET_S: &[(&str, u32)] = &[
     ("differential", 8),
     ("interop", 20),
     ("view", 15),
-    // Not measured yet: set from a clean-clone run.
     ("docs", 180),
     ("fuzz", 320),
     ("bench", 85),

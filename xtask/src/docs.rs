@@ -2,7 +2,8 @@
 //! documentation is a front page (README.md) and a book (mdBook, `docs/`), and neither may
 //! drift from the code. In order, the stage
 //!
-//! 1. builds the book (`mdbook build docs`, into `[build] build-dir` of `docs/book.toml`);
+//! 1. builds the book (`mdbook build docs`, into `target/book`, beside the API docs in
+//!    `target/doc`, so that the crates' links into the book resolve);
 //! 2. builds the API docs with warnings denied (`cargo doc --workspace --no-deps
 //!    --keep-going`, `RUSTDOCFLAGS="-D warnings"`), so a broken intra-doc link fails (every
 //!    crate's at once); the steps after it run even when it fails;
@@ -36,9 +37,6 @@ use std::time::{Duration, Instant};
 
 /// The book's root (`book.toml`, and the chapters under `src/`), from the workspace root.
 const BOOK: &str = "docs";
-
-/// Where mdBook writes the book when `book.toml` does not say (relative to the book's root).
-const MDBOOK_DEFAULT_BUILD_DIR: &str = "book";
 
 /// Pages of the built book whose links are not checked, and why:
 /// - `print.html` repeats every chapter with its links rewritten to anchors of that one
@@ -142,12 +140,12 @@ pub fn book(options: &BookOptions) -> Result {
 fn build_book(open: bool) -> Result<PathBuf> {
     let dir = root().join(BOOK);
     let config = dir.join("book.toml");
-    let toml = std::fs::read_to_string(&config).map_err(|e| {
-        format!(
-            "reading {}: {e} (the book's configuration, beside its chapters in {BOOK}/src/)",
+    if !config.is_file() {
+        return Err(format!(
+            "{} not found: the book's configuration, beside its chapters in {BOOK}/src/",
             shown(&config)
-        )
-    })?;
+        ));
+    }
     // mdBook would write a SUMMARY.md of its own into the sources if there were none.
     let summary = dir.join("src").join("SUMMARY.md");
     if !summary.is_file() {
@@ -156,66 +154,22 @@ fn build_book(open: bool) -> Result<PathBuf> {
             shown(&summary)
         ));
     }
-    let build_dir = build_dir(&toml).map_err(|e| format!("{}: {e}", shown(&config)))?;
-    let out = normalize(&dir.join(build_dir.as_deref().unwrap_or(MDBOOK_DEFAULT_BUILD_DIR)));
-    let mut mdbook = Cmd::new("mdbook").arg("build");
+    // Given on the command line, so that the book lands beside the API docs wherever the
+    // target directory is (`book.toml`'s `build-dir` says the same for `mdbook serve`).
+    let out = target_dir().join("book");
+    let mut mdbook = Cmd::new("mdbook").arg("build").arg("--dest-dir").arg(&out);
     if open {
         mdbook = mdbook.arg("--open");
     }
     mdbook.arg(BOOK).run()?;
-    // With more than one renderer mdBook writes each into a directory of its own.
-    [out.clone(), out.join("html")]
-        .into_iter()
-        .find(|d| d.join("index.html").is_file())
-        .ok_or_else(|| format!("mdbook build wrote no index.html in {}", shown(&out)))
-}
-
-/// The book's output directory as `book.toml` sets it (`build-dir` in its `[build]` table,
-/// relative to the book's root); `None` when it does not set it. Only a one-line string
-/// value is understood.
-fn build_dir(toml: &str) -> Result<Option<String>> {
-    let mut table = String::new();
-    for (index, line) in toml.lines().enumerate() {
-        let line = line.trim();
-        if line.starts_with('[') {
-            table = line
-                .trim_start_matches('[')
-                .split(']')
-                .next()
-                .unwrap_or("")
-                .replace([' ', '"'], "");
-            continue;
-        }
-        let Some((key, value)) = line.split_once('=') else {
-            continue;
-        };
-        let key = key.replace([' ', '"'], "");
-        let key = if table.is_empty() {
-            key
-        } else {
-            format!("{table}.{key}")
-        };
-        if key == "build.build-dir" {
-            return toml_string(value).map(Some).ok_or_else(|| {
-                format!(
-                    "line {}: build-dir = {}: not a one-line string",
-                    index + 1,
-                    value.trim()
-                )
-            });
-        }
+    if out.join("index.html").is_file() {
+        Ok(out)
+    } else {
+        Err(format!(
+            "mdbook build wrote no index.html in {}",
+            shown(&out)
+        ))
     }
-    Ok(None)
-}
-
-/// A TOML string without escapes (`"..."` or `'...'`), and nothing but a comment after it.
-fn toml_string(value: &str) -> Option<String> {
-    let value = value.trim();
-    let quote = value.chars().next().filter(|c| matches!(c, '"' | '\''))?;
-    let (text, rest) = value[1..].split_once(quote)?;
-    let rest = rest.trim();
-    let plain = !(quote == '"' && text.contains('\\'));
-    (plain && (rest.is_empty() || rest.starts_with('#'))).then(|| text.to_string())
 }
 
 /// The Markdown files whose links and examples are checked: README.md, then every `.md`
@@ -2310,19 +2264,6 @@ mod tests {
     fn ids_are_every_id_and_the_names_of_anchors() {
         let html = "<h1 id=\"a\">x</h1><a name=\"b\"></a><meta name=\"c\"><p data-id=\"d\" ID='e'>";
         assert_eq!(html_ids(html), ["a", "b", "e"].map(String::from).into());
-    }
-
-    #[test]
-    fn the_build_dir_is_read_from_the_build_table() {
-        let toml = "[book]\ntitle = \"x\"\nbuild-dir = \"no\"\n\n[build]\n# c\n\
-                    build-dir = \"../target/book\" # where\ncreate-missing = false\n";
-        assert_eq!(build_dir(toml), Ok(Some("../target/book".into())));
-        assert_eq!(build_dir("[book]\ntitle = 'x'\n"), Ok(None));
-        assert_eq!(
-            build_dir("build.build-dir = 'out'\n"),
-            Ok(Some("out".into()))
-        );
-        assert!(build_dir("[build]\nbuild-dir = [1]\n").is_err());
     }
 
     fn example(line: usize, command: &str, status: Status, output: &str) -> Example {
