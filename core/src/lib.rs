@@ -23,7 +23,8 @@
 //! - [`cansm`]: the CAN State Manager's communication modes and bus-off recovery;
 //! - [`ecum`]: EcuM start-up/run/shutdown and BswM's action lists;
 //! - [`rte`]: typed sender-receiver ports (last-is-best and queued, with data-received
-//!   events) and client-server operations.
+//!   events) and client-server operations;
+//! - [`time`]: the 64-bit millisecond time's arithmetic in 32-bit operations.
 //!
 //! Each BSW module reads its configuration through [`tables::Tables`]: a `&'static`
 //! reference, or a zero-sized type that makes the configuration a build-time constant.
@@ -54,4 +55,5 @@ pub mod sonar;
 pub mod tables;
 #[cfg(any(test, kani))]
 mod testing;
+pub mod time;
 pub mod warning;

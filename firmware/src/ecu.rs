@@ -30,6 +30,7 @@ use cw_core::com::signal::SignalValue;
 use cw_core::ecum::{bswm_execute, BswMRequest, EcuM};
 use cw_core::os::{Hooks, IsrId, OsError, ServiceId, StatusType, TaskId, E_OK, OSDEFAULTAPPMODE};
 use cw_core::sonar::SonarConfig;
+use cw_core::time::rem_u64;
 use cw_core::warning::{Measurement, WarningLevel};
 
 use crate::board::{
@@ -525,6 +526,10 @@ impl<P: Port<Kernel = Kernel>, B: Board> Ecu<P, B> {
             count(os, entered)
         });
         if entered.is_err() {
+            // The body does not run, so nothing clears the source: the port quiets the
+            // line (a level-triggered one would be taken again at once).
+            self.port.isr_refused(isr);
+            self.port.span(span, false);
             return;
         }
         self.port.isr_entered(isr);
@@ -546,11 +551,12 @@ impl<P: Port<Kernel = Kernel>, B: Board> Ecu<P, B> {
     /// An alarm that cannot activate its task (a period overrun, which the paper's Table 1
     /// would show as a missed period) reaches `ErrorHook`.
     pub fn tick(&self) {
-        // The alarms are cyclic from StartOS on: they expire at multiples of their periods.
+        // The alarms are cyclic from StartOS on: they expire at multiples of their periods
+        // (a 32-bit remainder of the 64-bit time: no library division on the core).
         let now = self.port.now_ms();
         let due = config::PERIOD_MS
             .iter()
-            .any(|&p| p > 0 && now % u64::from(p) == 0);
+            .any(|&p| u16::try_from(p).is_ok_and(|p| p > 0 && rem_u64(now, p) == 0));
         let span = if due {
             span::TICK_ALARMS_DUE
         } else {

@@ -22,11 +22,12 @@
 //! `shutdown` ends the run at `ShutdownOS` (the port's [`App::shut_down`]): interrupts
 //! stay off, the report follows. It plays every command the host simulation does.
 
-use cw_bsp::cortex_m::{App, CortexMPort};
+use cw_bsp::cortex_m::{now_ms, App, CortexMPort};
 use cw_bsp::mps2::{self, CoreDelay, Led, SensorUart, SlcanCan, SlcanEvent, Unconnected};
+use cw_bsp::port::preempt::PortFault;
 use cw_bsp::port::Port;
 use cw_core::can::Hrh;
-use cw_core::os::{status_name, OsError, TaskId, E_OK};
+use cw_core::os::{status_name, TaskId, E_OK};
 use cw_core::scenario::Scenario;
 use cw_core::sonar::model::{EchoModel, Noise};
 use cw_core::sonar::{Echo, SonarConfig};
@@ -38,6 +39,14 @@ use crate::board::{
 };
 use crate::config::{self, Kernel};
 use crate::ecu::{span, Ecu};
+
+// The ECU's configuration fits the Cortex-M port (task count, ISR priorities the NVIC
+// tells apart): checked when the image is built; a refusal names the task or ISR.
+const _: () = cw_bsp::port::preempt::assert_fits(
+    config::OS.tasks(),
+    config::OS.isrs(),
+    cw_bsp::cortex_m::ISR_PRIORITIES,
+);
 
 /// The mps2-an386 board's drivers.
 pub struct Mps2Board;
@@ -272,7 +281,7 @@ impl embedded_hal::digital::ErrorType for ScenarioInput {
 
 impl embedded_hal::digital::InputPin for ScenarioInput {
     fn is_high(&mut self) -> Result<bool, Self::Error> {
-        let now = u64::from(mps2::now_ms());
+        let now = now_ms();
         Ok(match self.line {
             ModeLine::Ignition => self.scenario.ignition_on(now),
             ModeLine::ComEnable => !self.scenario.in_no_communication(now),
@@ -307,7 +316,7 @@ impl ScenarioEcho {
 
 impl PulseCapture for ScenarioEcho {
     fn high_time_us(&mut self, timeout_us: u32) -> Option<u32> {
-        let now = u64::from(mps2::now_ms());
+        let now = now_ms();
         // A `dropout` window is an unplugged sensor: no echo, nothing drawn (as the
         // host's forced dropout).
         if self.scenario.in_dropout(now) {
@@ -325,7 +334,7 @@ pub struct Mps2App {
     /// The ECU.
     pub ecu: Mps2Ecu,
     /// The run ends (QEMU exits) at this OS time, ms.
-    pub end_ms: u32,
+    pub end_ms: u64,
     /// The scenario's bus events.
     pub scenario: &'static ImageScenario,
     /// The sensor is the UART ranging module.
@@ -349,7 +358,7 @@ impl App for Mps2App {
     }
 
     fn idle(&self) {
-        if mps2::now_ms() < self.end_ms {
+        if now_ms() < self.end_ms {
             return;
         }
         // The scenario's end, with the OS running (a `shutdown` line ends the run at
@@ -363,9 +372,10 @@ impl App for Mps2App {
         // a ms on the bus, received in the ms after it was sent.
         // (The controller's bus-fault model is the `scenario` feature's, which `cw-qemu`
         // requires.)
+        mps2::on_tick();
         #[cfg(feature = "scenario")]
         {
-            let now = mps2::now_ms();
+            let now = u32::try_from(now_ms()).unwrap_or(u32::MAX);
             for &(_, count) in self.scenario.can_errors.iter().filter(|(at, _)| *at == now) {
                 mps2::inject_tx_errors(count);
             }
@@ -378,7 +388,6 @@ impl App for Mps2App {
                 mps2::put_frame_on_bus(frame);
             }
         }
-        self.ecu.port().advance_ms();
         self.ecu.tick();
     }
 
@@ -386,8 +395,12 @@ impl App for Mps2App {
         board_irq(&self.ecu, line);
     }
 
-    fn stack_fault(&self, task: Option<TaskId>) -> ! {
-        stack_overflow(&self.ecu, task)
+    fn report(&self, fault: &PortFault) {
+        mps2::report(fault);
+    }
+
+    fn halt(&self) -> ! {
+        mps2::halt()
     }
 
     fn shut_down(&self) -> ! {
@@ -424,19 +437,6 @@ fn board_irq<B: Board>(ecu: &Ecu<CortexMPort<Kernel>, B>, line: u16) {
     }
 }
 
-/// A stack overflowed: logged, then the OS shuts down with `E_OS_STACKFAULT` (the port
-/// hands the end to `App::shut_down`).
-fn stack_overflow<B: Board>(ecu: &Ecu<CortexMPort<Kernel>, B>, task: Option<TaskId>) -> ! {
-    mps2::leds_safe();
-    defmt::println!(
-        "FATAL: stack overflow on the {} stack: ShutdownOS(E_OS_STACKFAULT)",
-        task.map_or("shared task", |t| task_name(usize::from(t.0)))
-    );
-    ecu.port()
-        .kernel(|os| os.shutdown_on_fault(OsError::StackFault));
-    mps2::fatal("the OS did not shut down on a stack overflow")
-}
-
 /// `App::shut_down` on this board: the LEDs' safe state (whatever shut the OS down; EcuM's
 /// post-run has set it already on a normal shutdown) and the log line `NAME: ShutdownOS at
 /// MS ms: ShutdownHook saw STATUS`. Returns whether the status was `E_OK`.
@@ -446,7 +446,7 @@ fn shutdown_report<B: Board>(name: &str, ecu: &Ecu<CortexMPort<Kernel>, B>) -> b
     defmt::println!(
         "{=str}: ShutdownOS at {} ms: ShutdownHook saw {}; no task or interrupt runs from here on",
         name,
-        mps2::now_ms(),
+        now_ms(),
         status_name(status).unwrap_or("an application's code")
     );
     status == E_OK
@@ -504,7 +504,7 @@ impl App for Mps2FlashApp {
     fn idle(&self) {}
 
     fn tick(&self) {
-        self.ecu.port().advance_ms();
+        mps2::on_tick();
         self.ecu.tick();
     }
 
@@ -512,13 +512,18 @@ impl App for Mps2FlashApp {
         board_irq(&self.ecu, line);
     }
 
-    fn stack_fault(&self, task: Option<TaskId>) -> ! {
-        stack_overflow(&self.ecu, task)
+    fn report(&self, fault: &PortFault) {
+        mps2::report(fault);
+    }
+
+    fn halt(&self) -> ! {
+        mps2::halt()
     }
 
     fn shut_down(&self) -> ! {
-        // On silicon EcuM would power off or reset here; QEMU exits.
-        mps2::exit(shutdown_report("cw-mps2", &self.ecu))
+        // EcuM's reset after the shutdown (QEMU, run with -no-reboot, exits).
+        shutdown_report("cw-mps2", &self.ecu);
+        mps2::halt()
     }
 }
 
@@ -565,7 +570,7 @@ impl Mps2App {
         }
         defmt::println!(
             "cw-qemu: end at {} ms; kernel errors {}, port errors {}; task stack used {} of {} bytes, main stack (ISRs) {} bytes",
-            mps2::now_ms(),
+            now_ms(),
             hooks.errors,
             hooks.port_errors,
             task_stack,

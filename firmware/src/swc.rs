@@ -139,25 +139,12 @@ impl LedActuator {
         match (level, self.color) {
             (WarningLevel::Red, LedColor::Red) | (WarningLevel::Yellow, LedColor::Yellow) => true,
             (WarningLevel::Fault, _) => {
-                rem_u64(now_ms, 2 * BLINK_HALF_PERIOD_MS as u16) < BLINK_HALF_PERIOD_MS
+                cw_core::time::rem_u64(now_ms, 2 * BLINK_HALF_PERIOD_MS as u16)
+                    < BLINK_HALF_PERIOD_MS
             }
             _ => false,
         }
     }
-}
-
-/// `x % m` in 32-bit operations: the Cortex-M4 has no 64-bit divide, and the library's
-/// takes 0.9 KiB of flash. With `x = hi * 2^32 + lo`, `x mod m` is `(hi mod m) * (2^32 mod
-/// m) + lo mod m`, taken mod `m` again; for `m` below 2^16 every term fits in a `u32`.
-/// `m = 0` gives 0.
-const fn rem_u64(x: u64, m: u16) -> u32 {
-    if m == 0 {
-        return 0;
-    }
-    let m = m as u32;
-    let (hi, lo) = ((x >> 32) as u32, x as u32);
-    let wrap = (u32::MAX % m + 1) % m;
-    ((hi % m) * wrap + lo % m) % m
 }
 
 /// CanTranslate: the raw CAN signal values for a measurement and level. `None` for the
@@ -223,33 +210,6 @@ impl ModeManager {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn the_32_bit_remainder_is_the_64_bit_one() {
-        let mut x: u64 = 0x9E37_79B9_7F4A_7C15;
-        let edges = [
-            0,
-            1,
-            499,
-            500,
-            u64::from(u32::MAX),
-            1 << 32,
-            u64::MAX - 1,
-            u64::MAX,
-        ];
-        for m in [1u16, 2, 3, 250, 500, 1000, 4096, 65_521, u16::MAX] {
-            for v in edges {
-                assert_eq!(u64::from(rem_u64(v, m)), v % u64::from(m), "{v} % {m}");
-            }
-            for _ in 0..10_000 {
-                x ^= x << 13;
-                x ^= x >> 7;
-                x ^= x << 17;
-                assert_eq!(u64::from(rem_u64(x, m)), x % u64::from(m), "{x} % {m}");
-            }
-        }
-        assert_eq!(rem_u64(12345, 0), 0);
-    }
 
     #[test]
     fn ultrasonic_holds_then_faults_then_recovers() {

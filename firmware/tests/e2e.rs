@@ -318,6 +318,18 @@ fn ignition_off_goes_through_post_run_to_shutdown_with_leds_dark_and_bus_silent(
 }
 
 #[test]
+fn an_isr_the_kernel_refuses_has_its_line_quieted_not_left_pending() {
+    let mut sim = run("hold 500 2000\nshutdown 1000");
+    assert!(sim.ecu().is_off());
+    assert!(sim.ecu().port().refused_isrs().is_empty());
+    // The CAN controller's interrupt arrives after ShutdownOS: the kernel refuses its
+    // entry, so its body (which would clear the source) does not run; the port quiets the
+    // line instead of returning to take it again.
+    sim.ecu().can_isr();
+    assert_eq!(*sim.ecu().port().refused_isrs(), [config::CAN_ISR]);
+}
+
+#[test]
 fn communication_is_not_restarted_during_post_run() {
     // Ignition off at 1001 ms, and communication enabled again at 1005 ms (the end of a
     // no-communication window): ModeManager sees both edges at 1010 ms and asks for

@@ -197,6 +197,16 @@ mod targets {
             });
     }
 
+    /// Any schedule of job starts, stack use, ends, waits and wake-ups: the preemptive
+    /// port's switch keeps every job's context apart on the shared stack and on the own
+    /// stacks (`cw_bsp::port::preempt::spec::stacks_stay_apart`).
+    #[test]
+    fn port_switch() {
+        bolero::check!()
+            .with_type::<Vec<(u8, u8)>>()
+            .for_each(|steps| assert!(cw_bsp::port::preempt::spec::stacks_stay_apart(steps)));
+    }
+
     /// Any text as a scenario file (the host simulation's and the image's parser): read
     /// or refused with a line number within the text, never a panic; every line read
     /// writes back to a line that reads as the same command.

@@ -30,6 +30,9 @@ pub fn machine(program: &str, args: &[&str]) -> Vec<String> {
         "-nographic",
         "-monitor",
         "none",
+        // A reset (a production image's end after a fatal fault) ends QEMU instead of
+        // starting the image again.
+        "-no-reboot",
         "-semihosting-config",
         &semihosting,
     ]
@@ -160,5 +163,6 @@ mod tests {
             Some("enable=on,target=native,arg=cw-qemu,arg=--scenario,arg=a,,b.txt")
         );
         assert_eq!(options.get(1).map(String::as_str), Some("mps2-an386"));
+        assert!(options.iter().any(|o| o == "-no-reboot"));
     }
 }

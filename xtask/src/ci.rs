@@ -19,6 +19,7 @@ pub const FUZZ_TARGETS: &[&str] = &[
     "targets::dbc_and_log",
     "targets::blf_bytes",
     "targets::view_replay",
+    "targets::port_switch",
 ];
 
 /// How long the `fuzz` stage runs each target (cargo-bolero `-T`).
@@ -74,7 +75,7 @@ const BUDGET_S: &[(&str, u32)] = &[
     ("interop", 20),
     ("view", 15),
     ("docs", 180),
-    ("fuzz", 320),
+    ("fuzz", 340),
     ("bench", 85),
 ];
 

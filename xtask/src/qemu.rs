@@ -601,24 +601,95 @@ fn cw_can_view_live(image: &Path, out: &Path) -> Result {
     Ok(())
 }
 
-/// The extended-task demo (`cw-qemu-events`): it must end with `ok` (its waiter woke on
-/// every alarm to the millisecond and on the ISR's events, then its deliberate stack
-/// overflow was caught by the MPU guard and shut the OS down with `E_OS_STACKFAULT`).
+/// The faults the extended-task demo plays (`cw-qemu-events --fault NAME`), each with
+/// whether the run must succeed and the lines its log must hold.
+const EVENT_FAULTS: &[(&str, bool, &[&str])] = &[
+    (
+        "task-stack",
+        true,
+        &[
+            "cw-qemu-events: the port reports: stack overflow on the stack of Waiter",
+            "cw-qemu-events: ShutdownHook saw E_OS_STACKFAULT",
+            "cw-qemu-events: ok",
+        ],
+    ),
+    (
+        "in-kernel",
+        true,
+        &[
+            "cw-qemu-events: the port reports: stack overflow on the stack of Waiter",
+            "cw-qemu-events: ShutdownHook saw E_OS_STACKFAULT",
+            "cw-qemu-events: ok",
+        ],
+    ),
+    (
+        "main-stack",
+        true,
+        &[
+            "cw-qemu-events: the port reports: stack overflow on the main stack (ISRs)",
+            "cw-qemu-events: ShutdownHook saw E_OS_STACKFAULT",
+            "cw-qemu-events: ok",
+        ],
+    ),
+    (
+        "missing-end",
+        true,
+        &[
+            "cw-qemu-events: kernel calls that opened the caller's critical section: 0",
+            "cw-qemu-events: ok",
+        ],
+    ),
+    (
+        "no-own-stack",
+        false,
+        &["cw-qemu-events: the port reports: an extended task needs a stack of its own: Waiter"],
+    ),
+    (
+        "reset",
+        true,
+        &["cw-qemu-events: the port reports: fault panic", "RESET"],
+    ),
+];
+
+/// The extended-task demo (`cw-qemu-events`), once per fault it plays: each run must end
+/// as the port's guarantees say (`EVENT_FAULTS`): its waiter woke on every alarm to the
+/// millisecond and on the ISR's events, then the fault was caught and ended the run the
+/// way the port promises (`E_OS_STACKFAULT` through the ShutdownHook, `E_OS_MISSINGEND`
+/// and the tasks going on, a refusal naming the task, or a reset).
 fn events(out: &Path) -> Result {
     let image = build_bin("cw-qemu-events", "trace", "release")?;
     std::fs::create_dir_all(out).map_err(|e| format!("creating {}: {e}", out.display()))?;
-    let mut qemu = std::process::Command::new("qemu-system-arm");
-    qemu.args(cw_tests::qemu::machine("cw-qemu-events", &[]))
+    for &(fault, success, lines) in EVENT_FAULTS {
+        let mut qemu = std::process::Command::new("qemu-system-arm");
+        qemu.args(cw_tests::qemu::machine(
+            "cw-qemu-events",
+            &["--fault", fault],
+        ))
         .args(["-icount", "shift=0,sleep=off"])
         .args(["-serial", "null"])
         .arg("-kernel")
         .arg(&image);
-    let report = decoded_run(qemu, &image)?;
-    print!("{report}");
-    if !report.lines().any(|l| l == "cw-qemu-events: ok") {
-        return Err("qemu: the extended-task demo did not end with `ok`".into());
+        let shown: Vec<String> = std::iter::once(qemu.get_program())
+            .chain(qemu.get_args())
+            .map(|a| a.to_string_lossy().into_owned())
+            .collect();
+        println!("$ {}", shown.join(" "));
+        let (ended_ok, report) = cw_tests::qemu::run(qemu, &image)?;
+        print!("{report}");
+        let missing: Vec<&str> = lines
+            .iter()
+            .copied()
+            .filter(|l| !report.lines().any(|r| r == *l))
+            .collect();
+        if ended_ok != success || !missing.is_empty() {
+            return Err(format!(
+                "qemu: the demo's fault `{fault}` ended {} (expected {}); lines missing: {missing:?}",
+                if ended_ok { "successfully" } else { "failed" },
+                if success { "success" } else { "a failure" },
+            ));
+        }
     }
-    println!("qemu: extended tasks woke on alarm and ISR events; the stack overflow was caught and shut the OS down with E_OS_STACKFAULT");
+    println!("qemu: extended tasks woke on alarm and ISR events; stack overflows (a task's stack, inside a kernel call, the main stack) shut the OS down with E_OS_STACKFAULT; a refused TerminateTask ended with E_OS_MISSINGEND; an extended task without its own stack was refused; a panic reset the board");
     Ok(())
 }
 

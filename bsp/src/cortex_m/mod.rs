@@ -1,11 +1,19 @@
-//! The Cortex-M OS port (ARMv7-M: Cortex-M4 on QEMU's mps2-an386, later the S32K144).
+//! The Cortex-M arch of the OS port (ARMv7-M: Cortex-M4 on QEMU's mps2-an386, later the
+//! S32K144): the CPU under the CPU-independent preemptive port
+//! ([`crate::port::preempt`]), its exception handlers and its time base.
+//!
+//! The book: [the Cortex-M4 image](../../book/cortex-m4.html) ("The port's guarantees",
+//! "Layers").
 //!
 //! # Mechanism: PendSV context switching, one stack for the basic tasks
 //!
-//! The kernel decides; this port carries the decision out:
+//! The kernel decides; the port carries the decision out ([`crate::port::preempt`] keeps
+//! the bookkeeping, this module does the CPU's part):
 //!
-//! - **Kernel lock.** Every kernel service runs with PRIMASK set ([`CortexMPort::kernel`]),
-//!   so no ISR can observe the kernel half-updated; a few instructions long.
+//! - **Kernel lock at the OS level.** Every kernel service runs with BASEPRI at the OS
+//!   level: the priority of the highest category-2 ISR, which also holds the OS tick and
+//!   PendSV. Category-1 ISRs, above it, are never delayed by a kernel call; they may not
+//!   call the OS (a call that finds another under way is a fatal port fault).
 //! - **Task switch.** After a service, if the kernel's running task changed, the port pends
 //!   PendSV, the exception of lowest priority: it runs as soon as no ISR is active and the
 //!   kernel's interrupt mask allows, saves r4-r11 (and s16-s31 when the task used the FPU)
@@ -14,48 +22,53 @@
 //!   by an ISR starts when the last nested ISR returns (tail-chained).
 //! - **Stacks.** OSEK basic tasks run to completion and preempt each other in LIFO order,
 //!   so they share one stack: a new job's first frame is built just below the deepest
-//!   preempted job. The idle loop is the stack's bottom. A task given its own stack
-//!   ([`set_task_stack`]: extended tasks, whose `WaitEvent` keeps their context while
-//!   lower tasks run) starts its jobs there. ISRs run on the main stack (MSP).
-//! - **Stack guard.** The bottom 256 bytes of every task stack are a guard that MPU region
-//!   0, moved at every switch, makes inaccessible to the running context: an overflow
-//!   faults at its first access, and [`App::stack_fault`] shuts the OS down with
-//!   `E_OS_STACKFAULT`.
-//! - **Shutdown.** When a kernel call leaves the OS shut down (`ShutdownOS`, or the
-//!   OS's own on a stack fault), PRIMASK stays set for good and no task is switched to;
-//!   the port hands the end to [`App::shut_down`] (report, safe state, stop) from that
-//!   call, once.
-//! - **Interrupt masking.** The kernel's interrupt mask ([`cw_core::os::InterruptMask`])
-//!   becomes BASEPRI (`UpTo(p)`: every ISR of OSEK priority up to `p`, and PendSV, held)
-//!   or PRIMASK (`All`) after every kernel call: resources shared with ISRs and
-//!   `SuspendOSInterrupts` raise BASEPRI, `DisableAllInterrupts` sets PRIMASK.
+//!   preempted job. The idle loop is the stack's bottom. An extended task (whose
+//!   `WaitEvent` keeps its context while lower tasks run) must be given its own stack
+//!   ([`set_task_stack`]); the port refuses to start otherwise. ISRs run on the main
+//!   stack (MSP).
+//! - **Stack guards.** The bottom 256 bytes of every task stack are a guard that MPU region
+//!   0, moved at every switch (then DSB, ISB), makes inaccessible to the running context;
+//!   region 1 guards the main stack below its [`MAIN_STACK_BYTES`]. An overflow faults at
+//!   its first access (MemManage), and the OS shuts down with `E_OS_STACKFAULT`, also when
+//!   the overflow happened inside a kernel call.
+//! - **Masks.** The kernel's interrupt mask ([`cw_core::os::InterruptMask`]) becomes
+//!   BASEPRI (`UpTo(p)`: every ISR of OSEK priority up to `p`, and PendSV, held) after every
+//!   kernel call; PRIMASK is set and cleared only where the kernel's mask says
+//!   `All` (`DisableAllInterrupts`, `SuspendAllInterrupts`), so a kernel call made inside
+//!   the caller's own critical section leaves it closed.
+//! - **Shutdown and faults.** When a kernel call leaves the OS shut down (`ShutdownOS`, or
+//!   the OS's own on a stack fault), PRIMASK stays set for good and the port hands the end
+//!   to [`App::shut_down`]. Panics, HardFault, NMI, BusFault and UsageFault go to the
+//!   application's [`App::report`] and [`App::halt`] (the board's safe state, its log, then
+//!   a reset or a documented halt): never a semihosting call the board may not have.
 //!
 //! Why not one NVIC priority level per task, as RTIC does? That scheme lets the NVIC make
 //! the scheduling decision again, in hardware, and needs every task to be an interrupt
 //! handler: it cannot run OSEK's extended tasks (`WaitEvent` blocks with the task's
 //! context kept), and the verified kernel's decision would be duplicated by a second
 //! scheduler that must be shown to agree with it. Here the kernel is the only scheduler,
-//! and the cost is a software context switch (its instructions are counted in the book: `docs/src/performance.md`).
+//! and the cost is a software context switch (its instructions are counted in the book:
+//! `docs/src/performance.md`).
 //!
 //! NVIC priorities (3 priority bits are assumed, the fewest a Cortex-M4 implements): an
-//! OSEK category-2 ISR of priority `p` gets `0xE0 - 0x20 * p`; PendSV gets `0xE0`, the
-//! lowest.
+//! OSEK ISR of priority `p` (1 to 6, either category) gets `0xE0 - 0x20 * p`; PendSV gets
+//! `0xE0`, the lowest; the CPU's faults keep 0, the highest.
 
 use core::cell::UnsafeCell;
+use core::sync::atomic::{AtomicBool, AtomicU32, AtomicU8, Ordering};
 
-use cortex_m::peripheral::scb::SystemHandler;
-use cortex_m::peripheral::{NVIC, SCB};
-use cortex_m::register::basepri;
-use cw_core::os::{InterruptMask, IsrId, OsError, TaskId};
+use cortex_m::peripheral::scb::{Exception, SystemHandler};
+use cortex_m::peripheral::{MPU, NVIC, SCB};
+use cortex_m::register::{basepri, basepri_max};
+use cw_core::os::{InterruptMask, IsrCategory, TaskId};
 
+use crate::port::preempt::{Arch, Mark, PortFault, Preemptive};
 use crate::port::{OsKernel, Port};
 
 pub mod trace;
 
-/// The most tasks the port can switch between.
-pub const MAX_TASKS: usize = 16;
-/// The slot of the idle loop.
-const IDLE: u8 = MAX_TASKS as u8;
+pub use crate::port::preempt::MAX_TASKS;
+
 /// Words of the shared stack of the basic tasks (and the idle loop): 2 KiB.
 pub const BASIC_STACK_WORDS: usize = 512;
 /// The value painted into unused stack, to measure the deepest use.
@@ -64,8 +77,7 @@ pub const STACK_PAINT: u32 = 0xDEAD_BEEF;
 /// stack guard. While a context runs, the MPU makes its stack's guard inaccessible, so the
 /// first access past the stack's end faults (MemManage) at that instruction; and a context
 /// switch that finds a saved stack pointer inside the guard reports the overflow too.
-/// Either way the application shuts the OS down with `E_OS_STACKFAULT`
-/// ([`App::stack_fault`]).
+/// Either way the OS shuts down with `E_OS_STACKFAULT`.
 ///
 /// 256 bytes. A function's frame can move the stack pointer past the stack's end before
 /// it touches memory, and the fault's own exception frame (32 bytes, 104 with the FPU's
@@ -75,69 +87,252 @@ pub const STACK_PAINT: u32 = 0xDEAD_BEEF;
 /// 152 bytes (224 without FPU state) past the stack's end: the usual limit of MPU guards
 /// on cores without stack-limit registers (ARMv8-M has PSPLIM).
 pub const GUARD_WORDS: usize = 64;
+/// The main stack's size (ISRs, PendSV and the fault handlers; the exception frames go on
+/// the interrupted task's stack): the bytes below the main stack pointer at the OS's start,
+/// painted for [`main_stack_use`], with an MPU guard (region 1) right below them.
+pub const MAIN_STACK_BYTES: u32 = 2048;
+/// The highest OSEK ISR priority the port expresses (3 NVIC priority bits: 0 is the
+/// faults' level, 7 PendSV's).
+pub const ISR_PRIORITIES: u8 = 6;
 
-/// The NVIC priority byte of an OSEK category-2 ISR priority (1 to 6).
+/// The NVIC priority byte of an OSEK ISR priority (1 to [`ISR_PRIORITIES`]; the port
+/// refuses a configuration with others before it starts).
 pub const fn nvic_priority(osek_priority: u8) -> u8 {
-    let p = if osek_priority > 6 { 6 } else { osek_priority };
-    0xE0 - 0x20 * p
+    0xE0u8.wrapping_sub(0x20u8.wrapping_mul(osek_priority))
 }
 
 /// The BASEPRI value for a kernel interrupt mask (0: nothing masked).
-const fn basepri_for(mask: InterruptMask) -> u8 {
+fn basepri_for(mask: InterruptMask) -> u8 {
     match mask {
         InterruptMask::None => 0,
-        InterruptMask::UpTo(p) => nvic_priority(if p == 0 { 1 } else { p }),
+        InterruptMask::UpTo(p) => nvic_priority(p.max(1)),
         // PRIMASK does it; BASEPRI holds the OS level meanwhile.
-        InterruptMask::All => nvic_priority(1),
+        InterruptMask::All => OS_LEVEL.load(Ordering::Relaxed),
     }
 }
 
-/// What the port knows of the jobs on the shared stack.
-struct Sched {
-    /// The slot now executing (a task index, or `IDLE`).
-    current: u8,
-    /// The slot the kernel chose last.
-    next: u8,
-    /// The current job ended (`TerminateTask`/`ChainTask` succeeded): its stack is free.
-    ended: bool,
-    /// Saved stack pointers of preempted jobs and of the idle loop.
-    sp: [u32; MAX_TASKS + 1],
-    /// Bit `t`: task `t` has a job under way (a context to resume).
-    started: u32,
-    /// The shared stack's top when each job started (restored when it ends).
-    job_base: [u32; MAX_TASKS],
-    /// Where the next new job's first frame goes.
-    basic_top: u32,
-    /// A kernel call is under way (a nested one would alias the kernel).
-    in_kernel: bool,
-    /// Each task's own stack as (lowest address, top), or (0, 0): the shared stack.
-    own_stack: [(u32, u32); MAX_TASKS],
-    /// `ShutdownOS` ran and the application was told ([`App::shut_down`]).
-    stopped: bool,
+/// The kernel lock's BASEPRI: the highest category-2 ISR's NVIC priority, set at start
+/// (until then the lowest level that still holds PendSV).
+#[no_mangle]
+static CW_PORT_OS_LEVEL: AtomicU8 = AtomicU8::new(0xE0);
+use CW_PORT_OS_LEVEL as OS_LEVEL;
+
+/// The Cortex-M CPU under the preemptive port.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct CortexM;
+
+/// The preemptive port on a Cortex-M.
+pub type CortexMPort<K> = Preemptive<K, CortexM>;
+
+/// The port of `kernel` on this CPU.
+pub const fn port<K: OsKernel>(kernel: K) -> CortexMPort<K> {
+    Preemptive::new(kernel, CortexM)
 }
 
-struct SchedCell(UnsafeCell<Sched>);
+impl Arch for CortexM {
+    const ISR_PRIORITIES: u8 = ISR_PRIORITIES;
+    const GUARD_BYTES: u32 = (GUARD_WORDS * 4) as u32;
+    const FIRST_FRAME_BYTES: u32 = 17 * 4 + 4;
 
-// SAFETY: `Sched` is touched only with PRIMASK set (in `CortexMPort::kernel`, `end_job`,
-// and `cw_port_switch`, which PendSV calls between `cpsid i` and `cpsie i`), on a single
-// core: no two accesses overlap.
-unsafe impl Sync for SchedCell {}
+    #[inline(always)]
+    fn lock_os(&self) {
+        // `basepri_max::write` ends with an ISB: the lock holds from the next instruction.
+        basepri_max::write(OS_LEVEL.load(Ordering::Relaxed));
+    }
 
-static SCHED: SchedCell = SchedCell(UnsafeCell::new(Sched {
-    current: IDLE,
-    next: IDLE,
-    ended: false,
-    sp: [0; MAX_TASKS + 1],
-    started: 0,
-    job_base: [0; MAX_TASKS],
-    basic_top: 0,
-    in_kernel: false,
-    own_stack: [(0, 0); MAX_TASKS],
-    stopped: false,
-}));
+    #[inline(always)]
+    fn set_mask(&self, mask: InterruptMask) {
+        // SAFETY: BASEPRI only holds interrupts back; the value is the kernel's mask.
+        unsafe { basepri::write(basepri_for(mask)) };
+    }
 
-/// A task's own stack (aligned for its MPU guard region). Extended tasks need one: `WaitEvent` keeps the task's context while
-/// tasks of lower priority run, which on the shared stack would grow into it.
+    #[inline(always)]
+    fn all_masked(&self) -> bool {
+        // PRIMASK "inactive": exceptions of configurable priority are not taken.
+        cortex_m::register::primask::read().is_inactive()
+    }
+
+    #[inline(always)]
+    fn disable_all(&self) {
+        cortex_m::interrupt::disable();
+    }
+
+    #[inline(always)]
+    fn enable_all(&self) {
+        // SAFETY: the port unmasks only what it (or the kernel's `All` mask) masked.
+        unsafe { cortex_m::interrupt::enable() };
+    }
+
+    #[inline(always)]
+    fn request_switch(&self) {
+        SCB::set_pendsv();
+    }
+
+    #[inline(always)]
+    fn wait(&self) {
+        cortex_m::asm::wfi();
+    }
+
+    unsafe fn first_frame(&self, top: u32, task: u8) -> u32 {
+        let frame_top = top & !7;
+        let frame = frame_top - 17 * 4;
+        let words: [u32; 17] = [
+            // r4-r11
+            0,
+            0,
+            0,
+            0,
+            0,
+            0,
+            0,
+            0,
+            // EXC_RETURN: thread mode, process stack, no FPU state
+            0xFFFF_FFFD,
+            // r0 (the task index), r1-r3, r12
+            u32::from(task),
+            0,
+            0,
+            0,
+            0,
+            // lr: a job never returns (it ends through the kernel)
+            0xFFFF_FFFF,
+            // pc: the job entry, Thumb bit cleared as the exception frame wants it
+            (cw_port_job as *const () as usize as u32) & !1,
+            // xPSR: Thumb state
+            0x0100_0000,
+        ];
+        for (i, w) in words.iter().enumerate() {
+            // SAFETY: the caller's contract: the 72 bytes below `top` are free stack.
+            unsafe { (frame as *mut u32).add(i).write_volatile(*w) };
+        }
+        frame
+    }
+
+    fn move_guard(&self, bottom: u32) {
+        // SAFETY: only region 0's base moves, to the bottom of a 256-byte-aligned stack;
+        // the switch runs with the kernel lock taken.
+        unsafe { (*MPU::PTR).rbar.write(bottom | RBAR_VALID) };
+        // The new guard is in force before the incoming context's first access.
+        cortex_m::asm::dsb();
+        cortex_m::asm::isb();
+    }
+
+    fn quiet_active_line(&self) {
+        // IPSR: 16 + n for external interrupt n; the system exceptions (SysTick among
+        // them) are not level-triggered lines.
+        let ipsr: u32;
+        // SAFETY: reads IPSR, no side effect.
+        unsafe { core::arch::asm!("mrs {}, ipsr", out(reg) ipsr, options(nomem, nostack)) };
+        if let Some(line) = (ipsr & 0x1FF).checked_sub(16) {
+            NVIC::mask(Line(line as u16));
+        }
+    }
+
+    fn report(&self, fault: &PortFault) {
+        if let Some(app) = app() {
+            app.report(fault);
+        }
+    }
+
+    fn stopped(&self) -> ! {
+        match app() {
+            Some(app) => app.shut_down(),
+            None => halt_here(),
+        }
+    }
+
+    fn halt(&self) -> ! {
+        match app() {
+            Some(app) => app.halt(),
+            None => halt_here(),
+        }
+    }
+
+    #[inline]
+    fn now_ms(&self) -> u64 {
+        now_ms()
+    }
+
+    #[inline(always)]
+    fn trace(&self, mark: Mark) {
+        if !trace::ENABLED {
+            return;
+        }
+        let at = trace::now();
+        match mark {
+            Mark::JobStarted(t) => trace::job_started(t.0, at),
+            Mark::JobFinished(t) => trace::job_finished(t.0, at),
+            Mark::IsrEntered(i) => trace::isr_entered(i.0, at),
+            Mark::SpanStart(id) => trace::span_start(id, at),
+            Mark::SpanEnd(id) => trace::span_end(id, at),
+        }
+    }
+}
+
+/// An external interrupt line by number.
+#[derive(Clone, Copy)]
+struct Line(u16);
+
+// SAFETY: the number comes from IPSR: the line whose interrupt is active.
+unsafe impl cortex_m::interrupt::InterruptNumber for Line {
+    fn number(self) -> u16 {
+        self.0
+    }
+}
+
+/// No application to end the run: every interrupt off, the core waits for ever (a
+/// documented halt: a debugger finds it here).
+fn halt_here() -> ! {
+    cortex_m::interrupt::disable();
+    loop {
+        cortex_m::asm::wfi();
+    }
+}
+
+// ---- time ---------------------------------------------------------------------------
+
+/// Milliseconds since the OS tick started: low and high words, written by SysTick alone.
+static MS_LOW: AtomicU32 = AtomicU32::new(0);
+static MS_HIGH: AtomicU32 = AtomicU32::new(0);
+
+/// Milliseconds since the OS tick started (64 bits: no wrap in the ECU's life).
+pub fn now_ms() -> u64 {
+    loop {
+        let high = MS_HIGH.load(Ordering::Acquire);
+        let low = MS_LOW.load(Ordering::Acquire);
+        // SysTick, the only writer, runs whole between two reads of this context: the
+        // same high word twice means the pair is one value.
+        if MS_HIGH.load(Ordering::Acquire) == high {
+            return u64::from(high) << 32 | u64::from(low);
+        }
+    }
+}
+
+/// [`now_ms`] where SysTick cannot run (interrupts masked): the two words as they are.
+pub(crate) fn now_ms_masked() -> u64 {
+    u64::from(MS_HIGH.load(Ordering::Relaxed)) << 32 | u64::from(MS_LOW.load(Ordering::Relaxed))
+}
+
+/// The OS tick: one millisecond more (SysTick's handler, before the application's tick).
+fn advance_ms() {
+    let low = MS_LOW.load(Ordering::Relaxed).wrapping_add(1);
+    if low == 0 {
+        MS_HIGH.fetch_add(1, Ordering::Release);
+    }
+    MS_LOW.store(low, Ordering::Release);
+}
+
+/// The time since the OS started, µs (SysTick's position within the current ms).
+pub fn now_us() -> u64 {
+    let (whole, into, per_tick) = trace::systick_position();
+    whole * 1000 + u64::from(into) * 1000 / u64::from(per_tick.max(1))
+}
+
+// ---- stacks ---------------------------------------------------------------------------
+
+/// A task's own stack (aligned for its MPU guard region). Extended tasks need one:
+/// `WaitEvent` keeps the task's context while tasks of lower priority run, which on the
+/// shared stack would grow into it.
 #[repr(C, align(256))]
 pub struct TaskStack<const WORDS: usize>(UnsafeCell<[u32; WORDS]>);
 
@@ -159,34 +354,21 @@ impl<const WORDS: usize> Default for TaskStack<WORDS> {
 }
 
 /// Gives `task` its own stack; call before [`start`]. A task given none runs on the
-/// shared stack. A fatal port error if `task` is out of range, the stack is too small
-/// for its guard and one frame, or it overlaps a stack given before.
-pub fn set_task_stack<const WORDS: usize>(task: TaskId, stack: &'static TaskStack<WORDS>) {
+/// shared stack. A fatal port fault if `task` is out of range, the stack is too small
+/// for its guard and two frames, or it overlaps another stack.
+pub fn set_task_stack<K: OsKernel, const WORDS: usize>(
+    port: &CortexMPort<K>,
+    task: TaskId,
+    stack: &'static TaskStack<WORDS>,
+) {
     let bottom = stack.0.get() as u32;
-    let top = bottom + (WORDS * 4) as u32;
-    let fits = WORDS >= GUARD_WORDS + 64;
-    cortex_m::interrupt::free(|_| {
-        // SAFETY: interrupts are off and no kernel call is under way: the only reference.
-        let s = unsafe { &mut *SCHED.0.get() };
-        let overlaps = s
-            .own_stack
-            .iter()
-            .any(|&(b, t)| t != 0 && bottom < t && b < top);
-        match s.own_stack.get_mut(usize::from(task.0)) {
-            Some(slot) if fits && !overlaps => *slot = (bottom, top),
-            _ => fatal("task stack refused (task out of range, too small, or shared)"),
-        }
-    });
+    port.set_task_stack(task, bottom, bottom + (WORDS * 4) as u32);
 }
 
 /// The deepest use of `task`'s own stack so far, in bytes (`None`: it has none).
-pub fn task_stack_use(task: TaskId) -> Option<usize> {
-    let (bottom, top) = cortex_m::interrupt::free(|_| {
-        // SAFETY: interrupts are off; a read of the table.
-        let s = unsafe { &*SCHED.0.get() };
-        s.own_stack.get(usize::from(task.0)).copied()
-    })?;
-    (top != 0).then(|| {
+pub fn task_stack_use<K: OsKernel>(port: &CortexMPort<K>, task: TaskId) -> Option<usize> {
+    let (bottom, top) = port.stack_of(task);
+    (bottom != BASIC_STACK.0.get() as u32).then(|| {
         painted_use(
             bottom as *const u32,
             ((top - bottom) / 4) as usize,
@@ -196,8 +378,8 @@ pub fn task_stack_use(task: TaskId) -> Option<usize> {
 }
 
 /// Bytes of a painted stack of `words` words at `base` that were overwritten, above its
-/// first `skip` words (a task stack's guard is never written: the MPU forbids it, and
-/// reading it from a context whose guard it is would fault).
+/// first `skip` words (a stack's guard is never written: the MPU forbids it, and reading
+/// it from a context whose guard it is would fault).
 fn painted_use(base: *const u32, words: usize, skip: usize) -> usize {
     let mut untouched = skip.min(words);
     while untouched < words {
@@ -237,230 +419,22 @@ unsafe impl Sync for Stack {}
 #[link_section = ".uninit.cw_basic_stack"]
 static BASIC_STACK: Stack = Stack(UnsafeCell::new([0; BASIC_STACK_WORDS]));
 
-/// The application the port runs: the ECU's entry points.
-pub trait App: Sync {
-    /// `StartOS` (from the idle loop's context, once).
-    fn start_os(&self);
-    /// One job of `task`, from its first line to `TerminateTask`.
-    fn run_job(&self, task: TaskId);
-    /// The idle loop's work, between interrupts (returns to wait for the next one).
-    fn idle(&self);
-    /// The OS tick (SysTick's handler).
-    fn tick(&self);
-    /// External interrupt line `line` of the board.
-    fn irq(&self, line: u16);
-    /// A stack overflowed (`task`'s, or the shared stack's: `None`): the application
-    /// reports which and shuts the OS down with `E_OS_STACKFAULT` (its ShutdownHook sees
-    /// it), which ends in [`App::shut_down`]. Called from PendSV or the MemManage fault
-    /// with interrupts disabled; never returns.
-    fn stack_fault(&self, task: Option<TaskId>) -> !;
-    /// `ShutdownOS` ran (the application's own call, or the OS's on a fault): called once,
-    /// from the kernel call that shut the OS down, in the context that made it, with
-    /// interrupts disabled for good (OSEK: the OS does not come back, no task or ISR runs
-    /// again). The application puts its outputs in their safe state, reports and stops
-    /// (on silicon: EcuM's power-off or reset). Kernel calls that only read (the hooks'
-    /// record) are still served, without switching tasks or unmasking interrupts.
-    fn shut_down(&self) -> !;
-}
-
-struct AppCell(UnsafeCell<Option<&'static dyn App>>);
-
-// SAFETY: written once by `start`, before any interrupt or task can read it.
-unsafe impl Sync for AppCell {}
-
-static APP: AppCell = AppCell(UnsafeCell::new(None));
-
-pub(crate) fn app() -> Option<&'static dyn App> {
-    // SAFETY: `APP` is written only in `start`, before the task switch that makes any
-    // reader run; afterwards it is only read.
-    unsafe { *APP.0.get() }
-}
-
-/// Where the kernel lives on this port.
-pub struct CortexMPort<K> {
-    kernel: UnsafeCell<K>,
-    /// Milliseconds since start, advanced by the tick ISR.
-    ms: core::sync::atomic::AtomicU32,
-}
-
-// SAFETY: the kernel is reached only in `kernel`/`inspect`/`end_job`, with PRIMASK set
-// and a re-entrance check, on a single core.
-unsafe impl<K: Send> Sync for CortexMPort<K> {}
-
-impl<K: OsKernel> CortexMPort<K> {
-    /// The port of `kernel`.
-    pub const fn new(kernel: K) -> Self {
-        Self {
-            kernel: UnsafeCell::new(kernel),
-            ms: core::sync::atomic::AtomicU32::new(0),
-        }
-    }
-
-    /// SysTick counts since the OS started (see [`trace`]).
-    pub fn now_counts(&self) -> u32 {
-        trace::now(self.ms.load(core::sync::atomic::Ordering::Relaxed))
-    }
-
-    /// The tick ISR advances the millisecond time base.
-    pub fn advance_ms(&self) {
-        self.ms.fetch_add(1, core::sync::atomic::Ordering::Relaxed);
-    }
-
-    /// Runs `f` on the kernel with PRIMASK set; then applies the kernel's interrupt mask
-    /// and pends PendSV if the kernel chose another task (or the job ended).
-    #[inline(always)]
-    fn locked<R>(&self, f: impl FnOnce(&mut K, &mut Sched) -> R) -> R {
-        cortex_m::interrupt::disable();
-        // SAFETY: PRIMASK is set, so nothing else runs until it is cleared below; the
-        // `in_kernel` flag refuses a nested call, which would alias the kernel.
-        let (kernel, sched) = unsafe { (&mut *self.kernel.get(), &mut *SCHED.0.get()) };
-        if sched.in_kernel {
-            fatal("kernel lock taken twice");
-        }
-        sched.in_kernel = true;
-        let result = f(kernel, sched);
-        sched.in_kernel = false;
-        let next = kernel.running().map_or(IDLE, |t| t.0);
-        if next == IDLE && kernel.is_shut_down() {
-            // ShutdownOS ran: PRIMASK stays set and nothing is switched to; the first
-            // call to see it hands the end to the application.
-            if !core::mem::replace(&mut sched.stopped, true) {
-                os_stopped();
-            }
-            return result;
-        }
-        sched.next = next;
-        if next != sched.current || sched.ended {
-            SCB::set_pendsv();
-        }
-        let mask = kernel.interrupt_mask();
-        // SAFETY: BASEPRI only holds interrupts back; the value is the kernel's mask.
-        unsafe { basepri::write(basepri_for(mask)) };
-        if mask != InterruptMask::All {
-            // SAFETY: the kernel lock ends here; the kernel's mask admits interrupts.
-            unsafe { cortex_m::interrupt::enable() };
-        }
-        result
-    }
-}
-
-impl<K: OsKernel> Port for CortexMPort<K> {
-    type Kernel = K;
-    const NESTED: bool = false;
-
-    #[inline]
-    fn kernel<R>(&self, f: impl FnOnce(&mut K) -> R) -> R {
-        self.locked(|kernel, _| f(kernel))
-    }
-
-    #[inline]
-    fn inspect<R>(&self, f: impl FnOnce(&K) -> R) -> R {
-        self.locked(|kernel, _| f(kernel))
-    }
-
-    fn end_job(&self, f: impl FnOnce(&mut K) -> Result<(), OsError>) -> Result<(), OsError> {
-        self.locked(|kernel, sched| {
-            let result = f(kernel);
-            if result.is_ok() {
-                sched.ended = true;
-            }
-            result
-        })?;
-        // PendSV is pending and taken as soon as the mask allows: this job is over.
-        loop {
-            cortex_m::asm::wfi();
-        }
-    }
-
-    fn now_ms(&self) -> u64 {
-        u64::from(self.ms.load(core::sync::atomic::Ordering::Relaxed))
-    }
-
-    fn job_started(&self, task: TaskId) {
-        if trace::ENABLED {
-            trace::job_started(task.0, self.now_counts());
-        }
-    }
-
-    fn job_finished(&self, task: TaskId) {
-        if trace::ENABLED {
-            trace::job_finished(task.0, self.now_counts());
-        }
-    }
-
-    fn isr_entered(&self, isr: IsrId) {
-        if trace::ENABLED {
-            trace::isr_entered(isr.0, self.now_counts());
-        }
-    }
-
-    fn span(&self, id: usize, start: bool) {
-        if !trace::ENABLED {
-            return;
-        }
-        let at = self.now_counts();
-        if start {
-            trace::span_start(id, at);
-        } else {
-            trace::span_end(id, at);
-        }
-    }
-}
-
-/// The OS has shut down: the application ends the run.
-fn os_stopped() -> ! {
-    match app() {
-        Some(app) => app.shut_down(),
-        None => fatal("ShutdownOS before the application started"),
-    }
-}
-
-/// Fatal port error: the LEDs' safe state is the board's; here the OS cannot go on.
-fn fatal(what: &str) -> ! {
-    cortex_m::interrupt::disable();
-    crate::cortex_m::report_fatal(what);
-}
-
-/// What a board does on a fatal error (set by the board at start).
-static FATAL: FatalCell = FatalCell(UnsafeCell::new(None));
-
-struct FatalCell(UnsafeCell<Option<fn(&str) -> !>>);
-
-// SAFETY: written once by `start` before interrupts are enabled; read-only afterwards.
-unsafe impl Sync for FatalCell {}
-
-/// Puts the board in its safe state and reports `what`; never returns.
-pub fn report_fatal(what: &str) -> ! {
-    // SAFETY: read-only after `start`.
-    if let Some(handler) = unsafe { *FATAL.0.get() } {
-        handler(what);
-    }
-    loop {
-        cortex_m::asm::wfi();
-    }
-}
-
-/// Bytes of the main stack (ISRs, exceptions) painted when the OS starts, below the main
-/// stack pointer that every exception then starts from, for [`main_stack_use`].
-pub const MAIN_STACK_PAINTED: usize = 2048;
-
-/// Where the painted main stack region ends (its top), set once by `start`.
-static MAIN_PAINT_TOP: core::sync::atomic::AtomicU32 = core::sync::atomic::AtomicU32::new(0);
+/// The main stack's painted region: its top (the main stack pointer when the OS
+/// started) and its lowest address (the guard's top), set once by the idle loop's start.
+static MAIN_TOP: AtomicU32 = AtomicU32::new(0);
+#[no_mangle]
+static CW_PORT_MAIN_GUARD_TOP: AtomicU32 = AtomicU32::new(0);
 
 /// The deepest use of the main stack since the OS started, in bytes (ISRs, PendSV and
 /// the fault handlers run there; the exception frames go on the interrupted task's
-/// stack); at most [`MAIN_STACK_PAINTED`].
+/// stack); at most [`MAIN_STACK_BYTES`].
 pub fn main_stack_use() -> usize {
-    let top = MAIN_PAINT_TOP.load(core::sync::atomic::Ordering::Relaxed);
+    let top = MAIN_TOP.load(Ordering::Relaxed);
+    let bottom = CW_PORT_MAIN_GUARD_TOP.load(Ordering::Relaxed);
     if top == 0 {
         return 0;
     }
-    // The region has no guard: counted from its bottom.
-    painted_use(
-        (top as usize - MAIN_STACK_PAINTED) as *const u32,
-        MAIN_STACK_PAINTED / 4,
-        0,
-    )
+    painted_use(bottom as *const u32, ((top - bottom) / 4) as usize, 0)
 }
 
 /// The deepest use of the shared task stack so far, in bytes (the painted words above
@@ -473,57 +447,169 @@ pub fn basic_stack_use() -> usize {
     )
 }
 
-/// Starts the OS on this port and becomes the idle loop: paints the task stack, sets
-/// PendSV to the lowest priority, moves thread mode to the task stack, calls
-/// `app.start_os()` and then `app.idle()` between interrupts forever.
-///
-/// `on_fatal` puts the board's outputs in their safe state and reports a fatal port error.
-pub fn start(app: &'static dyn App, on_fatal: fn(&str) -> !) -> ! {
+// ---- the application ----------------------------------------------------------------
+
+/// The application the port runs: the ECU's entry points and the board's ends.
+pub trait App: Sync {
+    /// `StartOS` (from the idle loop's context, once, with every interrupt masked: the
+    /// port unmasks them when it returns).
+    fn start_os(&self);
+    /// One job of `task`, from its first line to `TerminateTask`.
+    fn run_job(&self, task: TaskId);
+    /// The idle loop's work, between interrupts (returns to wait for the next one).
+    fn idle(&self);
+    /// The OS tick (SysTick's handler, after the port's millisecond count advanced).
+    fn tick(&self);
+    /// External interrupt line `line` of the board.
+    fn irq(&self, line: u16);
+    /// Logs a port fault or the CPU's (with every interrupt masked): before
+    /// `ShutdownOS(E_OS_STACKFAULT)` for a stack overflow, before [`App::halt`] otherwise.
+    fn report(&self, fault: &PortFault);
+    /// A fault the OS cannot go on from (a refused configuration, a panic, HardFault, NMI,
+    /// BusFault, UsageFault): the board's safe state, then a reset or a documented halt.
+    fn halt(&self) -> !;
+    /// `ShutdownOS` ran (the application's own call, or the OS's on a stack fault): called
+    /// once, from the kernel call that shut the OS down, with interrupts disabled for good
+    /// (OSEK: the OS does not come back, no task or ISR runs again). The application puts
+    /// its outputs in their safe state, reports and stops (EcuM's power-off or reset).
+    /// Kernel calls that only read (the hooks' record) are still served.
+    fn shut_down(&self) -> !;
+}
+
+struct AppCell(UnsafeCell<Option<&'static dyn App>>);
+
+// SAFETY: written once by `start`, before any interrupt or task can read it.
+unsafe impl Sync for AppCell {}
+
+static APP: AppCell = AppCell(UnsafeCell::new(None));
+
+/// The application, once `start` has registered it.
+pub fn app() -> Option<&'static dyn App> {
+    // SAFETY: `APP` is written only in `start`, with interrupts off, before the task
+    // switch that makes any reader run; afterwards it is only read.
+    unsafe { *APP.0.get() }
+}
+
+/// The running port, for the exception handlers (PendSV, MemManage): its address and the
+/// handlers' entries for its kernel type.
+#[derive(Clone, Copy)]
+struct Registered {
+    port: *const (),
+    switch: unsafe fn(*const (), u32) -> u32,
+    fault: unsafe fn(*const (), StackFault) -> !,
+}
+
+struct PortCell(UnsafeCell<Option<Registered>>);
+
+// SAFETY: written once by `start` with interrupts off, before any exception that reads it
+// can run; read-only afterwards.
+unsafe impl Sync for PortCell {}
+
+static PORT: PortCell = PortCell(UnsafeCell::new(None));
+
+fn registered() -> Option<Registered> {
+    // SAFETY: see `PortCell`.
+    unsafe { *PORT.0.get() }
+}
+
+/// Which stack a guard fault hit.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum StackFault {
+    /// The running context's task stack.
+    Task,
+    /// The main stack.
+    Main,
+}
+
+/// # Safety
+/// `port` is the address of a `CortexMPort<K>` registered by `start` (a `'static`).
+unsafe fn switch_of<K: OsKernel>(port: *const (), sp: u32) -> u32 {
+    // SAFETY: the caller's contract.
+    let port = unsafe { &*port.cast::<CortexMPort<K>>() };
+    port.switch(sp)
+}
+
+/// # Safety
+/// As [`switch_of`].
+unsafe fn fault_of<K: OsKernel>(port: *const (), which: StackFault) -> ! {
+    // SAFETY: the caller's contract.
+    let port = unsafe { &*port.cast::<CortexMPort<K>>() };
+    match which {
+        StackFault::Main => port.main_stack_fault(),
+        StackFault::Task => port.stack_fault(port.current_own_stack_task()),
+    }
+}
+
+/// Starts the OS on this port and becomes the idle loop: checks the kernel's
+/// configuration against the port (task count, ISR priorities, an own stack for every
+/// extended task: a refusal is a fatal port fault naming the item), paints the task
+/// stacks, sets PendSV to the lowest priority and the kernel lock's level, turns the MPU's
+/// stack guards on, moves thread mode to the task stack, calls `app.start_os()` and then
+/// `app.idle()` between interrupts forever.
+pub fn start<K: OsKernel>(app: &'static dyn App, port: &'static CortexMPort<K>) -> ! {
     cortex_m::interrupt::disable();
     // SAFETY: interrupts are off and the OS has not started: nothing else reads these.
     unsafe {
         *APP.0.get() = Some(app);
-        *FATAL.0.get() = Some(on_fatal);
+        *PORT.0.get() = Some(Registered {
+            port: (port as *const CortexMPort<K>).cast(),
+            switch: switch_of::<K>,
+            fault: fault_of::<K>,
+        });
     }
-    let base = BASIC_STACK.0.get().cast::<u32>();
-    let basic_bottom = base as u32;
+    let basic_bottom = BASIC_STACK.0.get() as u32;
+    let basic_top = basic_bottom + (BASIC_STACK_WORDS * 4) as u32;
+    port.set_shared_stack(basic_bottom, basic_top);
+    port.start_checked();
+    // The kernel lock's level: the highest category-2 ISR's.
+    let os_priority = port.inspect(|k| {
+        k.isrs()
+            .iter()
+            .filter(|i| i.category == IsrCategory::Two)
+            .map(|i| i.priority)
+            .max()
+            .unwrap_or(1)
+    });
+    OS_LEVEL.store(nvic_priority(os_priority), Ordering::Relaxed);
     // SAFETY: the shared stack's array, which nothing uses yet.
-    unsafe { paint(basic_bottom, basic_bottom + (BASIC_STACK_WORDS * 4) as u32) };
-    // SAFETY: interrupts are off: the only reference to the table.
-    let own = unsafe { (*SCHED.0.get()).own_stack };
-    for (bottom, top) in own.into_iter().filter(|r| r.1 != 0) {
+    unsafe { paint(basic_bottom, basic_top) };
+    let own = port.own_stacks();
+    for t in (0..MAX_TASKS as u8).filter(|t| own & (1 << t) != 0) {
+        let (bottom, top) = port.stack_of(TaskId(t));
         // SAFETY: a task stack given by `set_task_stack`, not yet in use.
         unsafe { paint(bottom, top) };
     }
-    // SAFETY: one past the end of the stack array: the initial process stack pointer.
-    let top = unsafe { base.add(BASIC_STACK_WORDS) } as u32;
     // SAFETY: the core peripherals are taken once, here, before the OS runs.
     let mut cp = unsafe { cortex_m::Peripherals::steal() };
     // SAFETY: setting exception priorities before interrupts are enabled.
     unsafe {
         cp.SCB.set_priority(SystemHandler::PendSV, 0xE0);
     }
-    cp.SCB
-        .enable(cortex_m::peripheral::scb::Exception::MemoryManagement);
+    // The configurable faults are taken as themselves (not escalated to HardFault), each
+    // with its handler below.
+    cp.SCB.enable(Exception::MemoryManagement);
+    cp.SCB.enable(Exception::BusFault);
+    cp.SCB.enable(Exception::UsageFault);
     // SAFETY: region 0 becomes the running context's stack guard (256 bytes, no access,
     // never executable); the background map keeps every other address as before for
     // privileged code, which is all code here. The idle loop's guard (the shared stack's)
-    // is the first.
+    // is the first. Region 1 (the main stack's guard) is set when the main stack's top
+    // is known, before any interrupt.
     unsafe {
         cp.MPU.rnr.write(0);
-        cp.MPU.rbar.write(BASIC_STACK.0.get() as u32);
+        cp.MPU.rbar.write(basic_bottom);
         cp.MPU.rasr.write(GUARD_RASR);
         cp.MPU.ctrl.write(MPU_ENABLE | MPU_PRIVDEFENA);
     }
     cortex_m::asm::dsb();
     cortex_m::asm::isb();
-    // SAFETY: `top` is the 8-byte-aligned end of a static array reserved for this stack;
-    // `switch_to_task_stack` moves thread mode onto it and never returns.
-    unsafe { switch_to_task_stack(top) }
+    // SAFETY: `basic_top` is the 8-byte-aligned end of a static array reserved for this
+    // stack; `cw_port_enter_idle` moves thread mode onto it and never returns.
+    unsafe { cw_port_enter_idle(basic_top) }
 }
 
-/// Sets the NVIC priority of an external interrupt for an OSEK category-2 ISR priority
-/// and enables it.
+/// Sets the NVIC priority of an external interrupt for an OSEK ISR priority and enables
+/// it.
 pub fn enable_irq<I: cortex_m::interrupt::InterruptNumber>(irq: I, osek_priority: u8) {
     // SAFETY: the core peripherals are shared by the port alone; priorities are set
     // before the interrupt is unmasked.
@@ -554,37 +640,57 @@ pub fn start_systick(reload: u32, osek_priority: u8) {
 
 extern "C" {
     fn cw_port_enter_idle(top: u32) -> !;
-}
-
-/// Moves thread mode onto the task stack and enters the idle loop.
-///
-/// # Safety
-/// `top` must be the end of memory reserved for the task stack.
-unsafe fn switch_to_task_stack(top: u32) -> ! {
-    // SAFETY: the caller's contract.
-    unsafe { cw_port_enter_idle(top) }
+    /// The end of the linker's `.bss` and `.uninit` (cortex-m-rt's symbol): nothing of
+    /// the image lives above it but the main stack.
+    static _stack_end: u32;
 }
 
 /// The idle loop, on the task stack (called once by `cw_port_enter_idle`).
 #[no_mangle]
 extern "C" fn cw_port_idle() -> ! {
     // Thread mode runs on the task stack from here on, so the main stack pointer stays
-    // where it is until an exception uses the memory below it: paint that memory.
-    let painted_top = cortex_m::register::msp::read() & !7;
-    // SAFETY: below the main stack pointer, inside the RAM the linker leaves to the main
-    // stack: nothing lives there, and interrupts are still off.
-    unsafe { paint(painted_top - MAIN_STACK_PAINTED as u32, painted_top) };
-    MAIN_PAINT_TOP.store(painted_top, core::sync::atomic::Ordering::Relaxed);
-    // SAFETY: the OS starts now, from thread mode on the task stack.
-    unsafe { cortex_m::interrupt::enable() };
+    // where it is until an exception uses the memory below it: the main stack is the
+    // MAIN_STACK_BYTES below it, painted, with its guard right below.
+    let top = cortex_m::register::msp::read() & !7;
+    let guard_top = (top - MAIN_STACK_BYTES) & !0xFF;
+    let guard_bottom = guard_top - (GUARD_WORDS * 4) as u32;
+    if guard_bottom < core::ptr::addr_of!(_stack_end) as u32 {
+        fatal(PortFault::Board("the main stack does not fit above .bss"));
+    }
+    // SAFETY: between the guard and the main stack pointer, inside the RAM the linker
+    // leaves to the main stack: nothing lives there, and interrupts are still off.
+    unsafe { paint(guard_top, top) };
+    MAIN_TOP.store(top, Ordering::Relaxed);
+    CW_PORT_MAIN_GUARD_TOP.store(guard_top, Ordering::Relaxed);
+    // SAFETY: region 1 becomes the main stack's guard: 256 bytes below its budget, no
+    // access, never executable; nothing of the image lives there (checked above).
+    unsafe {
+        let mpu = &*MPU::PTR;
+        mpu.rbar.write(guard_bottom | RBAR_VALID | 1);
+        mpu.rasr.write(GUARD_RASR);
+    }
+    cortex_m::asm::dsb();
+    cortex_m::asm::isb();
     if let Some(app) = app() {
         app.start_os();
+        // SAFETY: the OS runs from here on, from thread mode on the task stack.
+        unsafe { cortex_m::interrupt::enable() };
         loop {
             app.idle();
             cortex_m::asm::wfi();
         }
     }
-    fatal("no application");
+    halt_here();
+}
+
+/// A fatal fault: reported through the application, then its halt.
+fn fatal(fault: PortFault) -> ! {
+    cortex_m::interrupt::disable();
+    if let Some(app) = app() {
+        app.report(&fault);
+        app.halt();
+    }
+    halt_here()
 }
 
 /// A job's first frame: r0 is its task index, pc the job entry.
@@ -593,88 +699,19 @@ extern "C" fn cw_port_job(task: u32) -> ! {
     if let Some(app) = app() {
         app.run_job(TaskId(task as u8));
     }
-    // The job could not end (the OS shut down, or `TerminateTask` was refused): the
-    // task's context stays; nothing more runs on it.
-    loop {
-        cortex_m::asm::wfi();
-    }
+    // `run_job` ends through the kernel (the port ends a job whose TerminateTask is
+    // refused with E_OS_MISSINGEND); reaching here is a fault.
+    fatal(PortFault::Board("a job returned"));
 }
 
-/// PendSV's decision: saves the outgoing context's stack pointer, returns the incoming
-/// one's (building a new job's first frame on the shared stack). Called with PRIMASK set.
+/// PendSV's decision, with the kernel lock taken: the port's switch.
 #[no_mangle]
 extern "C" fn cw_port_switch(sp: u32) -> u32 {
-    if let Some(task) = overflowed(sp) {
-        match app() {
-            Some(app) => app.stack_fault(task),
-            None => fatal("stack overflow"),
-        }
+    match registered() {
+        // SAFETY: registered by `start` for this port's kernel type.
+        Some(r) => unsafe { (r.switch)(r.port, sp) },
+        None => fatal(PortFault::Board("a task switch before start")),
     }
-    // SAFETY: PendSV calls this between `cpsid i` and `cpsie i`.
-    let s = unsafe { &mut *SCHED.0.get() };
-    let current = s.current as usize;
-    let shared = |s: &Sched, t: usize| s.own_stack.get(t).is_none_or(|r| r.1 == 0);
-    if s.ended && current < MAX_TASKS {
-        s.started &= !(1 << current);
-        if shared(s, current) {
-            s.basic_top = s.job_base[current];
-        }
-        s.ended = false;
-    } else if let Some(slot) = s.sp.get_mut(current) {
-        *slot = sp;
-        if shared(s, current) {
-            s.basic_top = sp;
-        }
-    }
-    let next = s.next as usize;
-    let new_sp = if next >= MAX_TASKS || s.started & (1 << next) != 0 {
-        s.sp.get(next).copied().unwrap_or(sp)
-    } else {
-        s.started |= 1 << next;
-        let top = if shared(s, next) {
-            s.job_base[next] = s.basic_top;
-            s.basic_top
-        } else {
-            s.own_stack[next].1
-        };
-        let frame_top = top & !7;
-        let frame = frame_top - 17 * 4;
-        let words: [u32; 17] = [
-            // r4-r11
-            0,
-            0,
-            0,
-            0,
-            0,
-            0,
-            0,
-            0,
-            // EXC_RETURN: thread mode, process stack, no FPU state
-            0xFFFF_FFFD,
-            // r0 (the task index), r1-r3, r12
-            next as u32,
-            0,
-            0,
-            0,
-            0,
-            // lr: a job never returns (it ends through the kernel)
-            0xFFFF_FFFF,
-            // pc: the job entry, Thumb bit cleared as the exception frame wants it
-            (cw_port_job as *const () as usize as u32) & !1,
-            // xPSR: Thumb state
-            0x0100_0000,
-        ];
-        for (i, w) in words.iter().enumerate() {
-            // SAFETY: `frame..frame_top` lies within the task's own stack (unused: its
-            // job starts now), or within the shared task stack below every preempted
-            // job's context (`basic_top` is the lowest of them).
-            unsafe { (frame as *mut u32).add(i).write_volatile(*w) };
-        }
-        frame
-    };
-    s.current = next as u8;
-    guard_stack_of(s, next);
-    new_sp
 }
 
 /// MPU RASR of a guard: enabled, 256 bytes (SIZE = 7: 2^(7+1)), no access (AP = 0),
@@ -690,53 +727,88 @@ const MPU_PRIVDEFENA: u32 = 1 << 2;
 /// MPU_RBAR: the address applies to the region number given with it.
 const RBAR_VALID: u32 = 1 << 4;
 
-/// Moves the MPU's guard region to the bottom of the stack of `slot` (a task with its
-/// own stack; otherwise the shared stack).
-fn guard_stack_of(s: &Sched, slot: usize) {
-    let bottom = match s.own_stack.get(slot) {
-        Some(&(bottom, top)) if top != 0 => bottom,
-        _ => BASIC_STACK.0.get() as u32,
+/// A MemManage fault (or a HardFault escalated from one): a stack guard was hit.
+/// `main_reset` is 1 when the entry found the main stack pointer inside the main stack's
+/// guard and moved it back to the main stack's top. Never returns.
+#[no_mangle]
+extern "C" fn cw_port_memory_fault(main_reset: u32) -> ! {
+    cortex_m::interrupt::disable();
+    // SAFETY: reads of the fault status and address registers.
+    let (cfsr, mmfar) = unsafe { ((*SCB::PTR).cfsr.read(), (*SCB::PTR).mmfar.read()) };
+    let guard_top = CW_PORT_MAIN_GUARD_TOP.load(Ordering::Relaxed);
+    let mmar_valid = cfsr & (1 << 7) != 0;
+    let in_main_guard = mmar_valid
+        && mmfar < guard_top
+        && mmfar >= guard_top.wrapping_sub((GUARD_WORDS * 4) as u32);
+    let which = if main_reset != 0 || in_main_guard {
+        StackFault::Main
+    } else {
+        StackFault::Task
     };
-    // SAFETY: only region 0's base moves, to the bottom of a 256-byte-aligned stack;
-    // PendSV runs with interrupts disabled, and the exception return that follows
-    // synchronises the change.
-    unsafe {
-        (*cortex_m::peripheral::MPU::PTR)
-            .rbar
-            .write(bottom | RBAR_VALID)
-    };
-}
-
-/// A MemManage fault (or a HardFault escalated from one): the running context touched its
-/// stack guard. Reports the overflow through the application; never returns.
-pub fn memory_fault() -> ! {
-    // SAFETY: a fault handler with the running context stopped; the table is read only.
-    let current = unsafe { (*SCHED.0.get()).current } as usize;
-    // SAFETY: as above.
-    let own = unsafe { (*SCHED.0.get()).own_stack.get(current).copied() };
-    let task = own.filter(|r| r.1 != 0).map(|_| TaskId(current as u8));
-    match app() {
-        Some(app) => app.stack_fault(task),
-        None => fatal("stack overflow"),
+    match registered() {
+        // SAFETY: registered by `start` for this port's kernel type.
+        Some(r) => unsafe { (r.fault)(r.port, which) },
+        None => fatal(PortFault::Board("stack overflow before start")),
     }
 }
 
-/// Whether the outgoing context overflowed its stack: its saved stack pointer lies in the
-/// guard at the stack's bottom (a context switch whose frame the MPU let through only
-/// because the hardware stacked part of it before the guard). `Some(task)` for a task's
-/// own stack, `Some(None)` for the shared one. The guard's words themselves are never
-/// read here: the MPU forbids them to this context, reads included.
-fn overflowed(sp: u32) -> Option<Option<TaskId>> {
-    // SAFETY: PendSV calls `cw_port_switch` between `cpsid i` and `cpsie i`; this borrow
-    // ends before the switch takes its own.
-    let s = unsafe { &*SCHED.0.get() };
-    let current = s.current as usize;
-    let own = s.own_stack.get(current).copied().filter(|r| r.1 != 0);
-    let (bottom, task) = match own {
-        Some((bottom, _)) => (bottom, Some(TaskId(current as u8))),
-        None => (BASIC_STACK.0.get() as u32, None),
-    };
-    (sp < bottom + (GUARD_WORDS * 4) as u32).then_some(task)
+/// HardFault: a MemManage fault escalated (it came with every interrupt masked) is a
+/// stack guard hit; anything else is fatal, named by the fault status register's group.
+#[no_mangle]
+extern "C" fn cw_port_hard_fault(main_reset: u32) -> ! {
+    // SAFETY: a read of the Configurable Fault Status Register.
+    let cfsr = unsafe { (*SCB::PTR).cfsr.read() };
+    if cfsr & 0xFF != 0 {
+        cw_port_memory_fault(main_reset);
+    }
+    fatal(PortFault::Board(if cfsr & 0xFF00 != 0 {
+        "HardFault (a bus fault escalated)"
+    } else if cfsr & 0xFFFF_0000 != 0 {
+        "HardFault (a usage fault escalated)"
+    } else {
+        "HardFault"
+    }))
+}
+
+#[cortex_m_rt::exception]
+fn SysTick() {
+    advance_ms();
+    if let Some(app) = app() {
+        app.tick();
+    }
+}
+
+#[cortex_m_rt::exception]
+unsafe fn NonMaskableInt() {
+    fatal(PortFault::Board("NMI"));
+}
+
+#[cortex_m_rt::exception]
+fn BusFault() {
+    fatal(PortFault::Board("BusFault"));
+}
+
+#[cortex_m_rt::exception]
+fn UsageFault() {
+    fatal(PortFault::Board(
+        "UsageFault (an undefined instruction, a division by zero, an unaligned access)",
+    ));
+}
+
+#[cortex_m_rt::exception]
+unsafe fn DefaultHandler(_irqn: i16) {
+    fatal(PortFault::Board("an exception without a handler"));
+}
+
+#[panic_handler]
+fn panic(_info: &core::panic::PanicInfo) -> ! {
+    static PANICKED: AtomicBool = AtomicBool::new(false);
+    cortex_m::interrupt::disable();
+    if PANICKED.swap(true, Ordering::Relaxed) {
+        // A panic while reporting one: no second report.
+        halt_here();
+    }
+    fatal(PortFault::Board("panic"))
 }
 
 core::arch::global_asm!(
@@ -751,6 +823,42 @@ core::arch::global_asm!(
     "    isb",
     "    bl cw_port_idle",
     "    b .",
+    // The guard faults' entries: a main stack pointer inside the main stack's guard (the
+    // entry's own stacking overflowed it) is moved back to the main stack's top before
+    // any Rust code pushes: the interrupted contexts never resume.
+    ".section .text.MemoryManagement,\"ax\",%progbits",
+    ".global MemoryManagement",
+    ".type MemoryManagement,%function",
+    ".thumb_func",
+    "MemoryManagement:",
+    "    bl cw_port_fix_msp",
+    "    b cw_port_memory_fault",
+    ".section .text.HardFault,\"ax\",%progbits",
+    ".global HardFault",
+    ".type HardFault,%function",
+    ".thumb_func",
+    "HardFault:",
+    "    bl cw_port_fix_msp",
+    "    b cw_port_hard_fault",
+    // r0 := 1 and msp := the main stack's top if msp lies below the main guard's top
+    // (0 if the guard is not set yet); r0 := 0 otherwise. Uses r0-r2 only, no stack.
+    ".section .text.cw_port_fix_msp,\"ax\",%progbits",
+    ".thumb_func",
+    "cw_port_fix_msp:",
+    "    ldr r1, =CW_PORT_MAIN_GUARD_TOP",
+    "    ldr r1, [r1]",
+    "    mrs r2, msp",
+    "    movs r0, #0",
+    "    cmp r2, r1",
+    "    bhs 1f",
+    "    ldr r2, ={main_top}",
+    "    ldr r2, [r2]",
+    "    cbz r2, 1f",
+    "    msr msp, r2",
+    "    movs r0, #1",
+    "1:",
+    "    bx lr",
+    ".ltorg",
     ".fpu fpv4-sp-d16",
     ".section .text.PendSV,\"ax\",%progbits",
     ".global PendSV",
@@ -762,13 +870,22 @@ core::arch::global_asm!(
     "    it eq",
     "    vstmdbeq r0!, {{s16-s31}}",
     "    stmdb r0!, {{r4-r11, lr}}",
-    "    cpsid i",
+    // The kernel lock (BASEPRI at the OS level): category-2 ISRs, which may change the
+    // kernel's choice, wait; category-1 ISRs do not.
+    "    ldr r1, =CW_PORT_OS_LEVEL",
+    "    ldrb r1, [r1]",
+    "    msr basepri, r1",
+    "    isb",
     "    bl cw_port_switch",
-    "    cpsie i",
+    // PendSV runs only with BASEPRI clear (its priority is the lowest).
+    "    movs r1, #0",
+    "    msr basepri, r1",
     "    ldmia r0!, {{r4-r11, lr}}",
     "    tst lr, #0x10",
     "    it eq",
     "    vldmiaeq r0!, {{s16-s31}}",
     "    msr psp, r0",
     "    bx lr",
+    ".ltorg",
+    main_top = sym MAIN_TOP,
 );

@@ -281,17 +281,20 @@ fn with<R>(f: impl FnOnce(&mut Trace) -> R) -> R {
     })
 }
 
-/// SysTick counts since the OS started: `ms` whole ticks, plus how far SysTick has
-/// counted into the current one (a tick that is due but not yet handled counts).
-pub fn now(ms: u32) -> u32 {
-    let (whole, into, per_tick) = systick_position(ms);
-    whole.wrapping_mul(per_tick).wrapping_add(into)
+/// SysTick counts since the OS started: the whole ticks, plus how far SysTick has counted
+/// into the current one (a tick that is due but not yet handled counts). Wraps after
+/// 2^32 counts (171 s at 25 MHz): spans are differences of two such times.
+pub fn now() -> u32 {
+    let (whole, into, per_tick) = systick_position();
+    (whole as u32).wrapping_mul(per_tick).wrapping_add(into)
 }
 
 /// Where SysTick stands: (whole ticks, counts into the current tick, counts per tick),
-/// `ms` being the ticks handled so far (a tick that is due but not yet handled counts).
-pub fn systick_position(ms: u32) -> (u32, u32, u32) {
+/// read together with the port's millisecond count inside one critical section (a tick
+/// that is due but not yet handled counts).
+pub fn systick_position() -> (u64, u32, u32) {
     cortex_m::interrupt::free(|_| {
+        let ms = super::now_ms_masked();
         let reload = SYST::get_reload();
         let current = SYST::get_current();
         let due = SCB::is_pendst_pending();

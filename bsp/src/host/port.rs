@@ -22,6 +22,8 @@ pub struct HostPort<K> {
     jobs: RefCell<Vec<TaskId>>,
     /// Every job start: (task, virtual time in µs).
     starts: RefCell<Vec<(TaskId, u64)>>,
+    /// ISRs whose entry the kernel refused, in order (their lines quieted).
+    refused: RefCell<Vec<IsrId>>,
 }
 
 impl<K: OsKernel> HostPort<K> {
@@ -33,6 +35,7 @@ impl<K: OsKernel> HostPort<K> {
             clock: clock.clone(),
             jobs: RefCell::new(Vec::new()),
             starts: RefCell::new(Vec::new()),
+            refused: RefCell::new(Vec::new()),
         }
     }
 
@@ -55,6 +58,12 @@ impl<K: OsKernel> HostPort<K> {
         }
         irq.apply_mask(self.kernel.borrow().interrupt_mask());
         irq.take_next(isrs)
+    }
+
+    /// The ISRs whose entry the kernel refused, in order: the port quieted their lines
+    /// (the simulation takes no further request of theirs).
+    pub fn refused_isrs(&self) -> Ref<'_, Vec<IsrId>> {
+        self.refused.borrow()
     }
 
     /// Every job start so far: (task, virtual time in µs).
@@ -104,5 +113,9 @@ impl<K: OsKernel> Port for HostPort<K> {
 
     fn job_finished(&self, _task: TaskId) {
         self.jobs.borrow_mut().pop();
+    }
+
+    fn isr_refused(&self, isr: IsrId) {
+        self.refused.borrow_mut().push(isr);
     }
 }

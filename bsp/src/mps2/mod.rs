@@ -30,7 +30,8 @@ use cw_core::can::{slcan, CanBusy, CanDriver, CanFrame, ControllerMode, Hth, Mod
 use embedded_hal::delay::DelayNs;
 use embedded_hal::digital::{ErrorType, InputPin, OutputPin};
 
-use crate::cortex_m::{app, report_fatal};
+use crate::cortex_m::{app, now_ms, now_us};
+use crate::port::preempt::PortFault;
 
 /// The core clock, Hz (SysTick counts it).
 pub const SYSCLK_HZ: u32 = 25_000_000;
@@ -89,7 +90,7 @@ static LEDS_LOGGED: LedLogCell = LedLogCell(core::cell::UnsafeCell::new(LedLog {
 }));
 
 fn led_changed(value: u32) {
-    let at_ms = now_ms();
+    let at_ms = u32::try_from(now_ms()).unwrap_or(u32::MAX);
     cortex_m::interrupt::free(|_| {
         // SAFETY: interrupts are off; the only reference to the log.
         let log = unsafe { &mut *LEDS_LOGGED.0.get() };
@@ -172,20 +173,6 @@ impl DelayNs for CoreDelay {
         // 25 cycles per µs; at least one.
         cortex_m::asm::delay((ns / 40).max(1));
     }
-}
-
-/// Milliseconds since the OS started, counted by [`SysTick`].
-static MS: AtomicU32 = AtomicU32::new(0);
-
-/// Milliseconds since the OS started.
-pub fn now_ms() -> u32 {
-    MS.load(Ordering::Relaxed)
-}
-
-/// The time since the OS started, µs (SysTick's position within the current ms).
-pub fn now_us() -> u64 {
-    let (whole, into, per_tick) = crate::cortex_m::trace::systick_position(now_ms());
-    u64::from(whole) * 1000 + u64::from(into) * 1000 / u64::from(per_tick.max(1))
 }
 
 /// Starts SysTick: one interrupt per millisecond, at OSEK ISR priority `osek_priority`.
@@ -348,8 +335,21 @@ static BUS_FRAMES: Mutex<RefCell<[Option<CanFrame>; RX_QUEUE]>> =
 static BUS_FRAMES_WAITING: AtomicBool = AtomicBool::new(false);
 
 /// The ms at which the controller's delayed transmission or bus-off is due (`u32::MAX`:
-/// none): SysTick raises the controller's interrupt then.
+/// none): the OS tick raises the controller's interrupt then ([`on_tick`]).
 static DEFERRED_DUE_MS: AtomicU32 = AtomicU32::new(u32::MAX);
+
+const _: () = assert!(
+    slcan::TIMESTAMP_MODULUS <= u16::MAX as u32,
+    "the time stamp's modulus fits the 32-bit remainder"
+);
+
+/// The board's work in every OS tick (the application's tick calls it first): the CAN
+/// controller's delayed transmission or bus-off, when due, raises its interrupt.
+pub fn on_tick() {
+    if BUS_FAULTS && now_ms() >= u64::from(DEFERRED_DUE_MS.load(Ordering::Relaxed)) {
+        cortex_m::peripheral::NVIC::pend(Irq(1));
+    }
+}
 
 /// Fault injection (a scenario's `can-errors`): the controller's next `count`
 /// transmission attempts fail, each raising its transmit error counter by 8 and taking
@@ -435,7 +435,7 @@ pub struct SlcanCan {
     mode: ControllerMode,
     /// The mailbox: a frame `Can_Write` accepted, with its time stamp, that the transmit
     /// interrupt has not yet turned into a line.
-    mailbox: Option<(CanFrame, Option<u32>)>,
+    mailbox: Option<(CanFrame, Option<u64>)>,
     /// The line being sent and how far.
     line: [u8; slcan::FRAME_LINE_MAX],
     len: usize,
@@ -604,8 +604,11 @@ impl SlcanCan {
     }
 
     /// Puts `frame`'s line (time-stamped `at_ms`) where the transmitter takes it from.
-    fn load_line(&mut self, frame: &CanFrame, at_ms: Option<u32>) {
-        self.len = slcan::encode_frame_at(frame, at_ms, &mut self.line);
+    fn load_line(&mut self, frame: &CanFrame, at_ms: Option<u64>) {
+        // Lawicel's time stamp counts ms modulo 60 000: the remainder of the 64-bit time,
+        // in 32-bit operations, here in the interrupt rather than in `Can_Write`.
+        let stamp = at_ms.map(|ms| cw_core::time::rem_u64(ms, slcan::TIMESTAMP_MODULUS as u16));
+        self.len = slcan::encode_frame_at(frame, stamp, &mut self.line);
         self.sent = 0;
     }
 
@@ -746,10 +749,7 @@ impl CanDriver for SlcanCan {
             return Err(CanBusy);
         }
         if crate::cortex_m::trace::ENABLED {
-            crate::cortex_m::trace::span_start(
-                DRIVER_WRITE_SPAN,
-                crate::cortex_m::trace::now(now_ms()),
-            );
+            crate::cortex_m::trace::span_start(DRIVER_WRITE_SPAN, crate::cortex_m::trace::now());
         }
         self.pdu = Some(pdu);
         match self.attempts(frame) {
@@ -761,10 +761,7 @@ impl CanDriver for SlcanCan {
             }
         }
         if crate::cortex_m::trace::ENABLED {
-            crate::cortex_m::trace::span_end(
-                DRIVER_WRITE_SPAN,
-                crate::cortex_m::trace::now(now_ms()),
-            );
+            crate::cortex_m::trace::span_end(DRIVER_WRITE_SPAN, crate::cortex_m::trace::now());
         }
         Ok(())
     }
@@ -815,7 +812,9 @@ unsafe impl cortex_m::interrupt::InterruptNumber for Irq {
 // which `cargo xtask qemu` and the emulator tests run on QEMU's output).
 use defmt_semihosting as _;
 
-/// Ends the QEMU run (semihosting `SYS_EXIT`), successfully or not.
+/// Ends the QEMU run (semihosting `SYS_EXIT`), successfully or not: the measuring and
+/// test images' end (QEMU runs them with semihosting; a board without a debugger would
+/// fault on the call, so a production image never makes it: [`halt`] resets).
 pub fn exit(success: bool) -> ! {
     let code = if success {
         cortex_m_semihosting::debug::EXIT_SUCCESS
@@ -828,57 +827,51 @@ pub fn exit(success: bool) -> ! {
     }
 }
 
-/// A fatal error: LEDs to their safe state, the reason on the log, the run ends failed.
+/// How a fatal fault ends the run.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum FatalEnd {
+    /// A system reset (`SCB::sys_reset`): the production image, as on silicon (QEMU,
+    /// run with `-no-reboot`, exits).
+    Reset,
+    /// QEMU's exit with a failure status (semihosting): the measuring and test images,
+    /// whose runs a test reads to its end.
+    Exit,
+}
+
+/// The image ends fatal faults by QEMU's exit instead of a reset.
+static END_BY_EXIT: AtomicBool = AtomicBool::new(false);
+
+/// Chooses how this image ends fatal faults (a reset unless told; before start).
+pub fn set_fatal_end(end: FatalEnd) {
+    END_BY_EXIT.store(end == FatalEnd::Exit, Ordering::Relaxed);
+}
+
+/// A fault the OS cannot go on from, already reported: the outputs' safe state (LEDs
+/// dark), then the image's end ([`FatalEnd`]): a reset, or QEMU's exit with a failure.
+pub fn halt() -> ! {
+    cortex_m::interrupt::disable();
+    leds_safe();
+    if END_BY_EXIT.load(Ordering::Relaxed) {
+        exit(false)
+    }
+    last_words(|| defmt::println!("RESET"));
+    cortex_m::peripheral::SCB::sys_reset()
+}
+
+/// Logs a port fault with the outputs in their safe state: `FATAL: WHAT ITEM` (a stack
+/// overflow then shuts the OS down, whose report follows).
+pub fn report(fault: &PortFault) {
+    leds_safe();
+    let (what, item) = fault.parts();
+    defmt::println!("FATAL: {=str} {=str}", what, item);
+}
+
+/// A fatal error of the board or the application: LEDs to their safe state, the reason on
+/// the log, then [`halt`].
 pub fn fatal(what: &str) -> ! {
     leds_safe();
     last_words(|| defmt::println!("FATAL: {=str}", what));
-    exit(false)
-}
-
-#[cortex_m_rt::exception]
-fn SysTick() {
-    let ms = MS.fetch_add(1, Ordering::Relaxed).wrapping_add(1);
-    if ms >= DEFERRED_DUE_MS.load(Ordering::Relaxed) {
-        // The CAN controller's delayed transmission or bus-off is due.
-        cortex_m::peripheral::NVIC::pend(Irq(1));
-    }
-    if let Some(app) = app() {
-        app.tick();
-    }
-}
-
-#[cortex_m_rt::exception]
-fn MemoryManagement() {
-    crate::cortex_m::memory_fault();
-}
-
-#[cortex_m_rt::exception]
-unsafe fn HardFault(frame: &cortex_m_rt::ExceptionFrame) -> ! {
-    // SAFETY: a read of the Configurable Fault Status Register.
-    let cfsr = unsafe { (*cortex_m::peripheral::SCB::PTR).cfsr.read() };
-    // A MemManage fault escalated (it came while PRIMASK was set, in a kernel call): a
-    // stack guard was hit.
-    if cfsr & 0xFF != 0 {
-        crate::cortex_m::memory_fault();
-    }
-    leds_safe();
-    last_words(|| defmt::println!("FATAL: HardFault at pc {=u32:#010x}", frame.pc()));
-    exit(false)
-}
-
-#[panic_handler]
-fn panic(info: &core::panic::PanicInfo) -> ! {
-    leds_safe();
-    if let Some(location) = info.location() {
-        last_words(|| {
-            defmt::println!(
-                "FATAL: panic at {=str}:{=u32}",
-                location.file(),
-                location.line()
-            )
-        });
-    }
-    report_fatal("panic")
+    halt()
 }
 
 /// Logs a fatal error's report the first time only: a fault or panic inside the log

@@ -20,9 +20,12 @@ use core::cell::UnsafeCell;
 use core::sync::atomic::{AtomicBool, Ordering};
 
 use cw_core::os::{
-    Hooks, InterruptMask, IsrId, Os, OsConfig, OsError, ResourceId, TaskId, TaskState,
+    Hooks, InterruptMask, IsrConfig, IsrId, Os, OsConfig, OsError, ResourceId, TaskConfig, TaskId,
+    TaskState,
 };
 use cw_core::tables::Tables;
+
+pub mod preempt;
 
 /// The kernel services a port and the [`Resource`] cells rely on.
 ///
@@ -63,6 +66,16 @@ pub unsafe trait OsKernel {
     fn exit_isr(&mut self) -> Result<(), OsError>;
     /// The OS shuts itself down on a fault the port detected (a stack overflow).
     fn shutdown_on_fault(&mut self, error: OsError);
+    /// The running task's job returned without ending (its `TerminateTask` refused): the
+    /// kernel ends it with `E_OS_MISSINGEND`, releasing what it holds.
+    ///
+    /// # Errors
+    /// As the kernel's `task_returned` (not called from a task).
+    fn task_returned(&mut self) -> Result<(), OsError>;
+    /// The configured tasks.
+    fn tasks(&self) -> &'static [TaskConfig];
+    /// The configured ISRs.
+    fn isrs(&self) -> &'static [IsrConfig];
 }
 
 // SAFETY: `Os::get_resource` records the caller as the owner and refuses an owned resource
@@ -119,6 +132,16 @@ where
     fn shutdown_on_fault(&mut self, error: OsError) {
         Os::shutdown_on_fault(self, error);
     }
+    #[inline]
+    fn task_returned(&mut self) -> Result<(), OsError> {
+        Os::task_returned(self)
+    }
+    fn tasks(&self) -> &'static [TaskConfig] {
+        self.config().tasks()
+    }
+    fn isrs(&self) -> &'static [IsrConfig] {
+        self.config().isrs()
+    }
 }
 
 /// How the ECU reaches the kernel on a board.
@@ -165,6 +188,12 @@ pub trait Port {
 
     /// Category-2 ISR `isr` was entered (the kernel accepted its entry); for traces.
     fn isr_entered(&self, _isr: IsrId) {}
+
+    /// The kernel refused the entry of ISR `isr`, so its body does not run and nothing
+    /// clears its source: the port quiets the interrupt line (on a level-triggered line,
+    /// FlexCAN's among them, returning would take the interrupt again at once: a storm).
+    /// The ISR's driver is started again only by the application.
+    fn isr_refused(&self, _isr: IsrId) {}
 
     /// A measured span `id` (the application numbers them) starts or ends here; for the
     /// instruction counts of the application's own paths.

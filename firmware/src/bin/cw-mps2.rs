@@ -8,7 +8,6 @@
 #![no_std]
 #![no_main]
 
-use cw_bsp::cortex_m::CortexMPort;
 use cw_bsp::mps2::{self, Led, SensorUart, SlcanCan};
 use cw_bsp::port::Slot;
 use cw_core::sonar::SonarConfig;
@@ -38,10 +37,11 @@ fn main() -> ! {
             com_enable: TiedOn,
         },
     };
-    let ecu = Ecu::new(CortexMPort::new(kernel), parts, SonarConfig::HC_SR04);
+    let ecu = Ecu::new(cw_bsp::cortex_m::port(kernel), parts, SonarConfig::HC_SR04);
     let Some(app) = APP.init(Mps2FlashApp { ecu }) else {
         mps2::fatal("started twice")
     };
     app.ecu.init();
-    cw_bsp::cortex_m::start(app, mps2::fatal)
+    let app: &'static Mps2FlashApp = app;
+    cw_bsp::cortex_m::start(app, app.ecu.port())
 }

@@ -9,19 +9,31 @@
 //!
 //! `WakeAlarm` sets `EV_ALARM` on `Waiter` every 5 ms; `PingIsr` (category 2, on the
 //! board's software interrupt line) sets `EV_ISR`. `Waiter` counts its wake-ups and checks
-//! that each alarm wake-up came in the millisecond its alarm expired. After 40 alarm
-//! wake-ups it reports, then overflows its own stack on purpose: the MPU guard below the
-//! stack must stop it at the first access, and the port must shut the OS down with
-//! `E_OS_STACKFAULT` for the ShutdownHook to see. The run succeeds only then.
+//! that each alarm wake-up came in the millisecond its alarm expired; every `Worker` job
+//! also makes a kernel call inside its own critical section, which must stay closed.
+//! After 40 alarm wake-ups the waiter reports, then plays the fault the command line
+//! names (`--fault NAME`; semihosting), and the run succeeds only if the port handles it
+//! as its guarantees say:
 //!
-//! Run: `cargo xtask qemu --events` (also in the check command's `qemu` stage).
+//! | fault | what the demo does | what must follow |
+//! |---|---|---|
+//! | `task-stack` (default) | `Waiter` recurses without end on its own stack | the MPU guard stops it; `ShutdownOS(E_OS_STACKFAULT)`, seen by the ShutdownHook |
+//! | `in-kernel` | the same, inside a kernel call | the same (not a "kernel lock taken twice") |
+//! | `main-stack` | `PingIsr` recurses without end on the main stack | the main stack's guard stops it; `E_OS_STACKFAULT` |
+//! | `missing-end` | one `Worker` job ends with interrupts disabled, so its `TerminateTask` is refused | `E_OS_MISSINGEND` for the job; `Worker` and `Pinger` go on running; then `task-stack` |
+//! | `no-own-stack` | `Waiter`'s own stack is not given | the port refuses to start, naming `Waiter` |
+//! | `reset` | a panic in `Waiter`, with the image's fatal end set to a reset | LEDs dark, `FATAL`, `RESET`: the production image's end (QEMU exits on the reset) |
+//!
+//! Run: `cargo xtask qemu --events` (every fault; also in the check command's `qemu`
+//! stage).
 #![no_std]
 #![no_main]
 
 use core::sync::atomic::{AtomicU32, Ordering};
 
-use cw_bsp::cortex_m::{self as port, App, CortexMPort, TaskStack};
-use cw_bsp::mps2;
+use cw_bsp::cortex_m::{self as port, now_ms, App, CortexMPort, TaskStack};
+use cw_bsp::mps2::{self, FatalEnd};
+use cw_bsp::port::preempt::PortFault;
 use cw_bsp::port::{Port, Slot};
 use cw_core::os::{
     status_name, AlarmAction, AlarmConfig, ConformanceClass, CounterConfig, CounterId, Dialect,
@@ -116,11 +128,62 @@ static LATE_WAKES: AtomicU32 = AtomicU32::new(0);
 static PINGS: AtomicU32 = AtomicU32::new(0);
 static WORK_JOBS: AtomicU32 = AtomicU32::new(0);
 static DIVING: AtomicU32 = AtomicU32::new(0);
-/// 1: the stack fault the port reported was on the waiter's own stack.
-static FAULT_ON_WAITER: AtomicU32 = AtomicU32::new(0);
+/// The stack overflow the port reported: 1 the waiter's own stack, 2 the main stack.
+static FAULT_ON: AtomicU32 = AtomicU32::new(0);
+/// Kernel calls inside a critical section that left it open.
+static SECTIONS_OPENED: AtomicU32 = AtomicU32::new(0);
+/// Worker jobs after the one that ended without a proper end.
+static JOBS_AFTER_MISSING_END: AtomicU32 = AtomicU32::new(0);
+static PINGS_AFTER_MISSING_END: AtomicU32 = AtomicU32::new(0);
+/// 1 once a Worker job has ended without a proper end.
+static MISSED_END: AtomicU32 = AtomicU32::new(0);
+
+/// The fault a run plays after the wake-ups (`--fault NAME`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Fault {
+    TaskStack,
+    InKernel,
+    MainStack,
+    MissingEnd,
+    NoOwnStack,
+    Reset,
+}
+
+impl Fault {
+    const ALL: [(&'static str, Fault); 6] = [
+        ("task-stack", Fault::TaskStack),
+        ("in-kernel", Fault::InKernel),
+        ("main-stack", Fault::MainStack),
+        ("missing-end", Fault::MissingEnd),
+        ("no-own-stack", Fault::NoOwnStack),
+        ("reset", Fault::Reset),
+    ];
+
+    /// The fault the semihosting command line names (`--fault NAME`), default `task-stack`.
+    fn from_command_line() -> Self {
+        let mut buf = [0u8; 128];
+        let line = mps2::semihosting::command_line(&mut buf).unwrap_or("");
+        let mut words = line.split_whitespace();
+        let Some(name) = words.find(|w| *w == "--fault").and_then(|_| words.next()) else {
+            return Fault::TaskStack;
+        };
+        match Self::ALL.iter().find(|(n, _)| *n == name) {
+            Some(&(_, fault)) => fault,
+            None => mps2::fatal("--fault takes task-stack, in-kernel, main-stack, missing-end, no-own-stack or reset"),
+        }
+    }
+
+    fn name(self) -> &'static str {
+        Self::ALL
+            .iter()
+            .find(|(_, f)| *f == self)
+            .map_or("?", |(n, _)| *n)
+    }
+}
 
 struct Demo {
     port: CortexMPort<Kernel>,
+    fault: Fault,
 }
 
 impl Demo {
@@ -155,13 +218,12 @@ impl Demo {
             }
             if events & EV_ALARM != 0 {
                 let n = ALARM_WAKES.fetch_add(1, Ordering::Relaxed) + 1;
-                if mps2::now_ms() != n * WAKE_PERIOD_MS {
+                if now_ms() != u64::from(n * WAKE_PERIOD_MS) {
                     LATE_WAKES.fetch_add(1, Ordering::Relaxed);
                 }
                 if n == WAKES {
                     self.report();
-                    DIVING.store(1, Ordering::Relaxed);
-                    dive(0);
+                    self.play_fault();
                 }
             }
         }
@@ -177,7 +239,7 @@ impl Demo {
             WORK_JOBS.load(Ordering::Relaxed),
             PINGS.load(Ordering::Relaxed),
             hooks.errors,
-            port::task_stack_use(WAITER).unwrap_or(0),
+            port::task_stack_use(&self.port, WAITER).unwrap_or(0),
             port::basic_stack_use()
         );
         port::trace::read(|t| {
@@ -193,7 +255,46 @@ impl Demo {
                 }
             }
         });
-        defmt::println!("cw-qemu-events: now overflowing the Waiter's stack on purpose");
+        if self.fault == Fault::MissingEnd {
+            defmt::println!(
+                "cw-qemu-events: after the job that ended without TerminateTask: Worker ran {} jobs, Pinger {}",
+                JOBS_AFTER_MISSING_END.load(Ordering::Relaxed),
+                PINGS_AFTER_MISSING_END.load(Ordering::Relaxed)
+            );
+        }
+        defmt::println!(
+            "cw-qemu-events: kernel calls that opened the caller's critical section: {}",
+            SECTIONS_OPENED.load(Ordering::Relaxed)
+        );
+    }
+
+    /// The run's fault, after the wake-ups.
+    fn play_fault(&self) {
+        DIVING.store(1, Ordering::Relaxed);
+        match self.fault {
+            Fault::TaskStack | Fault::MissingEnd | Fault::NoOwnStack => {
+                defmt::println!("cw-qemu-events: now overflowing the Waiter's stack on purpose");
+                dive(0);
+            }
+            Fault::InKernel => {
+                defmt::println!(
+                    "cw-qemu-events: now overflowing the Waiter's stack inside a kernel call"
+                );
+                self.port.kernel(|_| dive(0));
+            }
+            Fault::MainStack => {
+                defmt::println!("cw-qemu-events: now overflowing the main stack from PingIsr");
+                mps2::pend_software_irq();
+            }
+            Fault::Reset => {
+                defmt::println!("cw-qemu-events: now panicking, the fatal end set to a reset");
+                mps2::set_fatal_end(FatalEnd::Reset);
+                // An index the compiler cannot see is out of range.
+                let table = [1u32, 2];
+                let i = core::hint::black_box(2usize);
+                core::hint::black_box(table[i]);
+            }
+        }
     }
 }
 
@@ -226,12 +327,32 @@ impl App for Demo {
         match task {
             WAITER => self.waiter(),
             WORKER => {
-                WORK_JOBS.fetch_add(1, Ordering::Relaxed);
+                let jobs = WORK_JOBS.fetch_add(1, Ordering::Relaxed) + 1;
                 // Some work on the shared stack while the waiter's context is kept.
                 cortex_m::asm::delay(2_000);
+                // A kernel call inside the job's own critical section leaves it closed.
+                cortex_m::interrupt::free(|_| {
+                    let _ = self.port.kernel(|os| os.get_task_id());
+                    // PRIMASK "active": interrupts are taken again.
+                    if cortex_m::register::primask::read().is_active() {
+                        SECTIONS_OPENED.fetch_add(1, Ordering::Relaxed);
+                    }
+                });
+                if MISSED_END.load(Ordering::Relaxed) == 1 {
+                    JOBS_AFTER_MISSING_END.fetch_add(1, Ordering::Relaxed);
+                }
+                if self.fault == Fault::MissingEnd && jobs == 5 {
+                    // The job ends with every interrupt disabled: its TerminateTask is
+                    // refused (E_OS_DISABLEDINT), so it returns without a proper end.
+                    let _ = self.port.kernel(|os| os.disable_all_interrupts());
+                    MISSED_END.store(1, Ordering::Relaxed);
+                }
             }
             PINGER => {
                 PINGS.fetch_add(1, Ordering::Relaxed);
+                if MISSED_END.load(Ordering::Relaxed) == 1 {
+                    PINGS_AFTER_MISSING_END.fetch_add(1, Ordering::Relaxed);
+                }
                 mps2::pend_software_irq();
             }
             _ => {}
@@ -243,7 +364,6 @@ impl App for Demo {
     fn idle(&self) {}
 
     fn tick(&self) {
-        self.port.advance_ms();
         self.isr(SYSTICK_ISR, |demo| {
             let _ = demo.port.kernel(|os| os.increment_counter(COUNTER));
         });
@@ -254,21 +374,29 @@ impl App for Demo {
             mps2::fatal("an interrupt line the demo does not use");
         }
         self.isr(PING_ISR, |demo| {
+            if demo.fault == Fault::MainStack && DIVING.load(Ordering::Relaxed) == 1 {
+                dive(0);
+            }
             let _ = demo.port.kernel(|os| os.set_event(WAITER, EV_ISR));
         });
     }
 
-    fn stack_fault(&self, task: Option<TaskId>) -> ! {
-        let who = task.map_or("the shared", |t| OS.tasks()[usize::from(t.0)].name);
+    fn report(&self, fault: &PortFault) {
+        let (what, item) = fault.parts();
+        match fault {
+            PortFault::StackOverflow(Some("Waiter")) => FAULT_ON.store(1, Ordering::Relaxed),
+            PortFault::MainStackOverflow => FAULT_ON.store(2, Ordering::Relaxed),
+            _ => {}
+        }
         defmt::println!(
-            "cw-qemu-events: stack overflow caught by the MPU guard on {} stack; ShutdownOS(E_OS_STACKFAULT)",
-            who
+            "cw-qemu-events: the port reports: {=str} {=str}",
+            what,
+            item
         );
-        FAULT_ON_WAITER.store(u32::from(task == Some(WAITER)), Ordering::Relaxed);
-        // The port hands the end to `shut_down`.
-        self.port
-            .kernel(|os| os.shutdown_on_fault(OsError::StackFault));
-        mps2::fatal("the OS did not shut down on a stack overflow")
+    }
+
+    fn halt(&self) -> ! {
+        mps2::halt()
     }
 
     fn shut_down(&self) -> ! {
@@ -280,11 +408,25 @@ impl App for Demo {
                 .shutdown
                 .map_or("nothing", |s| status_name(s).unwrap_or("an unknown code"))
         );
-        let planned =
-            DIVING.load(Ordering::Relaxed) == 1 && FAULT_ON_WAITER.load(Ordering::Relaxed) == 1;
+        let expected_fault = if self.fault == Fault::MainStack { 2 } else { 1 };
+        let planned = DIVING.load(Ordering::Relaxed) == 1
+            && FAULT_ON.load(Ordering::Relaxed) == expected_fault;
+        // The job without a proper end: E_OS_DISABLEDINT (its refused TerminateTask) and
+        // E_OS_MISSINGEND (the port's end of it), then the tasks go on.
+        let (errors, went_on) = if self.fault == Fault::MissingEnd {
+            (
+                2,
+                JOBS_AFTER_MISSING_END.load(Ordering::Relaxed) > 0
+                    && PINGS_AFTER_MISSING_END.load(Ordering::Relaxed) > 0,
+            )
+        } else {
+            (0, true)
+        };
         let ok = planned
+            && went_on
             && hooks.shutdown == Some(OsError::StackFault.status())
-            && hooks.errors == 0
+            && hooks.errors == errors
+            && SECTIONS_OPENED.load(Ordering::Relaxed) == 0
             && LATE_WAKES.load(Ordering::Relaxed) == 0
             && ALARM_WAKES.load(Ordering::Relaxed) == WAKES
             && ISR_WAKES.load(Ordering::Relaxed) > 0;
@@ -300,12 +442,22 @@ fn main() -> ! {
     let Ok(kernel) = Kernel::new(DemoTables) else {
         mps2::fatal("the OS configuration is inconsistent")
     };
-    port::set_task_stack(WAITER, &WAITER_STACK);
+    // A test image: a fatal fault ends the QEMU run with a failure status.
+    mps2::set_fatal_end(FatalEnd::Exit);
+    let fault = Fault::from_command_line();
     let Some(demo) = DEMO.init(Demo {
-        port: CortexMPort::new(kernel),
+        port: port::port(kernel),
+        fault,
     }) else {
         mps2::fatal("started twice")
     };
-    defmt::println!("cw-qemu-events: extended tasks and the stack guard on mps2-an386");
-    port::start(demo, mps2::fatal)
+    let demo: &'static Demo = demo;
+    if fault != Fault::NoOwnStack {
+        port::set_task_stack(&demo.port, WAITER, &WAITER_STACK);
+    }
+    defmt::println!(
+        "cw-qemu-events: extended tasks and the stack guard on mps2-an386; fault {=str}",
+        fault.name()
+    );
+    port::start(demo, &demo.port)
 }

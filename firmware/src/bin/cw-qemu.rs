@@ -4,8 +4,7 @@
 #![no_std]
 #![no_main]
 
-use cw_bsp::cortex_m::CortexMPort;
-use cw_bsp::mps2::{self, Led, SlcanCan};
+use cw_bsp::mps2::{self, FatalEnd, Led, SlcanCan};
 use cw_bsp::port::Slot;
 use cw_core::sonar::SonarConfig;
 use cw_firmware::board::{BoardParts, Leds, ModeInputs};
@@ -23,6 +22,8 @@ fn main() -> ! {
     let Ok(kernel) = config::kernel() else {
         mps2::fatal("the OS configuration is inconsistent")
     };
+    // A measuring image: a fatal fault ends the QEMU run with a failure status.
+    mps2::set_fatal_end(FatalEnd::Exit);
     defmt::println!("cw-qemu: collision-warning ECU on mps2-an386");
     let start = load();
     let (uart_sensor, seed) = (start.uart_sensor, start.seed);
@@ -30,7 +31,7 @@ fn main() -> ! {
         mps2::fatal("started twice")
     };
     let scenario: &'static ImageScenario = scenario;
-    let end_ms = u32::try_from(scenario.duration_ms()).unwrap_or(u32::MAX);
+    let end_ms = scenario.duration_ms();
     let parts = BoardParts::<Mps2Board> {
         port: Mps2PortDriver,
         can: SlcanCan::uart0(),
@@ -44,7 +45,7 @@ fn main() -> ! {
             com_enable: ScenarioInput::new(scenario, ModeLine::ComEnable),
         },
     };
-    let ecu = Ecu::new(CortexMPort::new(kernel), parts, SonarConfig::HC_SR04);
+    let ecu = Ecu::new(cw_bsp::cortex_m::port(kernel), parts, SonarConfig::HC_SR04);
     let Some(app) = APP.init(Mps2App {
         ecu,
         end_ms,
@@ -54,5 +55,6 @@ fn main() -> ! {
         mps2::fatal("started twice")
     };
     app.ecu.init();
-    cw_bsp::cortex_m::start(app, mps2::fatal)
+    let app: &'static Mps2App = app;
+    cw_bsp::cortex_m::start(app, app.ecu.port())
 }

@@ -1,0 +1,739 @@
+//! The preemptive port without the CPU: the kernel lock, the task switch's bookkeeping
+//! (which job runs on which stack, where a new job's first frame goes), the end of a job,
+//! stack faults and the checks of a configuration against what the port can do. The CPU
+//! comes in through [`Arch`]: the Cortex-M port (`crate::cortex_m`) is this module over
+//! its exceptions, BASEPRI, PRIMASK and MPU; the host tests run it over a model CPU
+//! (`tests.rs`), with bolero harnesses that are also fuzz targets and Kani proofs.
+//!
+//! The book: [the Cortex-M4 image](../../../book/cortex-m4.html), "The port's guarantees".
+//!
+//! # The rules it keeps
+//!
+//! - **Kernel lock at the OS level.** A kernel call masks what the OS serves (category-2
+//!   ISRs, the OS tick, the task switch), not every interrupt: a category-1 ISR, whose
+//!   priority the configuration puts above every category-2 one, is never delayed by a
+//!   kernel call. A kernel call that finds another under way (a category-1 ISR calling the
+//!   OS, which OSEK forbids) is a fatal port fault, never a second `&mut` on the kernel.
+//! - **Masks.** After every call the OS level mask is the kernel's; every-interrupt masking
+//!   (`DisableAllInterrupts`, `SuspendAllInterrupts`) is turned on and off only where the
+//!   kernel's mask says so, so a kernel call made inside the caller's own critical
+//!   section leaves that section closed.
+//! - **One stack for the basic tasks.** OSEK basic tasks start and end in LIFO order, so
+//!   a new job's first frame goes just below the deepest preempted job on the shared
+//!   stack; a job that ends gives its part back. A task that can wait (an extended task)
+//!   keeps its context while lower tasks run, so it must have a stack of its own: the
+//!   port refuses to start otherwise ([`check`]), naming the task.
+//! - **A job that cannot end** (its `TerminateTask` refused: interrupts left disabled, a
+//!   resource still held) is ended by the kernel's `task_returned` (`E_OS_MISSINGEND` to
+//!   the ErrorHook, its resources and locks released, as AUTOSAR's SWS_Os_00052 and
+//!   SWS_Os_00069 say), instead of spinning at its priority for ever.
+//! - **Stack faults.** A context switch that finds the outgoing stack pointer inside the
+//!   stack's guard, or the CPU's guard fault, ends in `ShutdownOS(E_OS_STACKFAULT)` with
+//!   the ShutdownHook, also when the fault interrupted a kernel call (whose context never
+//!   resumes).
+
+use core::cell::UnsafeCell;
+use core::sync::atomic::{compiler_fence, AtomicBool, Ordering};
+
+use cw_core::os::{
+    InterruptMask, IsrConfig, IsrId, OsError, TaskConfig, TaskId, TaskKind, TaskState,
+};
+
+use super::{OsKernel, Port};
+
+pub mod spec;
+#[cfg(test)]
+mod tests;
+
+/// The most tasks the port switches between (its tables' size; the kernel allows more,
+/// which [`check`] refuses).
+pub const MAX_TASKS: usize = 16;
+/// The slot of the idle loop in the port's tables.
+pub const IDLE: u8 = MAX_TASKS as u8;
+
+/// What the port needs of the CPU.
+///
+/// An implementation is the interrupt controller and the stack layout of one core; every
+/// method is short and does exactly what it says (the decisions are this module's).
+pub trait Arch {
+    /// The OSEK ISR priorities the interrupt controller tells apart: `1 ..= ISR_PRIORITIES`
+    /// (above them the CPU's own faults, below them the task switch).
+    const ISR_PRIORITIES: u8;
+    /// Bytes at the bottom of every task stack that the stack guard covers.
+    const GUARD_BYTES: u32;
+    /// Bytes a new job's first frame takes below its stack's top (alignment included).
+    const FIRST_FRAME_BYTES: u32;
+
+    /// Takes the kernel lock: masks every interrupt the OS serves (category-2 ISRs, the OS
+    /// tick, the task switch); category-1 ISRs above the OS level keep running.
+    fn lock_os(&self);
+    /// Sets the OS-level mask to the kernel's interrupt mask, ending the kernel lock
+    /// (`All`: the OS level; every other interrupt is [`Arch::disable_all`]'s).
+    fn set_mask(&self, mask: InterruptMask);
+    /// Whether every interrupt is masked now ([`Arch::disable_all`], or the caller's own
+    /// critical section).
+    fn all_masked(&self) -> bool;
+    /// Masks every interrupt (category 1 included).
+    fn disable_all(&self);
+    /// Unmasks what [`Arch::disable_all`] masked.
+    fn enable_all(&self);
+    /// Requests the task switch, which runs when no ISR is active and the mask allows.
+    fn request_switch(&self);
+    /// Waits for an interrupt (a job that has ended waits here for its switch).
+    fn wait(&self);
+    /// Writes a new job's first frame for `task` just below `top` and returns the stack
+    /// pointer the switch loads.
+    ///
+    /// # Safety
+    /// The [`Arch::FIRST_FRAME_BYTES`] below `top` must be stack memory nothing uses.
+    unsafe fn first_frame(&self, top: u32, task: u8) -> u32;
+    /// Moves the running context's stack guard to the stack whose lowest address is
+    /// `bottom`.
+    fn move_guard(&self, bottom: u32);
+    /// Masks the interrupt line of the ISR running now (its entry was refused, so nothing
+    /// clears its source).
+    fn quiet_active_line(&self);
+    /// Logs a fault (the port goes on to end the run: `ShutdownOS` or [`Arch::halt`]).
+    fn report(&self, fault: &PortFault);
+    /// The OS has shut down: the application's end (its report, safe state, stop).
+    fn stopped(&self) -> !;
+    /// A fault the OS cannot go on from: the board's safe state, then reset or halt.
+    fn halt(&self) -> !;
+    /// Milliseconds since the OS tick started.
+    fn now_ms(&self) -> u64;
+    /// A mark for the task trace (the measuring images); nothing by default.
+    fn trace(&self, _mark: Mark) {}
+}
+
+/// A mark the port passes to the CPU's task trace.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Mark {
+    /// A job of the task starts.
+    JobStarted(TaskId),
+    /// The task's job is over.
+    JobFinished(TaskId),
+    /// The kernel accepted the category-2 ISR's entry.
+    IsrEntered(IsrId),
+    /// A measured span of the application starts.
+    SpanStart(usize),
+    /// A measured span of the application ends.
+    SpanEnd(usize),
+}
+
+/// A fault of the port (every one names what it is about).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum PortFault {
+    /// The configuration asks for something the port cannot do (refused at start).
+    Refused(Refusal),
+    /// A task stack given to the port is refused (the task, and why).
+    StackRefused {
+        /// The task's index.
+        task: u8,
+        /// Why.
+        why: &'static str,
+    },
+    /// A kernel call was made while another was under way (a category-1 ISR called the
+    /// OS, or the port was re-entered).
+    KernelReentered,
+    /// A stack overflowed: a task's own (named) or the shared one (`None`); the OS shuts
+    /// down with `E_OS_STACKFAULT`.
+    StackOverflow(Option<&'static str>),
+    /// The main stack (ISRs, exceptions) overflowed into its guard.
+    MainStackOverflow,
+    /// The OS shut down before the application was there to end the run.
+    NoApplication,
+    /// A fault of the CPU or the board (its name).
+    Board(&'static str),
+}
+
+impl PortFault {
+    /// What happened and to what: two words a log prints without formatting machinery.
+    pub const fn parts(&self) -> (&'static str, &'static str) {
+        match *self {
+            Self::Refused(r) => r.parts(),
+            Self::StackRefused { why, .. } => ("task stack refused", why),
+            Self::KernelReentered => (
+                "kernel call inside a kernel call",
+                "a category-1 ISR may not call the OS",
+            ),
+            Self::StackOverflow(Some(task)) => ("stack overflow on the stack of", task),
+            Self::StackOverflow(None) => ("stack overflow on", "the shared task stack"),
+            Self::MainStackOverflow => ("stack overflow on", "the main stack (ISRs)"),
+            Self::NoApplication => ("the OS stopped", "without an application"),
+            Self::Board(what) => ("fault", what),
+        }
+    }
+}
+
+/// Why the port refuses a configuration.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Refusal {
+    /// More tasks than the port's tables hold ([`MAX_TASKS`]); names the first one over.
+    TooManyTasks(&'static str),
+    /// An extended task without a stack of its own: on the shared stack, a lower task
+    /// resumed while it waits would overwrite its saved context.
+    NoOwnStack(&'static str),
+    /// An ISR priority outside `1 ..= Arch::ISR_PRIORITIES`: the interrupt controller
+    /// would merge it with another level, or with the task switch's.
+    IsrPriority(&'static str),
+}
+
+impl Refusal {
+    /// What is refused and which item.
+    pub const fn parts(&self) -> (&'static str, &'static str) {
+        match *self {
+            Self::TooManyTasks(task) => ("more tasks than the port holds, from", task),
+            Self::NoOwnStack(task) => ("an extended task needs a stack of its own:", task),
+            Self::IsrPriority(isr) => ("an ISR priority the port cannot express:", isr),
+        }
+    }
+}
+
+/// Checks a configuration against what the port can do: at most [`MAX_TASKS`] tasks,
+/// every ISR priority in `1 ..= isr_priorities`, and (when `has_own_stack` is known)
+/// every extended task with a stack of its own. A `const fn`, so an image checks its
+/// configuration when it is built ([`assert_fits`]); [`Preemptive::start_checked`] checks
+/// again at start, with the stacks given.
+///
+/// # Errors
+/// The first item refused.
+pub const fn check(
+    tasks: &[TaskConfig],
+    isrs: &[IsrConfig],
+    isr_priorities: u8,
+    own_stacks: Option<u32>,
+) -> Result<(), Refusal> {
+    let mut t = 0;
+    while t < tasks.len() {
+        if t >= MAX_TASKS {
+            return Err(Refusal::TooManyTasks(tasks[t].name));
+        }
+        if let (TaskKind::Extended, Some(stacks)) = (tasks[t].kind, own_stacks) {
+            if stacks & (1 << t) == 0 {
+                return Err(Refusal::NoOwnStack(tasks[t].name));
+            }
+        }
+        t += 1;
+    }
+    let mut i = 0;
+    while i < isrs.len() {
+        let p = isrs[i].priority;
+        if p == 0 || p > isr_priorities {
+            return Err(Refusal::IsrPriority(isrs[i].name));
+        }
+        i += 1;
+    }
+    Ok(())
+}
+
+/// [`check`] when the image is built (stacks are given at start and checked there): a
+/// build error naming the item refused. For a `const _: () = assert_fits(..);` item only:
+/// its panics are build errors, never reached at run time.
+#[allow(clippy::panic)]
+pub const fn assert_fits(tasks: &[TaskConfig], isrs: &[IsrConfig], isr_priorities: u8) {
+    // A const panic formats one `&str`: the item; the line says which rule.
+    match check(tasks, isrs, isr_priorities, None) {
+        Ok(()) => {}
+        // More tasks than the port's tables hold (MAX_TASKS), from this one on.
+        Err(Refusal::TooManyTasks(task)) => panic!("{}", task),
+        // An ISR priority outside 1 ..= isr_priorities.
+        Err(Refusal::IsrPriority(isr)) => panic!("{}", isr),
+        // (Not without stacks.)
+        Err(Refusal::NoOwnStack(task)) => panic!("{}", task),
+    }
+}
+
+/// The port's view of the jobs and their stacks.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Sched {
+    /// The slot now executing (a task index, or [`IDLE`]).
+    current: u8,
+    /// The slot the kernel chose last.
+    next: u8,
+    /// The current job ended (`TerminateTask`, `ChainTask` or `task_returned`): its stack
+    /// part is free.
+    ended: bool,
+    /// Saved stack pointers of preempted (or waiting) jobs and of the idle loop.
+    sp: [u32; MAX_TASKS + 1],
+    /// Bit `t`: task `t` has a job under way (a context to resume).
+    started: u32,
+    /// The shared stack's top when each job on it started (given back when it ends).
+    job_base: [u32; MAX_TASKS],
+    /// Where the next new job's first frame goes on the shared stack.
+    basic_top: u32,
+    /// The shared stack: (lowest address, top).
+    shared: (u32, u32),
+    /// Each task's own stack as (lowest address, top), or (0, 0): the shared stack.
+    own_stack: [(u32, u32); MAX_TASKS],
+    /// The port set every-interrupt masking for the kernel's `All` mask.
+    all_for_kernel: bool,
+    /// The OS has shut down and the application was told.
+    stopped: bool,
+}
+
+impl Sched {
+    /// Before start: nothing runs, no stack is known.
+    pub const fn new() -> Self {
+        Self {
+            current: IDLE,
+            next: IDLE,
+            ended: false,
+            sp: [0; MAX_TASKS + 1],
+            started: 0,
+            job_base: [0; MAX_TASKS],
+            basic_top: 0,
+            shared: (0, 0),
+            own_stack: [(0, 0); MAX_TASKS],
+            all_for_kernel: false,
+            stopped: false,
+        }
+    }
+
+    /// Whether `slot` runs on the shared stack.
+    fn on_shared(&self, slot: usize) -> bool {
+        self.own_stack.get(slot).is_none_or(|r| r.1 == 0)
+    }
+
+    /// The stack of `slot`: (lowest address, top).
+    pub fn stack_of(&self, slot: usize) -> (u32, u32) {
+        match self.own_stack.get(slot) {
+            Some(&own) if own.1 != 0 => own,
+            _ => self.shared,
+        }
+    }
+
+    /// The slot now executing.
+    pub const fn current(&self) -> u8 {
+        self.current
+    }
+
+    /// One bit per task with a stack of its own.
+    pub fn own_stacks(&self) -> u32 {
+        self.own_stack
+            .iter()
+            .enumerate()
+            .filter(|(_, r)| r.1 != 0)
+            .fold(0, |bits, (t, _)| bits | 1 << t)
+    }
+
+    /// Where the next new job on the shared stack starts.
+    pub const fn basic_top(&self) -> u32 {
+        self.basic_top
+    }
+}
+
+impl Default for Sched {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+/// What a context switch does, decided from the port's tables alone.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Switch {
+    /// Resume the saved context at this stack pointer.
+    Resume(u32),
+    /// Start a new job of `task`: its first frame goes below `top`.
+    Start {
+        /// The task.
+        task: u8,
+        /// Its first frame's top.
+        top: u32,
+    },
+    /// The outgoing context's stack pointer lies in its stack's guard: an overflow (the
+    /// task's own stack, or the shared one: `None`).
+    Overflow(Option<u8>),
+}
+
+/// The switch's decision: saves the outgoing context's stack pointer `sp` (or frees its
+/// part of the shared stack if its job ended) and names the incoming context.
+pub fn decide(s: &mut Sched, sp: u32, guard_bytes: u32) -> Switch {
+    let current = usize::from(s.current);
+    let (bottom, _) = s.stack_of(current);
+    if sp < bottom.saturating_add(guard_bytes) {
+        return Switch::Overflow((!s.on_shared(current)).then_some(s.current));
+    }
+    if s.ended && current < MAX_TASKS {
+        s.started &= !(1 << current);
+        if s.on_shared(current) {
+            s.basic_top = s.job_base[current];
+        }
+        s.ended = false;
+    } else if let Some(slot) = s.sp.get_mut(current) {
+        *slot = sp;
+        if s.on_shared(current) {
+            s.basic_top = sp;
+        }
+    }
+    let next = usize::from(s.next);
+    s.current = s.next;
+    if next >= MAX_TASKS || s.started & (1 << next) != 0 {
+        return Switch::Resume(s.sp.get(next).copied().unwrap_or(sp));
+    }
+    s.started |= 1 << next;
+    let top = if s.on_shared(next) {
+        s.job_base[next] = s.basic_top;
+        s.basic_top
+    } else {
+        s.own_stack[next].1
+    };
+    Switch::Start {
+        task: next as u8,
+        top,
+    }
+}
+
+/// The preemptive port of a kernel `K` on a CPU `A`.
+pub struct Preemptive<K, A> {
+    kernel: UnsafeCell<K>,
+    sched: UnsafeCell<Sched>,
+    /// A kernel call is under way: a second one would alias the kernel. Outside `sched`
+    /// so that the check itself takes no reference to the tables.
+    in_kernel: AtomicBool,
+    arch: A,
+}
+
+// SAFETY: the kernel and the tables are reached only with the kernel lock taken (every
+// ISR that may call the OS and the task switch masked, on a single core) and the
+// `in_kernel` flag set by a swap that refuses a second entry; the fault paths that take
+// them without the flag never return to the context they interrupted.
+unsafe impl<K: Send, A: Sync> Sync for Preemptive<K, A> {}
+
+impl<K: OsKernel, A: Arch> Preemptive<K, A> {
+    /// The port of `kernel` on `arch`.
+    pub const fn new(kernel: K, arch: A) -> Self {
+        Self {
+            kernel: UnsafeCell::new(kernel),
+            sched: UnsafeCell::new(Sched::new()),
+            in_kernel: AtomicBool::new(false),
+            arch,
+        }
+    }
+
+    /// The CPU.
+    pub const fn arch(&self) -> &A {
+        &self.arch
+    }
+
+    /// Runs `f` on the tables with every interrupt masked, outside any kernel call
+    /// (set-up, reports).
+    fn with_sched<R>(&self, f: impl FnOnce(&mut Sched) -> R) -> R {
+        let masked = self.arch.all_masked();
+        self.arch.disable_all();
+        if self.in_kernel.load(Ordering::Relaxed) {
+            self.fatal(PortFault::KernelReentered);
+        }
+        // SAFETY: every interrupt is masked and no kernel call is under way: the only
+        // reference to the tables.
+        let result = f(unsafe { &mut *self.sched.get() });
+        if !masked {
+            self.arch.enable_all();
+        }
+        result
+    }
+
+    /// Tells the port where the shared stack of the basic tasks is; before start.
+    pub fn set_shared_stack(&self, bottom: u32, top: u32) {
+        self.with_sched(|s| {
+            s.shared = (bottom, top);
+            s.basic_top = top;
+        });
+    }
+
+    /// Gives `task` its own stack `bottom .. top`; before start. A fatal port fault if
+    /// `task` is out of range, the stack is too small for its guard and one frame, or it
+    /// overlaps a stack given before.
+    pub fn set_task_stack(&self, task: TaskId, bottom: u32, top: u32) {
+        let refused = self.with_sched(|s| {
+            let overlaps = s
+                .own_stack
+                .iter()
+                .chain(core::iter::once(&s.shared))
+                .any(|&(b, t)| t != 0 && bottom < t && b < top);
+            let fits = top > bottom && top - bottom >= A::GUARD_BYTES + 2 * A::FIRST_FRAME_BYTES;
+            match s.own_stack.get_mut(usize::from(task.0)) {
+                None => Some("task out of range"),
+                Some(_) if !fits => Some("too small for its guard and a frame"),
+                Some(_) if overlaps => Some("overlaps another stack"),
+                Some(slot) => {
+                    *slot = (bottom, top);
+                    None
+                }
+            }
+        });
+        if let Some(why) = refused {
+            self.fatal(PortFault::StackRefused { task: task.0, why });
+        }
+    }
+
+    /// The stack of `task` (its own, or the shared one): (lowest address, top).
+    pub fn stack_of(&self, task: TaskId) -> (u32, u32) {
+        self.with_sched(|s| s.stack_of(usize::from(task.0)))
+    }
+
+    /// One bit per task with its own stack.
+    pub fn own_stacks(&self) -> u32 {
+        self.with_sched(|s| s.own_stacks())
+    }
+
+    /// Checks the kernel's configuration against the port (task count, ISR priorities,
+    /// an own stack for every extended task); a fatal port fault naming the item if it
+    /// does not fit. Called by the CPU's start, before the OS starts.
+    pub fn start_checked(&self) {
+        let stacks = self.own_stacks();
+        let refused = self.inspect(|k| check(k.tasks(), k.isrs(), A::ISR_PRIORITIES, Some(stacks)));
+        if let Err(r) = refused {
+            self.fatal(PortFault::Refused(r));
+        }
+        // The idle loop is the shared stack's bottom context.
+        self.with_sched(|s| s.guard_slot_start());
+    }
+
+    /// A fatal port fault: reported, then the board's end.
+    pub fn fatal(&self, fault: PortFault) -> ! {
+        self.arch.disable_all();
+        self.arch.report(&fault);
+        self.arch.halt()
+    }
+
+    /// Runs `f` on the kernel under the kernel lock, then carries out what the kernel
+    /// decided: the OS-level mask, every-interrupt masking if the kernel's mask changed
+    /// it, the task switch, or the end of the OS.
+    #[inline(always)]
+    fn locked<R>(&self, f: impl FnOnce(&mut K, &mut Sched) -> R) -> R {
+        let (kernel, sched) = self.enter();
+        let result = f(kernel, sched);
+        self.leave(kernel, sched);
+        result
+    }
+
+    /// The kernel lock taken: the kernel and the tables. Not generic over the call, so a
+    /// size-optimised image keeps one copy (a speed-optimised one inlines it).
+    #[inline]
+    #[allow(clippy::mut_from_ref)]
+    fn enter(&self) -> (&mut K, &mut Sched) {
+        self.arch.lock_os();
+        // A plain load and store (one core; the lock holds every ISR that may call the OS):
+        // a category-1 ISR calling the OS during a kernel call finds the flag set.
+        if self.in_kernel.load(Ordering::Relaxed) {
+            self.fatal(PortFault::KernelReentered);
+        }
+        self.in_kernel.store(true, Ordering::Relaxed);
+        compiler_fence(Ordering::SeqCst);
+        // SAFETY: the kernel lock masks every ISR that may call the OS and the switch, and
+        // this caller turned `in_kernel` on: the only references until `leave` turns it
+        // off.
+        unsafe { (&mut *self.kernel.get(), &mut *self.sched.get()) }
+    }
+
+    /// Carries out what the kernel decided and ends the kernel lock: the OS-level mask,
+    /// every-interrupt masking if the kernel's mask changed it, the task switch, or the
+    /// end of the OS.
+    #[inline]
+    fn leave(&self, kernel: &mut K, sched: &mut Sched) {
+        let next = kernel.running().map_or(IDLE, |t| t.0);
+        if next == IDLE && kernel.is_shut_down() {
+            self.stopping(sched);
+            return;
+        }
+        sched.next = next;
+        if next != sched.current || sched.ended {
+            self.arch.request_switch();
+        }
+        let mask = kernel.interrupt_mask();
+        compiler_fence(Ordering::SeqCst);
+        self.in_kernel.store(false, Ordering::Relaxed);
+        if (mask == InterruptMask::All) == sched.all_for_kernel {
+            self.arch.set_mask(mask);
+        } else {
+            // DisableAllInterrupts or SuspendAllInterrupts began or ended.
+            self.all_changed(sched, mask);
+        }
+    }
+
+    /// The kernel's `All` mask began (every interrupt masked before the OS-level mask
+    /// drops) or ended (unmasked after the OS-level mask is in place, so nothing the
+    /// kernel still holds slips through).
+    #[cold]
+    #[inline(never)]
+    fn all_changed(&self, sched: &mut Sched, mask: InterruptMask) {
+        let all = mask == InterruptMask::All;
+        sched.all_for_kernel = all;
+        if all {
+            self.arch.disable_all();
+            self.arch.set_mask(mask);
+        } else {
+            self.arch.set_mask(mask);
+            self.arch.enable_all();
+        }
+    }
+
+    /// ShutdownOS ran: every interrupt stays masked and nothing is switched to; the first
+    /// call to see it hands the end to the application.
+    #[cold]
+    #[inline(never)]
+    fn stopping(&self, sched: &mut Sched) {
+        self.arch.disable_all();
+        let first = !core::mem::replace(&mut sched.stopped, true);
+        self.in_kernel.store(false, Ordering::Relaxed);
+        if first {
+            self.arch.stopped();
+        }
+    }
+
+    /// The switch (the CPU's switch exception calls it with the kernel lock taken): saves
+    /// the outgoing stack pointer, returns the incoming one, building a new job's first
+    /// frame; moves the stack guard. A stack pointer found in its guard is a stack fault.
+    pub fn switch(&self, sp: u32) -> u32 {
+        // SAFETY: the CPU calls this with the kernel lock taken, outside every kernel call
+        // (the switch runs only when no ISR is active and the lock is free).
+        let s = unsafe { &mut *self.sched.get() };
+        let new_sp = match decide(s, sp, A::GUARD_BYTES) {
+            Switch::Overflow(task) => self.stack_fault(task.map(TaskId)),
+            Switch::Resume(sp) => sp,
+            // SAFETY: `top` is the top of the task's own stack (its job starts now, so
+            // nothing uses it), or the shared stack's top below every preempted job on it
+            // (`basic_top` is the lowest of their saved stack pointers).
+            Switch::Start { task, top } => unsafe { self.arch.first_frame(top, task) },
+        };
+        self.arch.move_guard(s.stack_of(usize::from(s.current)).0);
+        new_sp
+    }
+
+    /// The running context overflowed its stack (the CPU's guard fault, or the switch's
+    /// check): reported, then `ShutdownOS(E_OS_STACKFAULT)`, whose ShutdownHook runs, and
+    /// the application's end. Also from inside a kernel call: the context it interrupted
+    /// never resumes, so its kernel call is abandoned, not re-entered.
+    pub fn stack_fault(&self, task: Option<TaskId>) -> ! {
+        self.arch.disable_all();
+        let name = task.and_then(|t| self.task_name(t));
+        self.shut_down_on(PortFault::StackOverflow(name))
+    }
+
+    /// The main stack (ISRs, exceptions) overflowed into its guard: reported, then
+    /// `ShutdownOS(E_OS_STACKFAULT)` as for a task stack ([`Preemptive::stack_fault`]).
+    pub fn main_stack_fault(&self) -> ! {
+        self.arch.disable_all();
+        self.shut_down_on(PortFault::MainStackOverflow)
+    }
+
+    fn shut_down_on(&self, fault: PortFault) -> ! {
+        self.arch.report(&fault);
+        // SAFETY: every interrupt is masked and the context that may hold the kernel
+        // (an interrupted kernel call) never runs again: this is the only reference used
+        // from here on.
+        let (kernel, sched) = unsafe { (&mut *self.kernel.get(), &mut *self.sched.get()) };
+        kernel.shutdown_on_fault(OsError::StackFault);
+        sched.stopped = true;
+        // The abandoned call's flag goes: the application's end may still read the
+        // kernel (its hooks' record), which a stopped OS serves.
+        self.in_kernel.store(false, Ordering::Release);
+        self.arch.stopped()
+    }
+
+    /// The task running now, when it has a stack of its own (for the guard fault).
+    pub fn current_own_stack_task(&self) -> Option<TaskId> {
+        // SAFETY: called from the guard fault with every interrupt masked; a read.
+        let s = unsafe { &*self.sched.get() };
+        let current = usize::from(s.current);
+        (!s.on_shared(current)).then_some(TaskId(s.current))
+    }
+
+    fn task_name(&self, task: TaskId) -> Option<&'static str> {
+        // SAFETY: a read of the configuration (static) through the kernel, with every
+        // interrupt masked.
+        let kernel = unsafe { &*self.kernel.get() };
+        kernel.tasks().get(usize::from(task.0)).map(|t| t.name)
+    }
+
+    /// The kernel without the lock, for reports after the OS has stopped (every
+    /// interrupt masked for good, nothing else runs).
+    pub fn stopped_kernel(&self) -> Option<&K> {
+        // SAFETY: once stopped no kernel call changes anything (every call only reads),
+        // and every interrupt stays masked.
+        let stopped = unsafe { (*self.sched.get()).stopped };
+        // SAFETY: as above.
+        stopped.then(|| unsafe { &*self.kernel.get() })
+    }
+}
+
+impl Sched {
+    /// At start: the idle loop runs on the shared stack.
+    fn guard_slot_start(&mut self) {
+        self.current = IDLE;
+        self.next = IDLE;
+    }
+}
+
+impl<K: OsKernel, A: Arch> Port for Preemptive<K, A> {
+    type Kernel = K;
+    const NESTED: bool = false;
+
+    #[inline]
+    fn kernel<R>(&self, f: impl FnOnce(&mut K) -> R) -> R {
+        self.locked(|kernel, _| f(kernel))
+    }
+
+    #[inline]
+    fn inspect<R>(&self, f: impl FnOnce(&K) -> R) -> R {
+        self.locked(|kernel, _| f(kernel))
+    }
+
+    fn end_job(&self, f: impl FnOnce(&mut K) -> Result<(), OsError>) -> Result<(), OsError> {
+        let (result, ended) = self.locked(|kernel, sched| {
+            let result = f(kernel);
+            if result.is_ok() {
+                sched.ended = true;
+            } else if kernel.running().is_some_and(|t| {
+                t.0 == sched.current && kernel.task_state(t) == Some(TaskState::Running)
+            }) {
+                // The job cannot end as asked: it returns without a proper end, and the
+                // kernel ends it (E_OS_MISSINGEND, its resources and locks released).
+                if kernel.task_returned().is_ok() {
+                    sched.ended = true;
+                }
+            }
+            (result, sched.ended)
+        });
+        if ended {
+            // The switch is pending and runs as soon as the mask allows: this job is over.
+            loop {
+                self.arch.wait();
+            }
+        }
+        // Not in a task's job (nothing to end): the caller goes on.
+        result
+    }
+
+    fn now_ms(&self) -> u64 {
+        self.arch.now_ms()
+    }
+
+    #[inline]
+    fn job_started(&self, task: TaskId) {
+        self.arch.trace(Mark::JobStarted(task));
+    }
+
+    #[inline]
+    fn job_finished(&self, task: TaskId) {
+        self.arch.trace(Mark::JobFinished(task));
+    }
+
+    #[inline]
+    fn isr_entered(&self, isr: IsrId) {
+        self.arch.trace(Mark::IsrEntered(isr));
+    }
+
+    fn isr_refused(&self, _isr: IsrId) {
+        self.arch.quiet_active_line();
+    }
+
+    #[inline]
+    fn span(&self, id: usize, start: bool) {
+        self.arch.trace(if start {
+            Mark::SpanStart(id)
+        } else {
+            Mark::SpanEnd(id)
+        });
+    }
+}

@@ -1,0 +1,425 @@
+//! The preemptive port over a model CPU, with the real kernel: every fault the port
+//! guards against, named, and the switch's bookkeeping against its model (`spec`).
+
+extern crate std;
+
+use std::cell::{Cell, RefCell};
+use std::panic::{catch_unwind, AssertUnwindSafe};
+use std::vec::Vec;
+
+use cw_core::os::{
+    ConformanceClass, CounterConfig, Dialect, HookSet, Hooks, IsrConfig, Os, OsConfig,
+    OsDescription, OsError, ServiceCall, Status, StatusType, TaskConfig, TaskId, OSDEFAULTAPPMODE,
+};
+
+use super::spec;
+use super::{check, Arch, InterruptMask, PortFault, Preemptive, Refusal, IDLE, MAX_TASKS};
+use crate::port::Port;
+
+const LOW: TaskId = TaskId(0);
+const HIGH: TaskId = TaskId(1);
+const WAITER: TaskId = TaskId(2);
+
+static OS: OsConfig<3, 0, 1, 0, 2> = match OsConfig::new(
+    OsDescription::new(
+        [
+            TaskConfig::basic("Low", 1).autostart(),
+            TaskConfig::basic("High", 2),
+            TaskConfig::extended("Waiter", 3),
+        ],
+        [CounterConfig {
+            max_allowed_value: 0xFFFF,
+            ticks_per_base: 1,
+            min_cycle: 1,
+        }],
+        [],
+        [IsrConfig::cat2("Tick", 1), IsrConfig::cat1("Fast", 3)],
+    )
+    .class(ConformanceClass::Ecc1)
+    .status(Status::Extended)
+    .dialect(Dialect::Autosar)
+    .hooks(HookSet {
+        error: true,
+        shutdown: true,
+        ..HookSet::NONE
+    }),
+) {
+    Ok(cfg) => cfg,
+    Err(_) => panic!("the test configuration is inconsistent"),
+};
+
+cw_core::static_tables!(TestTables: OsConfig<3, 0, 1, 0, 2> = OS);
+
+/// What the hooks saw: the first errors, in order.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Hash)]
+struct Seen {
+    errors: [Option<(OsError, Option<ServiceCall>)>; 4],
+    shutdown: Option<StatusType>,
+}
+
+impl Seen {
+    fn errors(&self) -> Vec<OsError> {
+        self.errors.iter().flatten().map(|e| e.0).collect()
+    }
+}
+
+type Kernel = Os<3, 0, 1, 0, 2, 3, TestTables, Seen>;
+
+impl Hooks<Kernel> for Seen {
+    fn error_hook(os: &mut Kernel, error: OsError) {
+        let call = os.error_call();
+        if let Some(slot) = os.hooks_mut().errors.iter_mut().find(|e| e.is_none()) {
+            *slot = Some((error, call));
+        }
+    }
+
+    fn shutdown_hook(os: &mut Kernel, error: StatusType) {
+        os.hooks_mut().shutdown = Some(error);
+    }
+}
+
+/// How a model run ended (the payload of the unwinding that stands for `!`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum End {
+    Stopped,
+    Halted,
+    /// An ended job waited for its switch.
+    JobOver,
+}
+
+/// The model CPU: the OS-level mask, every-interrupt masking, a pending switch, the
+/// guard's place, the faults reported and the first frames written.
+#[derive(Default)]
+struct Model {
+    /// `None`: the kernel lock (the OS level); `Some(mask)`: the kernel's mask applied.
+    level: Cell<Option<InterruptMask>>,
+    all: Cell<bool>,
+    /// Every-interrupt masking was ever turned on while the kernel lock was held.
+    all_in_lock: Cell<bool>,
+    switch: Cell<bool>,
+    guard: Cell<u32>,
+    quieted: Cell<u32>,
+    reports: RefCell<Vec<PortFault>>,
+    frames: RefCell<Vec<(u32, u8)>>,
+}
+
+impl Arch for Model {
+    const ISR_PRIORITIES: u8 = 6;
+    const GUARD_BYTES: u32 = 256;
+    const FIRST_FRAME_BYTES: u32 = 72;
+
+    fn lock_os(&self) {
+        self.level.set(None);
+    }
+    fn set_mask(&self, mask: InterruptMask) {
+        self.level.set(Some(mask));
+    }
+    fn all_masked(&self) -> bool {
+        self.all.get()
+    }
+    fn disable_all(&self) {
+        if self.level.get().is_none() {
+            self.all_in_lock.set(true);
+        }
+        self.all.set(true);
+    }
+    fn enable_all(&self) {
+        self.all.set(false);
+    }
+    fn request_switch(&self) {
+        self.switch.set(true);
+    }
+    fn wait(&self) {
+        std::panic::panic_any(End::JobOver);
+    }
+    unsafe fn first_frame(&self, top: u32, task: u8) -> u32 {
+        self.frames.borrow_mut().push((top, task));
+        (top & !7) - 68
+    }
+    fn move_guard(&self, bottom: u32) {
+        self.guard.set(bottom);
+    }
+    fn quiet_active_line(&self) {
+        self.quieted.set(self.quieted.get() + 1);
+    }
+    fn report(&self, fault: &PortFault) {
+        self.reports.borrow_mut().push(*fault);
+    }
+    fn stopped(&self) -> ! {
+        std::panic::panic_any(End::Stopped)
+    }
+    fn halt(&self) -> ! {
+        std::panic::panic_any(End::Halted)
+    }
+    fn now_ms(&self) -> u64 {
+        0
+    }
+}
+
+type TestPort = Preemptive<Kernel, Model>;
+
+const SHARED: (u32, u32) = (0x1000, 0x1800);
+const WAITER_STACK: (u32, u32) = (0x2000, 0x2400);
+
+fn port() -> TestPort {
+    let Ok(kernel) = Kernel::new(TestTables) else {
+        panic!("the test kernel");
+    };
+    let port = Preemptive::new(kernel, Model::default());
+    port.set_shared_stack(SHARED.0, SHARED.1);
+    port
+}
+
+/// Runs `f`, which must end the way `!` functions end in the model; returns how.
+fn ends(f: impl FnOnce()) -> End {
+    std::panic::set_hook(std::boxed::Box::new(|_| {}));
+    let caught = catch_unwind(AssertUnwindSafe(f));
+    let _ = std::panic::take_hook();
+    match caught {
+        Ok(()) => panic!("returned instead of ending"),
+        Err(payload) => match payload.downcast::<End>() {
+            Ok(end) => *end,
+            Err(_) => panic!("ended by a panic of the port itself"),
+        },
+    }
+}
+
+/// The switch the model CPU would take now: `sp` is the outgoing context's stack pointer.
+fn take_switch(port: &TestPort, sp: u32) -> u32 {
+    assert!(port.arch().switch.replace(false), "no switch was requested");
+    port.switch(sp)
+}
+
+/// StartOS: `Low` (autostart) is chosen, the switch starts its job on the shared stack.
+fn started() -> TestPort {
+    let port = port();
+    port.set_task_stack(WAITER, WAITER_STACK.0, WAITER_STACK.1);
+    port.start_checked();
+    port.kernel(|os| os.start_os(OSDEFAULTAPPMODE))
+        .expect("StartOS");
+    take_switch(&port, SHARED.1 - 64);
+    port
+}
+
+/// A category-2 ISR (`Tick`) that makes one kernel call.
+fn from_isr(port: &TestPort, f: impl FnOnce(&mut Kernel)) {
+    port.kernel(|os| os.enter_isr(cw_core::os::IsrId(0)))
+        .expect("enter");
+    port.kernel(f);
+    port.kernel(|os| os.exit_isr()).expect("exit");
+}
+
+#[test]
+fn an_extended_task_without_its_own_stack_is_refused_before_start_naming_it() {
+    let port = port();
+    let end = ends(|| port.start_checked());
+    assert_eq!(end, End::Halted);
+    assert_eq!(
+        *port.arch().reports.borrow(),
+        [PortFault::Refused(Refusal::NoOwnStack("Waiter"))]
+    );
+    // Given a stack, the same configuration starts.
+    let port = self::port();
+    port.set_task_stack(WAITER, WAITER_STACK.0, WAITER_STACK.1);
+    port.start_checked();
+    assert!(port.arch().reports.borrow().is_empty());
+}
+
+#[test]
+fn more_tasks_than_the_port_holds_are_refused_naming_the_first_over() {
+    const NAMES: [&str; MAX_TASKS + 1] = [
+        "t0", "t1", "t2", "t3", "t4", "t5", "t6", "t7", "t8", "t9", "t10", "t11", "t12", "t13",
+        "t14", "t15", "t16",
+    ];
+    let tasks = NAMES.map(|name| TaskConfig::basic(name, 1));
+    assert_eq!(
+        check(&tasks, &[], 6, Some(0)),
+        Err(Refusal::TooManyTasks("t16"))
+    );
+    assert_eq!(check(&tasks[..MAX_TASKS], &[], 6, Some(0)), Ok(()));
+}
+
+#[test]
+fn isr_priorities_the_controller_cannot_tell_apart_are_refused() {
+    let fits = [IsrConfig::cat2("A", 1), IsrConfig::cat2("B", 6)];
+    assert_eq!(check(&[], &fits, 6, None), Ok(()));
+    // Above the controller's levels: merged with the highest (or the faults').
+    let high = [IsrConfig::cat2("A", 1), IsrConfig::cat2("Seven", 7)];
+    assert_eq!(
+        check(&[], &high, 6, None),
+        Err(Refusal::IsrPriority("Seven"))
+    );
+    // 0: the task switch's own level.
+    let zero = [IsrConfig::cat2("Zero", 0)];
+    assert_eq!(
+        check(&[], &zero, 6, None),
+        Err(Refusal::IsrPriority("Zero"))
+    );
+}
+
+#[test]
+fn a_job_whose_terminate_is_refused_ends_with_missing_end_instead_of_spinning() {
+    let port = started();
+    assert_eq!(port.inspect(|os| os.running()), Some(LOW));
+    // Low disables every interrupt and then tries to terminate: refused.
+    port.kernel(|os| os.disable_all_interrupts())
+        .expect("DisableAllInterrupts");
+    assert!(
+        port.arch().all.get(),
+        "DisableAllInterrupts masks every interrupt"
+    );
+    let end = ends(|| {
+        let _ = port.end_job(|os| os.terminate_task());
+    });
+    assert_eq!(
+        end,
+        End::JobOver,
+        "the job is over: it waits for its switch"
+    );
+    assert_eq!(
+        port.inspect(|os| os.hooks().errors()),
+        [OsError::DisabledInt, OsError::MissingEnd]
+    );
+    assert!(
+        !port.arch().all.get(),
+        "the job's interrupt lock is released"
+    );
+    assert_eq!(port.arch().level.get(), Some(InterruptMask::None));
+    // The switch frees the job's stack and goes idle; the task can run again.
+    take_switch(&port, SHARED.1 - 200);
+    assert_eq!(port.inspect(|os| os.running()), None);
+    from_isr(&port, |os| os.activate_task(LOW).expect("Low again"));
+    assert_eq!(take_switch(&port, SHARED.1 - 64), SHARED.1 - 64 - 68);
+}
+
+#[test]
+fn a_stack_fault_inside_a_kernel_call_shuts_the_os_down_with_stackfault() {
+    let port = started();
+    // The guard fault arrives while a kernel call is under way (its context never
+    // resumes).
+    let end = ends(|| {
+        port.kernel(|_| port.stack_fault(None));
+    });
+    assert_eq!(end, End::Stopped, "ShutdownOS, not a fatal port fault");
+    assert_eq!(
+        *port.arch().reports.borrow(),
+        [PortFault::StackOverflow(None)]
+    );
+    let kernel = port.stopped_kernel().expect("the OS stopped");
+    assert_eq!(kernel.hooks().shutdown, Some(OsError::StackFault.status()));
+}
+
+#[test]
+fn a_stack_overflow_seen_at_a_switch_names_the_task() {
+    let port = started();
+    // The waiter starts on its own stack, then is switched away with its stack pointer
+    // inside its guard.
+    port.kernel(|os| os.activate_task(WAITER))
+        .expect("activate");
+    take_switch(&port, SHARED.1 - 128);
+    assert_eq!(
+        port.arch().guard.get(),
+        WAITER_STACK.0,
+        "the guard moved with it"
+    );
+    port.kernel(|os| os.activate_task(HIGH)).expect("activate");
+    port.kernel(|os| os.wait_event(1)).expect("wait");
+    let end = ends(|| {
+        take_switch(&port, WAITER_STACK.0 + 100);
+    });
+    assert_eq!(end, End::Stopped);
+    assert_eq!(
+        *port.arch().reports.borrow(),
+        [PortFault::StackOverflow(Some("Waiter"))]
+    );
+}
+
+#[test]
+fn a_kernel_call_inside_a_critical_section_leaves_it_closed() {
+    let port = started();
+    // The caller's own critical section (every interrupt masked, not by the kernel).
+    port.arch().all.set(true);
+    port.kernel(|os| os.activate_task(HIGH)).expect("activate");
+    assert!(port.arch().all.get(), "the section is still closed");
+    port.arch().all.set(false);
+    // The kernel's own every-interrupt masking is turned on and off by its services.
+    port.kernel(|os| os.suspend_all_interrupts())
+        .expect("suspend");
+    assert!(port.arch().all.get());
+    port.kernel(|os| os.resume_all_interrupts())
+        .expect("resume");
+    assert!(!port.arch().all.get());
+}
+
+#[test]
+fn the_kernel_lock_is_the_os_level_and_never_masks_category_1() {
+    let port = started();
+    port.arch().all_in_lock.set(false);
+    port.kernel(|os| {
+        let _ = os.activate_task(HIGH);
+    });
+    port.kernel(|os| {
+        let _ = os.get_task_id();
+    });
+    assert!(
+        !port.arch().all_in_lock.get(),
+        "no kernel call masked every interrupt"
+    );
+}
+
+#[test]
+fn a_kernel_call_inside_a_kernel_call_is_a_fatal_fault_not_an_alias() {
+    let port = started();
+    // A category-1 ISR calling the OS while a task's kernel call is under way.
+    let end = ends(|| {
+        port.kernel(|_| port.kernel(|os| os.running()));
+    });
+    assert_eq!(end, End::Halted);
+    assert_eq!(*port.arch().reports.borrow(), [PortFault::KernelReentered]);
+}
+
+#[test]
+fn a_task_stack_that_overlaps_or_is_too_small_is_refused() {
+    let port = port();
+    let end = ends(|| port.set_task_stack(WAITER, SHARED.0 + 16, SHARED.0 + 0x400));
+    assert_eq!(end, End::Halted);
+    let port = self::port();
+    let end = ends(|| port.set_task_stack(WAITER, 0x3000, 0x3000 + 256));
+    assert_eq!(end, End::Halted);
+    let port = self::port();
+    let end = ends(|| port.set_task_stack(TaskId(MAX_TASKS as u8), 0x3000, 0x3400));
+    assert_eq!(end, End::Halted);
+}
+
+#[test]
+fn an_isr_whose_entry_is_refused_has_its_line_quieted() {
+    let port = started();
+    port.isr_refused(cw_core::os::IsrId(0));
+    assert_eq!(port.arch().quieted.get(), 1);
+}
+
+#[test]
+fn the_idle_loop_is_the_shared_stacks_bottom_context() {
+    let port = started();
+    assert_eq!(port.arch().guard.get(), SHARED.0);
+    assert_eq!(*port.arch().frames.borrow(), [(SHARED.1 - 64, LOW.0)]);
+    assert_eq!(IDLE as usize, MAX_TASKS);
+}
+
+/// Any legal schedule keeps every job's context apart on the shared stack and on the own
+/// stacks (`spec::stacks_stay_apart`).
+#[test]
+#[cfg_attr(kani, kani::proof, kani::unwind(20))]
+fn any_schedule_keeps_the_stacks_apart() {
+    bolero::check!()
+        .with_type::<[(u8, u8); 8]>()
+        .cloned()
+        .for_each(|steps| assert!(spec::stacks_stay_apart(&steps)));
+}
+
+#[test]
+fn long_schedules_keep_the_stacks_apart() {
+    bolero::check!()
+        .with_type::<Vec<(u8, u8)>>()
+        .for_each(|steps| assert!(spec::stacks_stay_apart(steps)));
+}
