@@ -24,7 +24,8 @@
 //! - [`ecum`]: EcuM start-up/run/shutdown and BswM's action lists;
 //! - [`rte`]: typed sender-receiver ports (last-is-best and queued, with data-received
 //!   events) and client-server operations;
-//! - [`time`]: the 64-bit millisecond time's arithmetic in 32-bit operations.
+//! - [`time`]: the 64-bit millisecond time's arithmetic in 32-bit operations;
+//! - [`wdgm`]: the Watchdog Manager's alive supervision and the watchdog driver interface.
 //!
 //! Each BSW module reads its configuration through [`tables::Tables`]: a `&'static`
 //! reference, or a zero-sized type that makes the configuration a build-time constant.
@@ -57,3 +58,4 @@ pub mod tables;
 mod testing;
 pub mod time;
 pub mod warning;
+pub mod wdgm;

@@ -15,6 +15,7 @@
 //! can-errors 6000 40       # at_ms count: the ECU's next `count` transmissions fail
 //! frame 7000 200#E8030000  # at_ms id#hex: a tester puts this frame on the bus
 //! no-communication 8000 500 # start_ms duration_ms: BswM stops network communication
+//! stall OsSonarTask 8500   # task at_ms: the task's jobs hang at their first line from then on
 //! shutdown 9000            # at_ms: ignition off; EcuM post-run, then the ECU shuts down
 //! ```
 //!
@@ -81,6 +82,47 @@ pub enum Command {
     NoCommunication(Window),
     /// `shutdown AT`.
     Shutdown(u32),
+    /// `stall TASK AT`: from `at_ms` on, every job of the task hangs at its first line
+    /// (it never returns: the task reports no more alive indications, and every task
+    /// below it is starved); the watchdog's supervision must catch it.
+    Stall {
+        /// The task, by its name in the OS configuration.
+        task: TaskName,
+        /// When, ms.
+        at_ms: u32,
+    },
+}
+
+/// A task's name on a scenario line, kept by value (up to [`TaskName::MAX`] bytes).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct TaskName {
+    bytes: [u8; TaskName::MAX],
+    len: u8,
+}
+
+impl TaskName {
+    /// The longest name, bytes.
+    pub const MAX: usize = 32;
+
+    /// `name`, if it fits.
+    pub fn new(name: &str) -> Option<Self> {
+        let mut bytes = [0; Self::MAX];
+        bytes
+            .get_mut(..name.len())?
+            .copy_from_slice(name.as_bytes());
+        Some(Self {
+            bytes,
+            len: name.len() as u8,
+        })
+    }
+
+    /// The name.
+    pub fn as_str(&self) -> &str {
+        self.bytes
+            .get(..usize::from(self.len))
+            .and_then(|b| core::str::from_utf8(b).ok())
+            .unwrap_or("")
+    }
 }
 
 /// A time window, ms.
@@ -170,6 +212,8 @@ pub enum LineError<'a> {
     Frame(FrameTextError<'a>),
     /// A second `shutdown`.
     ShutdownTwice,
+    /// A task name longer than [`TaskName::MAX`] bytes.
+    NameTooLong(&'a str),
     /// More lines of one kind than the scenario holds.
     Full {
         /// The kind.
@@ -198,6 +242,13 @@ impl fmt::Display for LineError<'_> {
             Self::NoiseForm => write!(f, "`noise` takes `off`, `uniform MM` or `gaussian MM`"),
             Self::Frame(e) => write!(f, "{e}"),
             Self::ShutdownTwice => write!(f, "the ECU shuts down only once"),
+            Self::NameTooLong(name) => {
+                write!(
+                    f,
+                    "the task name `{name}` is longer than {} bytes",
+                    TaskName::MAX
+                )
+            }
             Self::Full { kind, capacity } => {
                 write!(f, "more than {capacity} `{kind}` lines")
             }
@@ -330,6 +381,14 @@ pub fn parse_line(raw: &str) -> Result<Option<Command>, LineError<'_>> {
             arity(1)?;
             Command::Shutdown(num(0, "a time in ms")?)
         }
+        "stall" => {
+            arity(2)?;
+            let name = values.first().copied().unwrap_or("");
+            Command::Stall {
+                task: TaskName::new(name).ok_or(LineError::NameTooLong(name))?,
+                at_ms: num(1, "a time in ms")?,
+            }
+        }
         other => return Err(LineError::Unknown(other)),
     };
     Ok(Some(parsed))
@@ -359,6 +418,7 @@ impl fmt::Display for Command {
                 write!(f, "no-communication {} {}", w.start_ms, w.duration_ms)
             }
             Self::Shutdown(at_ms) => write!(f, "shutdown {at_ms}"),
+            Self::Stall { ref task, at_ms } => write!(f, "stall {} {at_ms}", task.as_str()),
         }
     }
 }
@@ -382,6 +442,8 @@ pub struct Scenario<const N: usize> {
     pub no_communication: heapless::Vec<Window, N>,
     /// Ignition off, ms.
     pub shutdown_at_ms: Option<u32>,
+    /// Tasks that hang: (from ms, task).
+    pub stalls: heapless::Vec<(u32, TaskName), N>,
 }
 
 /// Adds `item` to `list`, or names the kind that is full.
@@ -406,6 +468,7 @@ impl<const N: usize> Scenario<N> {
             frames: heapless::Vec::new(),
             no_communication: heapless::Vec::new(),
             shutdown_at_ms: None,
+            stalls: heapless::Vec::new(),
         }
     }
 
@@ -469,6 +532,7 @@ impl<const N: usize> Scenario<N> {
                 self.shutdown_at_ms = Some(at_ms);
                 Ok(())
             }
+            Command::Stall { task, at_ms } => push(&mut self.stalls, (at_ms, task), "stall"),
         }
     }
 
@@ -506,9 +570,17 @@ impl<const N: usize> Scenario<N> {
             .chain(self.can_errors.iter().map(|(t, _)| u64::from(*t)))
             .chain(self.frames.iter().map(|(t, _)| u64::from(*t)))
             .chain(self.shutdown_at_ms.map(u64::from))
+            .chain(self.stalls.iter().map(|(t, _)| u64::from(*t)))
             .max()
             .unwrap_or(0);
         moves.max(events)
+    }
+
+    /// Whether the task named `task` hangs at `t_ms` (a `stall` line at or before it).
+    pub fn stalled(&self, task: &str, t_ms: u64) -> bool {
+        self.stalls
+            .iter()
+            .any(|(at, name)| u64::from(*at) <= t_ms && name.as_str() == task)
     }
 
     /// The true distance at `t_ms` (the last segment's end distance after the movements).

@@ -20,9 +20,11 @@
 //! `cw_bsp::port::Port`.
 
 use cw_core::can::CanDriver;
+use cw_core::os::TaskId;
 use cw_core::sonar::uart::Ranger;
 use cw_core::sonar::SonarConfig;
 use cw_core::warning::Measurement;
+use cw_core::wdgm::WdgDriver;
 use embedded_hal::digital::{InputPin, OutputPin};
 
 /// A CAN controller event, taken by the ECU's CAN interrupt (`CanIsr`).
@@ -85,6 +87,72 @@ pub trait Board {
     type ModeInput: InputPin;
     /// The Port driver.
     type Port: PortDriver;
+    /// The watchdog driver (AUTOSAR Wdg) that WdgM triggers.
+    type Watchdog: WdgDriver;
+    /// Faults a test board injects into the tasks (a scenario's `stall`); [`NoFaults`]
+    /// on a vehicle's board.
+    type Faults: TaskFaults;
+}
+
+/// Faults a test board injects into the tasks.
+pub trait TaskFaults {
+    /// Whether the job of `task` that starts at `now_ms` hangs at its first line.
+    fn hangs(&self, task: TaskId, now_ms: u64) -> bool;
+}
+
+/// A board that injects no fault.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct NoFaults;
+
+impl TaskFaults for NoFaults {
+    #[inline(always)]
+    fn hangs(&self, _task: TaskId, _now_ms: u64) -> bool {
+        false
+    }
+}
+
+/// A scenario's `stall` lines, their tasks found by name in the OS configuration:
+/// from each time on, that task's jobs hang.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Stalls<const N: usize> {
+    stalls: [(u64, TaskId); N],
+    len: usize,
+}
+
+impl<const N: usize> Stalls<N> {
+    /// The stalls of `scenario`.
+    ///
+    /// # Errors
+    /// The first name that is no task of the configuration.
+    pub fn of<const M: usize>(
+        scenario: &cw_core::scenario::Scenario<M>,
+    ) -> Result<Self, cw_core::scenario::TaskName> {
+        let mut stalls = Self {
+            stalls: [(0, TaskId(0)); N],
+            len: 0,
+        };
+        for (at, name) in &scenario.stalls {
+            let task = crate::config::OS
+                .tasks()
+                .iter()
+                .position(|t| t.name == name.as_str())
+                .ok_or(*name)?;
+            if let Some(slot) = stalls.stalls.get_mut(stalls.len) {
+                *slot = (u64::from(*at), TaskId(task as u8));
+                stalls.len += 1;
+            }
+        }
+        Ok(stalls)
+    }
+}
+
+impl<const N: usize> TaskFaults for Stalls<N> {
+    fn hangs(&self, task: TaskId, now_ms: u64) -> bool {
+        self.stalls
+            .iter()
+            .take(self.len)
+            .any(|&(at, t)| t == task && now_ms >= at)
+    }
 }
 
 /// The two warning LEDs.
@@ -150,4 +218,8 @@ pub struct BoardParts<B: Board> {
     pub sonar: B::Sensor,
     /// The mode inputs.
     pub modes: ModeInputs<B>,
+    /// The watchdog (started by `Ecu::init`).
+    pub watchdog: B::Watchdog,
+    /// The faults the board injects.
+    pub faults: B::Faults,
 }

@@ -27,6 +27,12 @@
 //! | `RES_RTE` | the RTE's buffers (SonarData, LedRequest, mode requests) | `OsLEDTask`, `OsBswServiceTask`, `OsObstacleDetectionTask`, `OsComTask`, `OsSonarTask` | 6 (`OsLEDTask`) |
 //! | `RES_LEDS` | the LED pins | `OsLEDTask`, `OsBswServiceTask` (EcuM's safe state) | 6 (`OsLEDTask`) |
 //!
+//! WdgM supervises `OsLEDTask`, `OsObstacleDetectionTask` and `OsSonarTask` (one alive
+//! indication per job, exactly one per period); its main function runs in
+//! `OsBswServiceTask` and triggers the watchdog (50 ms timeout) while every supervision
+//! holds. A failed supervision puts the LEDs in their safe state (dark) and stops the
+//! trigger: the watchdog resets the ECU.
+//!
 //! The kernel's own data is guarded by the kernel lock (every interrupt masked for the
 //! length of one service call); `SysTickIsr` takes no resource. The ceilings are derived
 //! by `OsConfig::new` from the `uses` declarations below, never written by hand.
@@ -51,6 +57,7 @@ use cw_core::os::{
     IsrConfig, IsrId, OsConfig, OsDescription, ResourceId, Status, TaskConfig, TaskId,
 };
 use cw_core::pdur::{PduRConfig, RxRoute};
+use cw_core::wdgm::AliveSupervision;
 
 /// `OsStartupTask`.
 pub const STARTUP_TASK: TaskId = TaskId(0);
@@ -302,3 +309,35 @@ pub const CANSM: CanSmConfig = match CanSmConfig::from_ms(BSW_PERIOD_MS, 2, 10, 
     Ok(cfg) => cfg,
     Err(_) => panic!("CanSM timing is not a whole number of BSW periods"),
 };
+
+/// The tasks WdgM supervises, in the order of [`ALIVE`]: the periodic tasks but
+/// `OsBswServiceTask`, which runs WdgM's main function (if it stalls, the watchdog is no
+/// longer triggered at all).
+pub const SUPERVISED: [TaskId; 3] = [LED_TASK, OBSTACLE_TASK, SONAR_TASK];
+
+/// Main functions of WdgM (one per `OsBswServiceTask` job) in one period of `task`.
+const fn reference_cycle(task: TaskId) -> u16 {
+    let cycle = PERIOD_MS[task.0 as usize] / BSW_PERIOD_MS;
+    assert!(
+        cycle >= 1 && cycle * BSW_PERIOD_MS == PERIOD_MS[task.0 as usize],
+        "a supervised task's period is a whole number of WdgM main functions"
+    );
+    cycle as u16
+}
+
+/// WdgM's alive supervision: each supervised task reports one alive indication per job,
+/// and exactly one is expected per period (no margin, no failed cycle tolerated). A job
+/// that does not come, or comes twice, is a failure.
+pub static ALIVE: [AliveSupervision; 3] = [
+    AliveSupervision::new("OsLEDTask", reference_cycle(LED_TASK), 1),
+    AliveSupervision::new("OsObstacleDetectionTask", reference_cycle(OBSTACLE_TASK), 1),
+    AliveSupervision::new("OsSonarTask", reference_cycle(SONAR_TASK), 1),
+];
+
+/// Main functions an expired supervision still triggers the watchdog: none. The reset
+/// follows the expiry by the watchdog's timeout.
+pub const WDGM_EXPIRED_TOLERANCE: u16 = 0;
+
+/// The watchdog's timeout, ms: WdgM triggers it every 10 ms (each `OsBswServiceTask`
+/// job), so five periods without a trigger reset the ECU.
+pub const WATCHDOG_TIMEOUT_MS: u16 = 50;

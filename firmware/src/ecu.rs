@@ -35,6 +35,7 @@ use cw_core::warning::{Measurement, WarningLevel};
 
 use crate::board::{
     Board, BoardParts, CanEvents, CanInterrupt, DistanceSensor, Leds, ModeInputs, PortDriver,
+    TaskFaults,
 };
 use crate::config::{self, Kernel};
 use crate::iohwab;
@@ -42,6 +43,8 @@ use crate::rte::Rte;
 use crate::swc::{
     can_translate, LedActuator, LedColor, ModeManager, ObstacleDetection, UltraSonic,
 };
+use core::sync::atomic::{AtomicBool, AtomicU32, Ordering};
+use cw_core::wdgm::{Failure, Status, WdgDriver, WdgM};
 
 /// The ECU's hook routines and their data (the OS configuration enables `ErrorHook` and
 /// `ShutdownHook`).
@@ -297,6 +300,13 @@ struct ModePart<B: Board> {
     refused: u32,
 }
 
+/// WdgM and the watchdog it triggers (`OsBswServiceTask`'s, and `Ecu::init`'s before the
+/// OS runs).
+struct WdgPart<B: Board> {
+    wdgm: WdgM<3>,
+    driver: B::Watchdog,
+}
+
 struct ObstaclePart {
     swc: ObstacleDetection,
     /// The last threshold pair received from the PC and applied (raw), to apply each once.
@@ -312,6 +322,14 @@ pub struct Ecu<P, B: Board> {
     sonar: TaskLocal<SonarPart<B>>,
     obstacle: TaskLocal<ObstaclePart>,
     modes: TaskLocal<ModePart<B>>,
+    wdg: TaskLocal<WdgPart<B>>,
+    /// Alive indications of the supervised tasks since WdgM's last main function, each
+    /// incremented by its task alone and taken (swapped to 0) by the main function.
+    alive: [AtomicU32; 3],
+    /// WdgM's supervision expired: the LEDs stay in their safe state until the reset.
+    safe_state: AtomicBool,
+    /// The faults the board injects into the tasks.
+    faults: B::Faults,
     /// The Port driver, until `Port_Init`.
     port_driver: Option<B::Port>,
 }
@@ -347,6 +365,13 @@ impl<P: Port<Kernel = Kernel>, B: Board> Ecu<P, B> {
                 swc: ObstacleDetection::new(),
                 applied: (1000, 2000),
             }),
+            wdg: TaskLocal::new(WdgPart {
+                wdgm: WdgM::new(&config::ALIVE, config::WDGM_EXPIRED_TOLERANCE),
+                driver: parts.watchdog,
+            }),
+            alive: [AtomicU32::new(0), AtomicU32::new(0), AtomicU32::new(0)],
+            safe_state: AtomicBool::new(false),
+            faults: parts.faults,
             port_driver: Some(parts.port),
         }
     }
@@ -393,6 +418,13 @@ impl<P: Port<Kernel = Kernel>, B: Board> Ecu<P, B> {
         self.rte.get_mut().led_request.read()
     }
 
+    /// WdgM's global status and the failure that expired it, unless `OsBswServiceTask` has
+    /// a job under way (then `None`).
+    pub fn supervision(&self) -> Option<(Status, Option<Failure>)> {
+        self.wdg
+            .with(|part| (part.wdgm.global_status(), part.wdgm.failure()))
+    }
+
     /// The warning thresholds in use.
     pub fn thresholds(&mut self) -> cw_core::warning::Thresholds {
         self.obstacle.get_mut().swc.thresholds()
@@ -437,6 +469,12 @@ impl<P: Port<Kernel = Kernel>, B: Board> Ecu<P, B> {
         if let Some(mut port) = self.port_driver.take() {
             port.port_init();
         }
+        // Wdg_Init: the watchdog runs from here on; WdgM's first main function (the first
+        // `OsBswServiceTask` job, 10 ms after StartOS) triggers it well within its timeout.
+        self.wdg
+            .get_mut()
+            .driver
+            .set_trigger_condition(config::WATCHDOG_TIMEOUT_MS);
     }
 
     /// `StartOS`, which activates `OsStartupTask`.
@@ -485,6 +523,12 @@ impl<P: Port<Kernel = Kernel>, B: Board> Ecu<P, B> {
             self.port.span(span::ACTIVATE_TO_FIRST_LINE, false);
         }
         self.port.job_started(task);
+        if self.faults.hangs(task, self.port.now_ms()) {
+            // A fault the board injects: the job hangs here, never ending (the port keeps
+            // it running at its priority); it reports no alive indication.
+            self.port.hang();
+            return;
+        }
         match task {
             config::STARTUP_TASK => self.startup_task(),
             config::LED_TASK => self.led_task(),
@@ -493,6 +537,14 @@ impl<P: Port<Kernel = Kernel>, B: Board> Ecu<P, B> {
             config::COM_TASK => self.com_task(),
             config::SONAR_TASK => self.sonar_task(),
             _ => {}
+        }
+        // WdgM's alive indication: the supervised task's job has run.
+        if let Some(alive) = config::SUPERVISED
+            .iter()
+            .position(|&t| t == task)
+            .and_then(|i| self.alive.get(i))
+        {
+            alive.fetch_add(1, Ordering::Relaxed);
         }
         // The job's last line: where the port switches stacks, a successful
         // TerminateTask never returns here.
@@ -607,11 +659,40 @@ impl<P: Port<Kernel = Kernel>, B: Board> Ecu<P, B> {
             return;
         };
         let now_ms = self.port.now_ms();
+        let safe = self.safe_state.load(Ordering::Relaxed);
         let _ = self.leds.lock(&self.port, |leds| {
-            let (red, yellow) = (leds.red.run(level, now_ms), leds.yellow.run(level, now_ms));
+            let (red, yellow) = if safe {
+                // WdgM's supervision expired: dark until the watchdog's reset.
+                (false, false)
+            } else {
+                (leds.red.run(level, now_ms), leds.yellow.run(level, now_ms))
+            };
             leds.set(LedColor::Red, red);
             leds.set(LedColor::Yellow, yellow);
         });
+    }
+
+    /// WdgM's main function, in `OsBswServiceTask`: the supervised tasks' alive
+    /// indications since the last one judged; the watchdog triggered while every
+    /// supervision holds; on the expiry, the LEDs' safe state (they stay dark until the
+    /// watchdog resets the ECU, which no longer being triggered brings).
+    fn wdgm_main_function(&self) {
+        let indications = self.alive.each_ref().map(|a| a.swap(0, Ordering::Relaxed));
+        let verdict = self.wdg.with(|part| {
+            let verdict = part.wdgm.main_function(&indications);
+            if verdict.trigger {
+                part.driver
+                    .set_trigger_condition(config::WATCHDOG_TIMEOUT_MS);
+            }
+            verdict
+        });
+        if verdict.is_some_and(|v| v.expired_now) {
+            self.safe_state.store(true, Ordering::Relaxed);
+            let _ = self.leds.lock(&self.port, |leds| {
+                leds.set(LedColor::Red, false);
+                leds.set(LedColor::Yellow, false);
+            });
+        }
     }
 
     /// `OsBswServiceTask`: the BSW main functions; in EcuM's post-run the outputs go to
@@ -648,6 +729,7 @@ impl<P: Port<Kernel = Kernel>, B: Board> Ecu<P, B> {
             }
             stack.main_functions()
         });
+        self.wdgm_main_function();
         if shut_down != Ok(true) {
             return;
         }
@@ -655,6 +737,8 @@ impl<P: Port<Kernel = Kernel>, B: Board> Ecu<P, B> {
             leds.set(LedColor::Red, false);
             leds.set(LedColor::Yellow, false);
         });
+        // No task triggers the watchdog after ShutdownOS: EcuM switches it off first.
+        let _ = self.wdg.with(|part| part.driver.off());
         let _ = self.os(|os| os.shutdown_os(E_OK));
     }
 

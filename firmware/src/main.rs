@@ -149,13 +149,21 @@ fn run(o: &Options) -> Result<(), String> {
     let bus_offs = ecu.cansm().bus_off_total();
     let thresholds = ecu.thresholds();
     let ecum_state = ecu.ecum().state();
+    let supervision = ecu.supervision();
+    let watchdog = supervision_summary(
+        supervision.and_then(|(_, failure)| failure),
+        sim.watchdog().triggers(),
+        sim.watchdog().last_trigger_us(),
+        sim.reset_at_us(),
+    );
     let simulated_s = sim.now_ms() as f64 / 1000.0;
     let ratio = simulated_s / wall.as_secs_f64().max(1e-9);
     let text = format!(
         "{}\nsummary: {:.1} s of ECU time simulated in {:.1} ms of wall time ({:.0}x real time)\n\
          \x20        {} CAN frames on the bus; distance frames sent {}, refused {}; received frames dropped {}\n\
          \x20        bus-offs {}, kernel errors {}, thresholds red < {} mm, yellow < {} mm\n\
-         \x20        EcuM state at the end: {:?}\n",
+         \x20        EcuM state at the end: {:?}\n\
+         {}",
         figure7_table(sim.scenario(), sim.trace()),
         simulated_s,
         wall.as_secs_f64() * 1000.0,
@@ -169,9 +177,40 @@ fn run(o: &Options) -> Result<(), String> {
         thresholds.red_below_mm(),
         thresholds.yellow_below_mm(),
         ecum_state,
+        watchdog,
     );
     out.write_all(text.as_bytes())
         .map_err(|e| format!("cannot write to stdout: {e}"))
+}
+
+/// The summary's lines on WdgM and the watchdog: every supervision held, or which failed
+/// when, and the watchdog's reset.
+fn supervision_summary(
+    failure: Option<cw_core::wdgm::Failure>,
+    triggers: u64,
+    last_trigger_us: Option<u64>,
+    reset_at_us: Option<u64>,
+) -> String {
+    let mut text = match failure {
+        None => format!(
+            "         WdgM: every alive supervision held; the watchdog was triggered {triggers} times\n"
+        ),
+        Some(f) => format!(
+            "         WdgM: the alive supervision of {} failed at {} ms ({} of {} alive indications): LEDs dark from then on, the watchdog no longer triggered\n",
+            f.name,
+            u64::from(f.main_function) * u64::from(cw_firmware::config::BSW_PERIOD_MS),
+            f.counted,
+            f.expected
+        ),
+    };
+    if let Some(reset) = reset_at_us {
+        text.push_str(&format!(
+            "         watchdog: last triggered at {:.3} ms, reset the ECU at {:.3} ms; the run ends there\n",
+            last_trigger_us.unwrap_or(0) as f64 / 1000.0,
+            reset as f64 / 1000.0
+        ));
+    }
+    text
 }
 
 fn main() -> ExitCode {

@@ -34,8 +34,8 @@ use cw_core::sonar::{Echo, SonarConfig};
 use cw_core::warning::Measurement;
 
 use crate::board::{
-    Board, CanEvents, CanInterrupt, DistanceSensor, EchoSensor, PortDriver, PulseCapture, SerialRx,
-    SerialSensor,
+    Board, CanEvents, CanInterrupt, DistanceSensor, EchoSensor, NoFaults, PortDriver, PulseCapture,
+    SerialRx, SerialSensor, Stalls,
 };
 use crate::config::{self, Kernel};
 use crate::ecu::{span, Ecu};
@@ -57,6 +57,8 @@ impl Board for Mps2Board {
     type Sensor = Mps2Sensor;
     type ModeInput = ScenarioInput;
     type Port = Mps2PortDriver;
+    type Watchdog = mps2::CmsdkWatchdog;
+    type Faults = Stalls<IMAGE_CAPACITY>;
 }
 
 /// The image's sensor.
@@ -358,6 +360,7 @@ impl App for Mps2App {
     }
 
     fn idle(&self) {
+        report_supervision("cw-qemu", &self.ecu);
         if now_ms() < self.end_ms {
             return;
         }
@@ -396,6 +399,12 @@ impl App for Mps2App {
     }
 
     fn report(&self, fault: &PortFault) {
+        report_supervision("cw-qemu", &self.ecu);
+        if *fault == PortFault::Board("NMI") && mps2::watchdog_expired() {
+            // The watchdog's reset ends the run without the end-of-run report: the LED
+            // changes so far go to the log now.
+            report_leds();
+        }
         mps2::report(fault);
     }
 
@@ -437,6 +446,26 @@ fn board_irq<B: Board>(ecu: &Ecu<CortexMPort<Kernel>, B>, line: u16) {
     }
 }
 
+/// Logs WdgM's failure once, from the idle loop (no job under way): which task's alive
+/// supervision failed, when, and that the watchdog is no longer triggered.
+fn report_supervision<B: Board>(name: &str, ecu: &Ecu<CortexMPort<Kernel>, B>) {
+    static REPORTED: core::sync::atomic::AtomicBool = core::sync::atomic::AtomicBool::new(false);
+    if REPORTED.load(core::sync::atomic::Ordering::Relaxed) {
+        return;
+    }
+    if let Some((_, Some(f))) = ecu.supervision() {
+        REPORTED.store(true, core::sync::atomic::Ordering::Relaxed);
+        defmt::println!(
+            "{=str}: WdgM: the alive supervision of {=str} failed at {} ms ({} of {} alive indications): LEDs dark, the watchdog no longer triggered",
+            name,
+            f.name,
+            u64::from(f.main_function) * u64::from(config::BSW_PERIOD_MS),
+            f.counted,
+            f.expected
+        );
+    }
+}
+
 /// `App::shut_down` on this board: the LEDs' safe state (whatever shut the OS down; EcuM's
 /// post-run has set it already on a normal shutdown) and the log line `NAME: ShutdownOS at
 /// MS ms: ShutdownHook saw STATUS`. Returns whether the status was `E_OK`.
@@ -463,6 +492,8 @@ impl Board for Mps2FlashBoard {
     type Sensor = SerialSensor<SensorUart>;
     type ModeInput = TiedOn;
     type Port = Mps2PortDriver;
+    type Watchdog = mps2::CmsdkWatchdog;
+    type Faults = NoFaults;
 }
 
 /// A mode input the board ties on.
@@ -501,7 +532,9 @@ impl App for Mps2FlashApp {
         self.ecu.run_job(task);
     }
 
-    fn idle(&self) {}
+    fn idle(&self) {
+        report_supervision("cw-mps2", &self.ecu);
+    }
 
     fn tick(&self) {
         mps2::on_tick();
@@ -513,6 +546,7 @@ impl App for Mps2FlashApp {
     }
 
     fn report(&self, fault: &PortFault) {
+        report_supervision("cw-mps2", &self.ecu);
         mps2::report(fault);
     }
 
@@ -601,6 +635,16 @@ fn task_name(t: usize) -> &'static str {
     config::OS.tasks().get(t).map_or("?", |c| c.name)
 }
 
+/// Prints the LED register's changes so far: `led MS RED YELLOW` lines.
+fn report_leds() {
+    let dropped = mps2::led_changes(|at, bits| {
+        defmt::println!("cw-qemu: led {} {} {}", at, bits & 1, (bits >> 1) & 1);
+    });
+    if dropped > 0 {
+        defmt::println!("cw-qemu: led changes not logged {}", dropped);
+    }
+}
+
 /// Prints the LED changes and the task trace (`cw_bsp::cortex_m::trace`) over
 /// semihosting, one fact per line, for `cargo xtask qemu --compare` and for reading:
 ///
@@ -614,12 +658,7 @@ fn task_name(t: usize) -> &'static str {
 ///   and every periodic task's longest job ended within its period (`false` if not).
 fn report_trace() -> bool {
     use cw_bsp::cortex_m::trace::{self, EventKind, SpanRecord, IDLE_ROW};
-    let dropped = mps2::led_changes(|at, bits| {
-        defmt::println!("cw-qemu: led {} {} {}", at, bits & 1, (bits >> 1) & 1);
-    });
-    if dropped > 0 {
-        defmt::println!("cw-qemu: led changes not logged {}", dropped);
-    }
+    report_leds();
     let isr_name = |i: usize| config::OS.isrs().get(i).map_or("?", |c| c.name);
     trace::read(|t| {
         // Under `-icount shift=0`: one SysTick count is 40 instructions. The measuring's

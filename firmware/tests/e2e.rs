@@ -393,3 +393,89 @@ fn thresholds_the_pc_sends_live_are_taken_by_the_ecu() {
         "the PC's frame is on the bus"
     );
 }
+
+#[test]
+fn the_supervised_tasks_are_named_as_in_the_os_configuration() {
+    for (task, alive) in config::SUPERVISED.iter().zip(&config::ALIVE) {
+        assert_eq!(config::OS.tasks()[usize::from(task.0)].name, alive.name);
+        assert_eq!(
+            u32::from(alive.reference_cycle) * config::BSW_PERIOD_MS,
+            config::PERIOD_MS[usize::from(task.0)]
+        );
+    }
+}
+
+#[test]
+fn a_healthy_run_keeps_every_supervision_and_the_watchdog_triggered() {
+    let mut sim = run("hold 500 3000");
+    assert_eq!(sim.reset_at_us(), None);
+    assert_eq!(
+        sim.ecu().supervision(),
+        Some((cw_core::wdgm::Status::Ok, None))
+    );
+    // Ecu::init's first trigger, then one per OsBswServiceTask job.
+    assert_eq!(sim.watchdog().triggers(), 1 + 3000 / 10);
+}
+
+#[test]
+fn a_stalled_task_fails_its_supervision_goes_dark_and_the_watchdog_resets_the_ecu() {
+    let mut sim = run("hold 500 3000\nstall OsSonarTask 1000");
+    // The sonar job at 1000 ms hangs; its reference cycle (4 main functions) that ends at
+    // 1040 ms holds none of the one alive indication expected.
+    let (status, failure) = sim.ecu().supervision().expect("no job under way");
+    assert_eq!(status, cw_core::wdgm::Status::Stopped);
+    let failure = failure.expect("a failure");
+    assert_eq!(
+        (failure.name, failure.counted, failure.expected),
+        ("OsSonarTask", 0, 1)
+    );
+    assert_eq!(u64::from(failure.main_function) * 10, 1040);
+    // The last trigger was the main function before (1030 ms); the reset 50 ms later.
+    assert_eq!(sim.watchdog().last_trigger_us(), Some(1_030_000));
+    assert_eq!(sim.reset_at_us(), Some(1_080_000));
+    assert!(sim.now_ms() <= 1081, "the run ended at the reset");
+    // Red before the stall (0.5 m), dark from the failure on.
+    let lit = |t: u64| {
+        sim.trace()
+            .iter()
+            .find(|r| r.time_ms == t)
+            .map(|r| (r.red, r.yellow))
+    };
+    assert_eq!(lit(1000), Some((true, false)));
+    for t in (1050..=1070).step_by(10) {
+        assert_eq!(lit(t), Some((false, false)), "dark at {t} ms");
+    }
+    // The hung job was still running when its alarm fired again (E_OS_LIMIT at 1040).
+    assert_eq!(sim.ecu().stats().os_errors, 1);
+}
+
+#[test]
+fn a_stall_above_the_main_function_stops_the_trigger_itself() {
+    // OsLEDTask (priority 6) hangs at 1000 ms: OsBswServiceTask (5), which runs WdgM's main
+    // function, never runs again, so nothing judges or triggers: the watchdog resets 50 ms
+    // after the last trigger (990 ms).
+    let mut sim = run("hold 500 3000\nstall OsLEDTask 1000");
+    assert_eq!(sim.watchdog().last_trigger_us(), Some(990_000));
+    assert_eq!(sim.reset_at_us(), Some(1_040_000));
+    assert_eq!(sim.ecu().supervision().map(|s| s.1), Some(None));
+}
+
+#[test]
+fn after_shutdown_the_watchdog_is_off_and_resets_nothing() {
+    let mut sim = run("hold 500 3000\nshutdown 1000");
+    assert!(sim.ecu().is_off());
+    assert_eq!(sim.reset_at_us(), None);
+    assert_eq!(sim.now_ms(), 3000);
+}
+
+#[test]
+fn a_stall_of_no_task_is_refused_naming_it() {
+    let scenario = Scenario::parse("hold 500 3000\nstall OsNoSuchTask 1000").expect("parses");
+    match Simulation::new(scenario, 1) {
+        Ok(_) => panic!("a stall of an unknown task was accepted"),
+        Err(e) => assert_eq!(
+            e.to_string(),
+            "scenario: `stall OsNoSuchTask`: no task of that name"
+        ),
+    }
+}

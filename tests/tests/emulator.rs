@@ -91,6 +91,72 @@ fn shutdown_is_the_same_ecu_on_the_image_and_ends_at_shutdown_os() {
     assert!((6_000..6_100).contains(&at), "{line}");
 }
 
+/// A task hangs (`stall`): on the image as on the host, WdgM's alive supervision fails at
+/// the same main function, the LEDs go dark, and the watchdog (QEMU's CMSDK model on the
+/// image, the host board's model) resets the ECU 50 ms after the last trigger; the frames
+/// and LED levels up to the reset are the same.
+#[test]
+fn a_stalled_task_is_caught_by_the_watchdog_on_the_image_as_on_the_host() {
+    let image = image().unwrap_or_else(|e| panic!("{e}"));
+    let path = root().join("scenarios").join("stall.txt");
+    let run = run_image(&image, Some(&path), 1, &out("stall")).unwrap_or_else(|e| panic!("{e}"));
+    // The reset ends QEMU (`-no-reboot`) with status 0, before any end-of-run report.
+    assert!(
+        run.success,
+        "the image did not end by a reset:\n{}",
+        run.report
+    );
+    let line = |prefix: &str| {
+        run.report
+            .lines()
+            .find(|l| l.starts_with(prefix))
+            .unwrap_or_else(|| panic!("no `{prefix}` line in:\n{}", run.report))
+            .to_string()
+    };
+    let wdgm = line("cw-qemu: WdgM: ");
+    let watchdog = line("watchdog: ");
+    assert!(
+        !run.report.contains("cw-qemu: end at"),
+        "the run ended by the reset"
+    );
+    // The host's figures.
+    let text = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{e}"));
+    let scenario = cw_firmware::host::Scenario::parse(&text).unwrap_or_else(|e| panic!("{e}"));
+    let mut sim = cw_firmware::host::Simulation::new(scenario, 1).unwrap_or_else(|e| panic!("{e}"));
+    sim.run();
+    let failure = sim
+        .ecu()
+        .supervision()
+        .and_then(|(_, f)| f)
+        .unwrap_or_else(|| panic!("the host's supervision did not fail"));
+    let failed_ms = u64::from(failure.main_function) * 10;
+    let last_ms = sim.watchdog().last_trigger_us().unwrap_or(0) / 1000;
+    let reset_ms = sim.reset_at_us().unwrap_or(0) / 1000;
+    assert_eq!((failed_ms, last_ms, reset_ms), (2040, 2030, 2080));
+    assert_eq!(
+        wdgm,
+        format!(
+            "cw-qemu: WdgM: the alive supervision of {} failed at {failed_ms} ms (0 of 1 alive indications): LEDs dark, the watchdog no longer triggered",
+            failure.name
+        )
+    );
+    // The model's first expiry (its NMI) comes half-way: the reset follows at the second.
+    assert_eq!(
+        watchdog,
+        format!(
+            "watchdog: not triggered since {last_ms} ms; expired at {} ms (NMI), its reset follows",
+            last_ms + 25
+        )
+    );
+    let image_trace = run.trace().unwrap_or_else(|e| panic!("{e}"));
+    let host = simulate(&path, 1).unwrap_or_else(|e| panic!("{e}"));
+    let a = compare(&image_trace, &host).unwrap_or_else(|e| panic!("stall.txt: {e}"));
+    println!(
+        "stall.txt: WdgM failed at {failed_ms} ms, last trigger {last_ms} ms, reset at {reset_ms} ms on both; {} frames, {} red and {} yellow LED levels the same",
+        a.frames, a.red, a.yellow
+    );
+}
+
 /// A scenario the image cannot read or play: the run fails, the LEDs stay dark, and the
 /// report names the file, the line and the fault.
 fn refused(name: &str, text: Option<&str>, reason: &str) {

@@ -14,7 +14,9 @@
 //! - [`can`]: [`VirtualBus`] with [`HostCan`] controllers (AUTOSAR `Can` driver semantics,
 //!   mailboxes, acceptance filters, arbitration, frame timing, error counters and bus-off)
 //!   and [`Tester`] nodes that put arbitrary frames on the bus;
-//! - [`candump`]: [`CandumpLog`], the bus trace in `candump -l` format.
+//! - [`candump`]: [`CandumpLog`], the bus trace in `candump -l` format;
+//! - [`watchdog`]: [`SimWatchdog`], the watchdog that resets the ECU when WdgM stops
+//!   triggering it.
 //!
 //! Units: times in microseconds (`_us`) unless named otherwise; the CAN bus keeps its own
 //! time in nanoseconds internally so that bit times add up exactly.
@@ -59,6 +61,7 @@ pub mod clock;
 pub mod pin;
 pub mod port;
 pub mod sonar;
+pub mod watchdog;
 
 pub use can::{
     BusConfig, BusConfigError, BusRecord, BusStats, CanEvent, HostCan, HostCanConfig, HostCanStats,
@@ -69,3 +72,4 @@ pub use clock::{SimDelay, TimeWentBackwards, VirtualClock};
 pub use pin::{SimInput, SimPin};
 pub use port::HostPort;
 pub use sonar::{HcSr04, Noise, XorShift64};
+pub use watchdog::SimWatchdog;

@@ -7,6 +7,7 @@
 //! | CAN | [`SlcanCan`]: frames as SLCAN (Lawicel) text on UART0 | CMSDK APB UART0 at `0x4000_4000`, IRQ 0 (RX), 1 (TX) |
 //! | distance sensor (live runs) | [`SensorUart`]: a UART ranging module's bytes ([`sensor`]) | CMSDK APB UART1 at `0x4000_5000`, IRQ 2 (RX) |
 //! | OS tick | SysTick, 25 000 core clocks per ms | SCS |
+//! | watchdog | [`CmsdkWatchdog`]: WdgM's trigger; its first expiry is an NMI, its second resets the board | CMSDK APB watchdog at `0x4000_8000` |
 //! | log, exit | semihosting (`-semihosting-config enable=on,target=native`) | |
 //!
 //! QEMU models no FlexCAN, so the CAN controller here is a UART speaking SLCAN: what the
@@ -827,6 +828,94 @@ pub fn exit(success: bool) -> ! {
     }
 }
 
+/// The CMSDK APB watchdog (Arm DDI 0479C, 3.9): a down-counter at the core clock. At zero
+/// it raises its interrupt (the NMI on this board) and reloads; at the next zero with the
+/// interrupt still raised it resets the board. A trigger clears the interrupt, which also
+/// reloads the counter. So the reset comes `2 x WDOGLOAD` counts after the last trigger:
+/// `WDOGLOAD` is half the timeout, and the NMI half-way is the early warning.
+pub struct CmsdkWatchdog {
+    base: usize,
+    started: bool,
+}
+
+/// The watchdog's counter clock, Hz. On the AN386 FPGA image it is the 25 MHz system
+/// clock; QEMU 7.2's model counts twice as fast (measured: with `WDOGLOAD` at 625,000,
+/// the first expiry came 12.5 ms after the trigger, by the OS's SysTick time), so the
+/// timeout is set for the model QEMU runs. A port to the physical board halves this.
+const WATCHDOG_CLOCK_HZ: u32 = 2 * SYSCLK_HZ;
+
+/// The last trigger of the watchdog, OS ms (for the report of its expiry).
+static WATCHDOG_TRIGGERED_MS: AtomicU32 = AtomicU32::new(0);
+
+impl CmsdkWatchdog {
+    const LOAD: usize = 0x000;
+    const CONTROL: usize = 0x008;
+    const INTCLR: usize = 0x00C;
+    const RIS: usize = 0x010;
+    const LOCK: usize = 0xC00;
+    const UNLOCK_KEY: u32 = 0x1ACC_E551;
+    const INTEN: u32 = 1 << 0;
+    const RESEN: u32 = 1 << 1;
+
+    /// The board's watchdog (not started).
+    pub const fn new() -> Self {
+        Self {
+            base: 0x4000_8000,
+            started: false,
+        }
+    }
+
+    fn write(&self, offset: usize, value: u32) {
+        // SAFETY: a CMSDK APB watchdog register of this board; word access.
+        unsafe { ((self.base + offset) as *mut u32).write_volatile(value) }
+    }
+
+    fn read(&self, offset: usize) -> u32 {
+        // SAFETY: as `write`.
+        unsafe { ((self.base + offset) as *const u32).read_volatile() }
+    }
+}
+
+impl Default for CmsdkWatchdog {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl cw_core::wdgm::WdgDriver for CmsdkWatchdog {
+    fn set_trigger_condition(&mut self, timeout_ms: u16) {
+        let half = (WATCHDOG_CLOCK_HZ / 1000).saturating_mul(u32::from(timeout_ms.max(2)) / 2);
+        self.write(Self::LOCK, Self::UNLOCK_KEY);
+        // Writing WDOGLOAD restarts the counter from the value at once; WDOGINTCLR clears
+        // a raised interrupt (so the next expiry is a first one again).
+        self.write(Self::LOAD, half);
+        self.write(Self::INTCLR, 1);
+        if !self.started {
+            self.write(Self::CONTROL, Self::INTEN | Self::RESEN);
+            self.started = true;
+        }
+        self.write(Self::LOCK, 0);
+        WATCHDOG_TRIGGERED_MS.store(
+            u32::try_from(now_ms()).unwrap_or(u32::MAX),
+            Ordering::Relaxed,
+        );
+    }
+
+    fn off(&mut self) {
+        self.write(Self::LOCK, Self::UNLOCK_KEY);
+        self.write(Self::CONTROL, 0);
+        self.write(Self::INTCLR, 1);
+        self.write(Self::LOCK, 0);
+        self.started = false;
+    }
+}
+
+/// Whether the watchdog has expired once (its interrupt raised: the reset follows at the
+/// next expiry).
+pub fn watchdog_expired() -> bool {
+    CmsdkWatchdog::new().read(CmsdkWatchdog::RIS) & 1 != 0
+}
+
 /// How a fatal fault ends the run.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum FatalEnd {
@@ -851,6 +940,12 @@ pub fn set_fatal_end(end: FatalEnd) {
 pub fn halt() -> ! {
     cortex_m::interrupt::disable();
     leds_safe();
+    if watchdog_expired() {
+        // The watchdog's reset comes at its next expiry: it, not the software, ends the run.
+        loop {
+            cortex_m::asm::wfi();
+        }
+    }
     if END_BY_EXIT.load(Ordering::Relaxed) {
         exit(false)
     }
@@ -862,6 +957,14 @@ pub fn halt() -> ! {
 /// overflow then shuts the OS down, whose report follows).
 pub fn report(fault: &PortFault) {
     leds_safe();
+    if *fault == PortFault::Board("NMI") && watchdog_expired() {
+        defmt::println!(
+            "watchdog: not triggered since {} ms; expired at {} ms (NMI), its reset follows",
+            WATCHDOG_TRIGGERED_MS.load(Ordering::Relaxed),
+            now_ms()
+        );
+        return;
+    }
     let (what, item) = fault.parts();
     defmt::println!("FATAL: {=str} {=str}", what, item);
 }

@@ -198,6 +198,14 @@ pub trait Port {
     /// A measured span `id` (the application numbers them) starts or ends here; for the
     /// instruction counts of the application's own paths.
     fn span(&self, _id: usize, _start: bool) {}
+
+    /// The running job hangs (a fault a test board injects: a task stuck in a loop).
+    /// Where the port switches stacks this never returns: the job spins at its priority
+    /// with interrupts enabled, so tasks above it and ISRs still run. The host port
+    /// returns at once and keeps the job as the one running, which has the same effect
+    /// there: the kernel still has the task running, so only tasks above it and ISRs run
+    /// again.
+    fn hang(&self) {}
 }
 
 /// Data shared by tasks and ISRs, guarded by one OSEK resource.

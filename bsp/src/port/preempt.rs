@@ -728,6 +728,12 @@ impl<K: OsKernel, A: Arch> Port for Preemptive<K, A> {
         self.arch.quiet_active_line();
     }
 
+    fn hang(&self) {
+        loop {
+            self.arch.wait();
+        }
+    }
+
     #[inline]
     fn span(&self, id: usize, start: bool) {
         self.arch.trace(if start {

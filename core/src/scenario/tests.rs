@@ -13,7 +13,7 @@ fn reads_every_command_and_places_movements_back_to_back() {
     let text =
         "# demo\nhold 500 1000\nramp 500 1500 1000 # up\nnoise uniform 20\ndropout 300 200\n\
                 dropout-rate 1000\ncan-errors 1500 40\nframe 1800 200#E8030000 # thresholds\n\
-                no-communication 1200 300\nshutdown 1900\n";
+                no-communication 1200 300\nstall OsSonarTask 1700\nshutdown 1900\n";
     let s = match Small::parse(text) {
         Ok(s) => s,
         Err(e) => panic!("{e}"),
@@ -39,6 +39,9 @@ fn reads_every_command_and_places_movements_back_to_back() {
         }]
     );
     assert_eq!(s.shutdown_at_ms, Some(1900));
+    assert_eq!(s.stalls.len(), 1);
+    assert!(!s.stalled("OsSonarTask", 1699) && s.stalled("OsSonarTask", 1700));
+    assert!(!s.stalled("OsLEDTask", 1800));
     assert_eq!(s.duration_ms(), 2000);
 }
 
@@ -90,6 +93,15 @@ fn malformed_lines_name_the_line_and_the_problem() {
             "line 1: `noise` takes `off`, `uniform MM` or `gaussian MM`",
         ),
         ("dropout-rate 1000001", "line 1: 1000001 ppm is above 1000000"),
+        ("stall OsSonarTask", "line 1: `stall` takes 2 value(s), found 1"),
+        (
+            "stall OsSonarTask soon",
+            "line 1: `soon` is not a whole number (a time in ms)",
+        ),
+        (
+            "stall AVeryLongTaskNameOfMoreThanThirtyTwoBytes 5",
+            "line 1: the task name `AVeryLongTaskNameOfMoreThanThirtyTwoBytes` is longer than 32 bytes",
+        ),
         (
             "hold 1 1\nhold 1 1\nhold 1 1\nhold 1 1\nhold 1 1\nhold 1 1\nhold 1 1\nhold 1 1\nhold 1 1",
             "line 9: more than 8 `hold`/`ramp` lines",
@@ -125,7 +137,7 @@ fn any_command(kind: u8, a: u32, b: u32, c: u32, id: u16, len: u8, data: [u8; 8]
         start_ms: a,
         duration_ms: b,
     };
-    match kind % 11 {
+    match kind % 12 {
         0 => Command::Hold {
             mm: a,
             duration_ms: b,
@@ -150,6 +162,13 @@ fn any_command(kind: u8, a: u32, b: u32, c: u32, id: u16, len: u8, data: [u8; 8]
             }
         }
         9 => Command::NoCommunication(w),
+        10 => {
+            let names = ["OsSonarTask", "OsLEDTask", "T", "a_task-name.1"];
+            match TaskName::new(names[usize::from(len) % names.len()]) {
+                Some(task) => Command::Stall { task, at_ms: a },
+                None => panic!("a short name fits"),
+            }
+        }
         _ => Command::Shutdown(a),
     }
 }

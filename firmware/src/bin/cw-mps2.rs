@@ -11,7 +11,7 @@
 use cw_bsp::mps2::{self, Led, SensorUart, SlcanCan};
 use cw_bsp::port::Slot;
 use cw_core::sonar::SonarConfig;
-use cw_firmware::board::{BoardParts, Leds, ModeInputs, SerialSensor};
+use cw_firmware::board::{BoardParts, Leds, ModeInputs, NoFaults, SerialSensor};
 use cw_firmware::config;
 use cw_firmware::ecu::Ecu;
 use cw_firmware::mps2::{Mps2FlashApp, Mps2PortDriver, TiedOn};
@@ -25,6 +25,8 @@ fn main() -> ! {
     };
     defmt::println!("cw-mps2: collision-warning ECU on mps2-an386 (production image)");
     let parts = BoardParts {
+        watchdog: mps2::CmsdkWatchdog::new(),
+        faults: NoFaults,
         port: Mps2PortDriver,
         can: SlcanCan::uart0(),
         leds: Leds {

@@ -7,7 +7,7 @@
 use cw_bsp::mps2::{self, FatalEnd, Led, SlcanCan};
 use cw_bsp::port::Slot;
 use cw_core::sonar::SonarConfig;
-use cw_firmware::board::{BoardParts, Leds, ModeInputs};
+use cw_firmware::board::{BoardParts, Leds, ModeInputs, Stalls};
 use cw_firmware::config;
 use cw_firmware::ecu::Ecu;
 use cw_firmware::mps2::{
@@ -32,7 +32,12 @@ fn main() -> ! {
     };
     let scenario: &'static ImageScenario = scenario;
     let end_ms = scenario.duration_ms();
+    let Ok(stalls) = Stalls::of(scenario) else {
+        mps2::fatal("the scenario's `stall` names no task of the OS configuration")
+    };
     let parts = BoardParts::<Mps2Board> {
+        watchdog: mps2::CmsdkWatchdog::new(),
+        faults: stalls,
         port: Mps2PortDriver,
         can: SlcanCan::uart0(),
         leds: Leds {

@@ -5,7 +5,7 @@ use std::rc::Rc;
 
 use cw_bsp::host::{
     BusRecord, CanEvent, HcSr04, HostCan, HostCanConfig, HostPort, Noise, SimDelay, SimInput,
-    SimPin, Tester, VirtualBus, VirtualClock,
+    SimPin, SimWatchdog, Tester, VirtualBus, VirtualClock,
 };
 use cw_core::can::{CanFrame, Hrh};
 use cw_core::os::TaskId;
@@ -15,7 +15,7 @@ use cw_core::warning::{Measurement, WarningLevel};
 use super::scenario::Scenario;
 use crate::board::{
     Board, BoardParts, CanEvents, CanInterrupt, EchoSensor, Leds, ModeInputs, PortDriver,
-    PulseCapture,
+    PulseCapture, Stalls,
 };
 use crate::config::{self, Kernel};
 use crate::ecu::Ecu;
@@ -30,6 +30,8 @@ impl Board for HostBoard {
     type Sensor = EchoSensor<SimPin, SimInput, SimDelay, HostSonar>;
     type ModeInput = SimInput;
     type Port = HostPortDriver;
+    type Watchdog = SimWatchdog;
+    type Faults = Stalls<{ super::scenario::HOST_CAPACITY }>;
 }
 
 /// The ECU on the host port and board.
@@ -186,6 +188,9 @@ pub struct Simulation {
     now_ms: u64,
     trace: Vec<TraceRow>,
     frames: Vec<BusRecord>,
+    watchdog: SimWatchdog,
+    /// The watchdog's reset, µs: the run ended there.
+    reset_at_us: Option<u64>,
 }
 
 impl Simulation {
@@ -221,7 +226,16 @@ impl Simulation {
             untriggered: 0,
         }));
         let port_inits = Rc::new(Cell::new(0));
+        let stalls = Stalls::of(&scenario).map_err(|name| {
+            SimulationError(format!(
+                "scenario: `stall {}`: no task of that name",
+                name.as_str()
+            ))
+        })?;
+        let watchdog = SimWatchdog::new(&clock);
         let parts = BoardParts::<HostBoard> {
+            watchdog: watchdog.clone(),
+            faults: stalls,
             port: HostPortDriver {
                 outputs: [red.clone(), yellow.clone(), trigger.clone()],
                 inits: port_inits.clone(),
@@ -268,6 +282,8 @@ impl Simulation {
             now_ms: 0,
             trace: Vec::new(),
             frames: Vec::new(),
+            watchdog,
+            reset_at_us: None,
         };
         sim.ecu.init();
         sim.ecu.start_os();
@@ -366,9 +382,19 @@ impl Simulation {
 
     /// Runs until virtual time `end_ms`.
     pub fn run_until_ms(&mut self, end_ms: u64) {
-        while self.now_ms < end_ms {
+        while self.now_ms < end_ms && self.reset_at_us.is_none() {
             self.step();
         }
+    }
+
+    /// When the watchdog reset the ECU, µs (the run ended there), if it did.
+    pub const fn reset_at_us(&self) -> Option<u64> {
+        self.reset_at_us
+    }
+
+    /// The watchdog (its triggers, its last one).
+    pub const fn watchdog(&self) -> &SimWatchdog {
+        &self.watchdog
     }
 
     /// Runs the whole scenario.
@@ -391,6 +417,16 @@ impl Simulation {
         let _ = self.clock.advance_to_us(now_us);
         self.bus.run_until_now();
         self.deliver_can_events();
+        if let Some(at_us) = self.watchdog.reset_due() {
+            // The watchdog resets the ECU before this tick: every output de-energised,
+            // nothing of the ECU runs from here on (the run ends; a board would start
+            // again from power-on).
+            self.reset_at_us = Some(at_us);
+            let _ = self.board.red.set_low();
+            let _ = self.board.yellow.set_low();
+            let _ = self.board.trigger.set_low();
+            return;
+        }
         let t = self.now_ms;
         for (_, count) in self
             .scenario
