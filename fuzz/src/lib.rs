@@ -207,6 +207,31 @@ mod targets {
             .for_each(|steps| assert!(cw_bsp::port::preempt::spec::stacks_stay_apart(steps)));
     }
 
+    /// Any run of WdgM's main functions with any alive indications: the supervision keeps
+    /// its rule (`cw_core::wdgm::spec::alive_rule`) on the ECU's own configuration.
+    #[test]
+    fn wdgm_alive() {
+        bolero::check!()
+            .with_type::<(Vec<[u8; 3]>, u8)>()
+            .for_each(|(rounds, tolerance)| {
+                let rounds: Vec<[u32; 3]> =
+                    rounds.iter().map(|r| r.map(|n| u32::from(n % 4))).collect();
+                assert!(cw_core::wdgm::spec::alive_rule(
+                    &ALIVE,
+                    u16::from(tolerance % 3),
+                    &rounds
+                ));
+            });
+    }
+
+    /// The ECU's alive supervision (`cw-firmware`'s `config::ALIVE`, written out: the fuzz
+    /// targets do not link the firmware).
+    static ALIVE: [cw_core::wdgm::AliveSupervision; 3] = [
+        cw_core::wdgm::AliveSupervision::new("OsLEDTask", 1, 1),
+        cw_core::wdgm::AliveSupervision::new("OsObstacleDetectionTask", 2, 1),
+        cw_core::wdgm::AliveSupervision::new("OsSonarTask", 4, 1),
+    ];
+
     /// Any text as a scenario file (the host simulation's and the image's parser): read
     /// or refused with a line number within the text, never a panic; every line read
     /// writes back to a line that reads as the same command.

@@ -20,6 +20,7 @@ pub const FUZZ_TARGETS: &[&str] = &[
     "targets::blf_bytes",
     "targets::view_replay",
     "targets::port_switch",
+    "targets::wdgm_alive",
 ];
 
 /// How long the `fuzz` stage runs each target (cargo-bolero `-T`).
@@ -75,7 +76,7 @@ const BUDGET_S: &[(&str, u32)] = &[
     ("interop", 20),
     ("view", 15),
     ("docs", 180),
-    ("fuzz", 340),
+    ("fuzz", 360),
     ("bench", 85),
 ];
 
