@@ -1,5 +1,6 @@
-//! The ECU on QEMU's mps2-an386 (Cortex-M4): the board's drivers named for [`Board`], and
-//! the ECU's entry points for the Cortex-M port (`cw_bsp::cortex_m::App`).
+//! The measuring image on mps2-an386 (`cw-qemu`): scenarios read over semihosting and
+//! played, the task trace and the end-of-run report; the board's drivers named for
+//! [`Board`], and the ECU's entry points for the Cortex-M port (`cw_bsp::cortex_m::App`).
 //!
 //! The sensor is one of two ([`Mps2Sensor`]):
 //! - by default the scenario's: QEMU cannot time an HC-SR04 echo, so the Gpt capture
@@ -23,30 +24,22 @@
 //! stay off, the report follows. It plays every command the host simulation does.
 
 use cw_bsp::cortex_m::{now_ms, App, CortexMPort};
-use cw_bsp::mps2::{self, CoreDelay, Led, SensorUart, SlcanCan, SlcanEvent, Unconnected};
+use cw_bsp::mps2::{self, CoreDelay, Led, SensorUart, SlcanCan, Unconnected};
 use cw_bsp::port::preempt::PortFault;
 use cw_bsp::port::Port;
-use cw_core::can::Hrh;
-use cw_core::os::{status_name, TaskId, E_OK};
+use cw_core::os::TaskId;
 use cw_core::scenario::Scenario;
 use cw_core::sonar::model::{EchoModel, Noise};
 use cw_core::sonar::{Echo, SonarConfig};
 use cw_core::warning::Measurement;
 
-use crate::board::{
-    Board, CanEvents, CanInterrupt, DistanceSensor, EchoSensor, NoFaults, PortDriver, PulseCapture,
-    SerialRx, SerialSensor, Stalls,
+use super::{
+    board_irq, isr_priority, report_supervision, shutdown_report, start_os_with_devices,
+    Mps2PortDriver,
 };
+use crate::board::{Board, DistanceSensor, EchoSensor, PulseCapture, SerialSensor, Stalls};
 use crate::config::{self, Kernel};
 use crate::ecu::{span, Ecu};
-
-// The ECU's configuration fits the Cortex-M port (task count, ISR priorities the NVIC
-// tells apart): checked when the image is built; a refusal names the task or ISR.
-const _: () = cw_bsp::port::preempt::assert_fits(
-    config::OS.tasks(),
-    config::OS.isrs(),
-    cw_bsp::cortex_m::ISR_PRIORITIES,
-);
 
 /// The mps2-an386 board's drivers.
 pub struct Mps2Board;
@@ -99,34 +92,8 @@ impl DistanceSensor for Mps2Sensor {
     }
 }
 
-impl SerialRx for SensorUart {
-    fn read_byte(&mut self) -> Option<u8> {
-        SensorUart::read_byte(self)
-    }
-}
-
 /// The ECU on this board.
 pub type Mps2Ecu = Ecu<CortexMPort<Kernel>, Mps2Board>;
-
-impl CanEvents for SlcanCan {
-    fn take_event(&mut self) -> Option<CanInterrupt> {
-        SlcanCan::take_event(self).map(|event| match event {
-            SlcanEvent::TxConfirmation(pdu) => CanInterrupt::TxConfirmation(pdu),
-            // The UART is one receive mailbox; CanIf filters by id.
-            SlcanEvent::Received(frame) => CanInterrupt::Received(Hrh(0), frame),
-            SlcanEvent::BusOff => CanInterrupt::BusOff,
-        })
-    }
-}
-
-/// The Port driver: the LED outputs low.
-pub struct Mps2PortDriver;
-
-impl PortDriver for Mps2PortDriver {
-    fn port_init(&mut self) {
-        mps2::leds_safe();
-    }
-}
 
 /// Lines of each kind a scenario on the image holds.
 pub const IMAGE_CAPACITY: usize = 8;
@@ -135,7 +102,7 @@ pub const IMAGE_CAPACITY: usize = 8;
 pub type ImageScenario = Scenario<IMAGE_CAPACITY>;
 
 /// The paper's Figure 7, compiled in: the scenario when none is given.
-pub const FIGURE7: &str = include_str!("../../scenarios/figure7.txt");
+pub const FIGURE7: &str = include_str!("../../../scenarios/figure7.txt");
 
 /// The longest scenario file the image reads, bytes.
 pub const SCENARIO_FILE_MAX: usize = 1024;
@@ -372,11 +339,9 @@ impl App for Mps2App {
     fn tick(&self) {
         // The scenario's bus events, before the OS tick, as the host simulation orders
         // them: errors injected at their ms; a tester's frame, which takes a fraction of
-        // a ms on the bus, received in the ms after it was sent.
-        // (The controller's bus-fault model is the `scenario` feature's, which `cw-qemu`
-        // requires.)
+        // a ms on the bus, received in the ms after it was sent (the controller's
+        // bus-fault model: cw-bsp's `bus-faults`, which this module's feature brings).
         mps2::on_tick();
-        #[cfg(feature = "scenario")]
         {
             let now = u32::try_from(now_ms()).unwrap_or(u32::MAX);
             for &(_, count) in self.scenario.can_errors.iter().filter(|(at, _)| *at == now) {
@@ -415,149 +380,6 @@ impl App for Mps2App {
     fn shut_down(&self) -> ! {
         let ok = shutdown_report("cw-qemu", &self.ecu);
         self.end_run(ok)
-    }
-}
-
-/// The OSEK priority of ISR `isr` in the configuration.
-fn isr_priority(isr: cw_core::os::IsrId) -> u8 {
-    config::OS
-        .isrs()
-        .get(usize::from(isr.0))
-        .map_or(1, |c| c.priority)
-}
-
-/// The end of `App::start_os` on this board: the CAN controller's interrupts, the sensor
-/// UART's (if the sensor is the UART module), then StartOS (interrupts are off until its
-/// kernel call ends).
-fn start_os_with_devices<B: Board>(ecu: &Ecu<CortexMPort<Kernel>, B>, uart_sensor: bool) {
-    SlcanCan::enable_interrupts(isr_priority(config::CAN_ISR));
-    if uart_sensor {
-        SensorUart::enable_interrupt(isr_priority(config::SENSOR_RX_ISR));
-    }
-    ecu.start_os();
-}
-
-/// External interrupt `line`: UART0's RX and TX are the CAN controller (`CanIsr`); the
-/// ECU uses no other line through the port.
-fn board_irq<B: Board>(ecu: &Ecu<CortexMPort<Kernel>, B>, line: u16) {
-    match line {
-        0 | 1 => ecu.can_isr(),
-        _ => mps2::fatal("an interrupt line the ECU does not use"),
-    }
-}
-
-/// Logs WdgM's failure once, from the idle loop (no job under way): which task's alive
-/// supervision failed, when, and that the watchdog is no longer triggered.
-fn report_supervision<B: Board>(name: &str, ecu: &Ecu<CortexMPort<Kernel>, B>) {
-    static REPORTED: core::sync::atomic::AtomicBool = core::sync::atomic::AtomicBool::new(false);
-    if REPORTED.load(core::sync::atomic::Ordering::Relaxed) {
-        return;
-    }
-    if let Some((_, Some(f))) = ecu.supervision() {
-        REPORTED.store(true, core::sync::atomic::Ordering::Relaxed);
-        defmt::println!(
-            "{=str}: WdgM: the alive supervision of {=str} failed at {} ms ({} of {} alive indications): LEDs dark, the watchdog no longer triggered",
-            name,
-            f.name,
-            u64::from(f.main_function) * u64::from(config::BSW_PERIOD_MS),
-            f.counted,
-            f.expected
-        );
-    }
-}
-
-/// `App::shut_down` on this board: the LEDs' safe state (whatever shut the OS down; EcuM's
-/// post-run has set it already on a normal shutdown) and the log line `NAME: ShutdownOS at
-/// MS ms: ShutdownHook saw STATUS`. Returns whether the status was `E_OK`.
-fn shutdown_report<B: Board>(name: &str, ecu: &Ecu<CortexMPort<Kernel>, B>) -> bool {
-    mps2::leds_safe();
-    let status = ecu.hooks().shutdown.unwrap_or(E_OK);
-    defmt::println!(
-        "{=str}: ShutdownOS at {} ms: ShutdownHook saw {}; no task or interrupt runs from here on",
-        name,
-        now_ms(),
-        status_name(status).unwrap_or("an application's code")
-    );
-    status == E_OK
-}
-
-/// The mps2-an386 board as the production image (`cw-mps2`) wires it: the ranging module
-/// on UART1 is the sensor, and the mode inputs are tied on (the board has no ignition or
-/// bus-enable line: ignition on, communication enabled; a vehicle's ECU reads pins).
-pub struct Mps2FlashBoard;
-
-impl Board for Mps2FlashBoard {
-    type Can = SlcanCan;
-    type Led = Led;
-    type Sensor = SerialSensor<SensorUart>;
-    type ModeInput = TiedOn;
-    type Port = Mps2PortDriver;
-    type Watchdog = mps2::CmsdkWatchdog;
-    type Faults = NoFaults;
-}
-
-/// A mode input the board ties on.
-pub struct TiedOn;
-
-impl embedded_hal::digital::ErrorType for TiedOn {
-    type Error = core::convert::Infallible;
-}
-
-impl embedded_hal::digital::InputPin for TiedOn {
-    fn is_high(&mut self) -> Result<bool, Self::Error> {
-        Ok(true)
-    }
-
-    fn is_low(&mut self) -> Result<bool, Self::Error> {
-        Ok(false)
-    }
-}
-
-/// The production image's entry points: the ECU and nothing else. No scenario, no task
-/// trace or spans (cw-bsp without `trace`), no end-of-run report: it runs until the OS
-/// shuts down (a stack fault), logging its start and its faults.
-pub struct Mps2FlashApp {
-    /// The ECU.
-    pub ecu: Ecu<CortexMPort<Kernel>, Mps2FlashBoard>,
-}
-
-impl App for Mps2FlashApp {
-    fn start_os(&self) {
-        cortex_m::interrupt::disable();
-        mps2::start_tick(isr_priority(config::SYSTICK_ISR));
-        start_os_with_devices(&self.ecu, true);
-    }
-
-    fn run_job(&self, task: TaskId) {
-        self.ecu.run_job(task);
-    }
-
-    fn idle(&self) {
-        report_supervision("cw-mps2", &self.ecu);
-    }
-
-    fn tick(&self) {
-        mps2::on_tick();
-        self.ecu.tick();
-    }
-
-    fn irq(&self, line: u16) {
-        board_irq(&self.ecu, line);
-    }
-
-    fn report(&self, fault: &PortFault) {
-        report_supervision("cw-mps2", &self.ecu);
-        mps2::report(fault);
-    }
-
-    fn halt(&self) -> ! {
-        mps2::halt()
-    }
-
-    fn shut_down(&self) -> ! {
-        // EcuM's reset after the shutdown (QEMU, run with -no-reboot, exits).
-        shutdown_report("cw-mps2", &self.ecu);
-        mps2::halt()
     }
 }
 
