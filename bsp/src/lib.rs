@@ -39,6 +39,7 @@
 #[cfg(feature = "host")]
 extern crate std;
 
+pub mod chip;
 #[cfg(feature = "host")]
 pub mod host;
 pub mod port;

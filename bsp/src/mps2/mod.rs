@@ -31,15 +31,47 @@ use cw_core::can::{slcan, CanBusy, CanDriver, CanFrame, ControllerMode, Hth, Mod
 use embedded_hal::delay::DelayNs;
 use embedded_hal::digital::{ErrorType, InputPin, OutputPin};
 
+use crate::chip::cmsdk::CmsdkUart;
+use crate::chip::fpgaio::FpgaLeds;
 use crate::cortex_m::{app, now_ms, now_us};
 use crate::port::preempt::PortFault;
 
 /// The core clock, Hz (SysTick counts it).
 pub const SYSCLK_HZ: u32 = 25_000_000;
-/// FPGAIO's LED register.
-const FPGAIO_LED: *mut u32 = 0x4002_8000 as *mut u32;
-/// CMSDK APB UART0.
-const UART0: usize = 0x4000_4000;
+
+/// The AN386 image's peripherals this board uses, at their addresses (its memory map).
+mod map {
+    use crate::chip::cmsdk::{UartRegisters, WatchdogRegisters};
+    use crate::chip::fpgaio::FpgaIoRegisters;
+
+    /// CMSDK APB UART0 (the CAN controller's SLCAN link).
+    pub const UART0: usize = 0x4000_4000;
+    /// CMSDK APB UART1 (the sensor).
+    pub const UART1: usize = 0x4000_5000;
+    /// The CMSDK APB watchdog.
+    pub const WATCHDOG: usize = 0x4000_8000;
+    /// FPGAIO.
+    pub const FPGAIO: usize = 0x4002_8000;
+
+    /// The UART at `base` (UART0 or UART1).
+    pub fn uart(base: usize) -> &'static UartRegisters {
+        // SAFETY: UART0 and UART1 are CMSDK APB UARTs at these addresses on this board,
+        // mapped for its whole life; the block is accessed through volatile cells only.
+        unsafe { &*(base as *const UartRegisters) }
+    }
+
+    /// The watchdog.
+    pub fn watchdog() -> &'static WatchdogRegisters {
+        // SAFETY: as `uart`: the CMSDK APB watchdog of this board.
+        unsafe { &*(WATCHDOG as *const WatchdogRegisters) }
+    }
+
+    /// FPGAIO.
+    pub fn fpgaio() -> &'static FpgaIoRegisters {
+        // SAFETY: as `uart`: the FPGAIO block of this board.
+        unsafe { &*(FPGAIO as *const FpgaIoRegisters) }
+    }
+}
 
 /// A warning LED: one bit of the FPGAIO LED register. The LED pins are the ECU's
 /// `RES_LEDS`, so the register's read-modify-write never races another writer.
@@ -54,18 +86,9 @@ impl Led {
     pub const YELLOW: Self = Self { bit: 1 };
 
     fn write(&self, lit: bool) {
-        // SAFETY: FPGAIO's LED register exists on this board; a word access.
-        unsafe {
-            let now = FPGAIO_LED.read_volatile();
-            let new = if lit {
-                now | (1 << self.bit)
-            } else {
-                now & !(1 << self.bit)
-            };
-            FPGAIO_LED.write_volatile(new);
-            if new != now {
-                led_changed(new);
-            }
+        let (now, new) = FpgaLeds::new(map::fpgaio()).set(self.bit, lit);
+        if new != now {
+            led_changed(new);
         }
     }
 }
@@ -121,8 +144,7 @@ pub fn led_changes(mut f: impl FnMut(u32, u8)) -> u32 {
 
 /// Both LEDs dark: the outputs' safe state, for fatal errors.
 pub fn leds_safe() {
-    // SAFETY: as `Led::write`.
-    unsafe { FPGAIO_LED.write_volatile(0) };
+    FpgaLeds::new(map::fpgaio()).all_dark();
 }
 
 impl ErrorType for Led {
@@ -179,62 +201,6 @@ impl DelayNs for CoreDelay {
 /// Starts SysTick: one interrupt per millisecond, at OSEK ISR priority `osek_priority`.
 pub fn start_tick(osek_priority: u8) {
     crate::cortex_m::start_systick(SYSCLK_HZ / 1000 - 1, osek_priority);
-}
-
-/// The UART registers.
-struct Uart {
-    base: usize,
-}
-
-impl Uart {
-    const DATA: usize = 0x00;
-    const STATE: usize = 0x04;
-    const CTRL: usize = 0x08;
-    const INTSTATUS: usize = 0x0C;
-    const BAUDDIV: usize = 0x10;
-    const STATE_TX_FULL: u32 = 1 << 0;
-    const STATE_RX_FULL: u32 = 1 << 1;
-    const CTRL_TX_EN: u32 = 1 << 0;
-    const CTRL_RX_EN: u32 = 1 << 1;
-    const CTRL_TX_INT: u32 = 1 << 2;
-    const CTRL_RX_INT: u32 = 1 << 3;
-    const INT_TX: u32 = 1 << 0;
-    const INT_RX: u32 = 1 << 1;
-
-    fn reg(&self, offset: usize) -> *mut u32 {
-        (self.base + offset) as *mut u32
-    }
-
-    fn read(&self, offset: usize) -> u32 {
-        // SAFETY: a CMSDK APB UART register of this board; word access.
-        unsafe { self.reg(offset).read_volatile() }
-    }
-
-    fn write(&self, offset: usize, value: u32) {
-        // SAFETY: as `read`.
-        unsafe { self.reg(offset).write_volatile(value) }
-    }
-
-    /// 115 200 baud, transmitter and receiver on, both interrupts enabled.
-    fn init(&self) {
-        self.write(Self::BAUDDIV, SYSCLK_HZ / 115_200);
-        self.write(
-            Self::CTRL,
-            Self::CTRL_TX_EN | Self::CTRL_RX_EN | Self::CTRL_TX_INT | Self::CTRL_RX_INT,
-        );
-    }
-
-    fn tx_ready(&self) -> bool {
-        self.read(Self::STATE) & Self::STATE_TX_FULL == 0
-    }
-
-    fn rx_byte(&self) -> Option<u8> {
-        (self.read(Self::STATE) & Self::STATE_RX_FULL != 0).then(|| self.read(Self::DATA) as u8)
-    }
-
-    fn clear_interrupts(&self) {
-        self.write(Self::INTSTATUS, Self::INT_TX | Self::INT_RX);
-    }
 }
 
 /// A CAN controller event of [`SlcanCan`].
@@ -432,7 +398,8 @@ enum TxSource {
 /// counted and answered with BEL. The channel commands (`O`, `C`, `Sn`) are acknowledged
 /// but change nothing: the UART is the bus itself, always open.
 pub struct SlcanCan {
-    uart: Uart,
+    /// The UART's base address (its register block is reached through [`map::uart`]).
+    uart: usize,
     mode: ControllerMode,
     /// The mailbox: a frame `Can_Write` accepted, with its time stamp, that the transmit
     /// interrupt has not yet turned into a line.
@@ -468,10 +435,9 @@ pub struct SlcanCan {
 impl SlcanCan {
     /// The driver on UART0 (QEMU's first `-serial`).
     pub fn uart0() -> Self {
-        let uart = Uart { base: UART0 };
-        uart.init();
+        CmsdkUart::new(map::uart(map::UART0)).init(SYSCLK_HZ, 115_200, true);
         Self {
-            uart,
+            uart: map::UART0,
             mode: ControllerMode::Stopped,
             mailbox: None,
             line: [0; slcan::FRAME_LINE_MAX],
@@ -493,6 +459,11 @@ impl SlcanCan {
             recovery_end_us: 0,
             deferred: None,
         }
+    }
+
+    /// The UART's driver.
+    fn uart(&self) -> CmsdkUart<'static> {
+        CmsdkUart::new(map::uart(self.uart))
     }
 
     /// Enables the UART's interrupts in the NVIC at OSEK ISR priority `osek_priority`.
@@ -660,8 +631,8 @@ impl SlcanCan {
     /// frame line sent completely frees the transmitter and leaves its confirmation for
     /// `CanIsr`.
     fn pump(&mut self) {
-        self.uart.clear_interrupts();
-        while let Some(byte) = self.uart.rx_byte() {
+        self.uart().clear_interrupts();
+        while let Some(byte) = self.uart().read_byte() {
             self.receive(byte);
         }
         while BUS_FAULTS && BUS_FRAMES_WAITING.load(Ordering::Acquire) {
@@ -707,16 +678,16 @@ impl SlcanCan {
                 self.load_line(&frame, at_ms);
             }
         }
-        while self.uart.tx_ready() {
+        while self.uart().tx_ready() {
             let Some(byte) = self.next_tx_byte() else {
                 break;
             };
-            self.uart.write(Uart::DATA, u32::from(byte));
+            self.uart().write_byte(byte);
         }
         if self.source == TxSource::Idle && self.sent >= self.len && self.reply_len == 0 {
             // Nothing left to send: the TX-empty interrupt the characters just written
             // raised would only enter `CanIsr` again for nothing.
-            self.uart.write(Uart::INTSTATUS, Uart::INT_TX);
+            self.uart().clear_tx_interrupt();
             cortex_m::peripheral::NVIC::unpend(Irq(1));
         }
     }
@@ -828,14 +799,28 @@ pub fn exit(success: bool) -> ! {
     }
 }
 
-/// The CMSDK APB watchdog (Arm DDI 0479C, 3.9): a down-counter at the core clock. At zero
-/// it raises its interrupt (the NMI on this board) and reloads; at the next zero with the
-/// interrupt still raised it resets the board. A trigger clears the interrupt, which also
-/// reloads the counter. So the reset comes `2 x WDOGLOAD` counts after the last trigger:
-/// `WDOGLOAD` is half the timeout, and the NMI half-way is the early warning.
+/// The board's watchdog for WdgM (`cw_core::wdgm::WdgDriver`): the CMSDK APB watchdog
+/// ([`crate::chip::cmsdk::CmsdkWatchdog`]), its first expiry an NMI (the early warning,
+/// which logs the reason), its second a reset of the board.
 pub struct CmsdkWatchdog {
-    base: usize,
-    started: bool,
+    _private: (),
+}
+
+impl CmsdkWatchdog {
+    /// The board's watchdog (started by the first trigger).
+    pub const fn new() -> Self {
+        Self { _private: () }
+    }
+
+    fn chip() -> crate::chip::cmsdk::CmsdkWatchdog<'static> {
+        crate::chip::cmsdk::CmsdkWatchdog::new(map::watchdog(), WATCHDOG_CLOCK_HZ)
+    }
+}
+
+impl Default for CmsdkWatchdog {
+    fn default() -> Self {
+        Self::new()
+    }
 }
 
 /// The watchdog's counter clock, Hz. On the AN386 FPGA image it is the 25 MHz system
@@ -847,54 +832,9 @@ const WATCHDOG_CLOCK_HZ: u32 = 2 * SYSCLK_HZ;
 /// The last trigger of the watchdog, OS ms (for the report of its expiry).
 static WATCHDOG_TRIGGERED_MS: AtomicU32 = AtomicU32::new(0);
 
-impl CmsdkWatchdog {
-    const LOAD: usize = 0x000;
-    const CONTROL: usize = 0x008;
-    const INTCLR: usize = 0x00C;
-    const RIS: usize = 0x010;
-    const LOCK: usize = 0xC00;
-    const UNLOCK_KEY: u32 = 0x1ACC_E551;
-    const INTEN: u32 = 1 << 0;
-    const RESEN: u32 = 1 << 1;
-
-    /// The board's watchdog (not started).
-    pub const fn new() -> Self {
-        Self {
-            base: 0x4000_8000,
-            started: false,
-        }
-    }
-
-    fn write(&self, offset: usize, value: u32) {
-        // SAFETY: a CMSDK APB watchdog register of this board; word access.
-        unsafe { ((self.base + offset) as *mut u32).write_volatile(value) }
-    }
-
-    fn read(&self, offset: usize) -> u32 {
-        // SAFETY: as `write`.
-        unsafe { ((self.base + offset) as *const u32).read_volatile() }
-    }
-}
-
-impl Default for CmsdkWatchdog {
-    fn default() -> Self {
-        Self::new()
-    }
-}
-
 impl cw_core::wdgm::WdgDriver for CmsdkWatchdog {
     fn set_trigger_condition(&mut self, timeout_ms: u16) {
-        let half = (WATCHDOG_CLOCK_HZ / 1000).saturating_mul(u32::from(timeout_ms.max(2)) / 2);
-        self.write(Self::LOCK, Self::UNLOCK_KEY);
-        // Writing WDOGLOAD restarts the counter from the value at once; WDOGINTCLR clears
-        // a raised interrupt (so the next expiry is a first one again).
-        self.write(Self::LOAD, half);
-        self.write(Self::INTCLR, 1);
-        if !self.started {
-            self.write(Self::CONTROL, Self::INTEN | Self::RESEN);
-            self.started = true;
-        }
-        self.write(Self::LOCK, 0);
+        Self::chip().trigger(timeout_ms);
         WATCHDOG_TRIGGERED_MS.store(
             u32::try_from(now_ms()).unwrap_or(u32::MAX),
             Ordering::Relaxed,
@@ -902,18 +842,14 @@ impl cw_core::wdgm::WdgDriver for CmsdkWatchdog {
     }
 
     fn off(&mut self) {
-        self.write(Self::LOCK, Self::UNLOCK_KEY);
-        self.write(Self::CONTROL, 0);
-        self.write(Self::INTCLR, 1);
-        self.write(Self::LOCK, 0);
-        self.started = false;
+        Self::chip().off();
     }
 }
 
 /// Whether the watchdog has expired once (its interrupt raised: the reset follows at the
 /// next expiry).
 pub fn watchdog_expired() -> bool {
-    CmsdkWatchdog::new().read(CmsdkWatchdog::RIS) & 1 != 0
+    CmsdkWatchdog::chip().expired()
 }
 
 /// How a fatal fault ends the run.

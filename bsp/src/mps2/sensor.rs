@@ -16,10 +16,10 @@
 
 use core::sync::atomic::{AtomicU32, AtomicU8, Ordering};
 
-use super::{Irq, Uart, SYSCLK_HZ};
+use super::{map, Irq, SYSCLK_HZ};
+use crate::chip::cmsdk::CmsdkUart;
 
 /// CMSDK APB UART1.
-const UART1: usize = 0x4000_5000;
 /// UART1's receive interrupt line.
 pub const SENSOR_RX_IRQ: u16 = 2;
 /// The ring's size, bytes (a power of two: the indices wrap with it).
@@ -44,9 +44,9 @@ impl SensorUart {
     /// UART1 at the module's 9600 baud, receiver and its interrupt on. The interrupt
     /// stays masked in the NVIC until [`Self::enable_interrupt`].
     pub fn uart1() -> Self {
-        let uart = Uart { base: UART1 };
-        uart.write(Uart::BAUDDIV, SYSCLK_HZ / cw_core::sonar::uart::BAUD);
-        uart.write(Uart::CTRL, Uart::CTRL_RX_EN | Uart::CTRL_RX_INT);
+        let uart = CmsdkUart::new(map::uart(map::UART1));
+        uart.init(SYSCLK_HZ, cw_core::sonar::uart::BAUD, false);
+        uart.enable_rx_interrupt();
         Self { _private: () }
     }
 
@@ -88,9 +88,9 @@ pub fn sensor_uart_stats() -> SensorUartStats {
 
 /// `SensorRxIsr`: every byte the UART holds into the ring.
 pub(super) extern "C" fn uart1_rx() {
-    let uart = Uart { base: UART1 };
+    let uart = CmsdkUart::new(map::uart(map::UART1));
     uart.clear_interrupts();
-    while let Some(byte) = uart.rx_byte() {
+    while let Some(byte) = uart.read_byte() {
         RECEIVED.fetch_add(1, Ordering::Relaxed);
         let tail = TAIL.load(Ordering::Relaxed);
         if tail.wrapping_sub(HEAD.load(Ordering::Acquire)) as usize >= RING {
