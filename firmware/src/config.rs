@@ -33,8 +33,9 @@
 //! holds. A failed supervision puts the LEDs in their safe state (dark) and stops the
 //! trigger: the watchdog resets the ECU.
 //!
-//! The kernel's own data is guarded by the kernel lock (every interrupt masked for the
-//! length of one service call); `SysTickIsr` takes no resource. The ceilings are derived
+//! The kernel's own data is guarded by the kernel lock (every interrupt the OS serves
+//! masked for the length of one service call; the category-1 `SensorRxIsr` above it is
+//! not); `SysTickIsr` takes no resource. The ceilings are derived
 //! by `OsConfig::new` from the `uses` declarations below, never written by hand.
 //!
 //! The OS runs in conformance class BCC1 (basic tasks, one activation each, one task per
