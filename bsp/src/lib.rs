@@ -43,6 +43,7 @@ pub mod chip;
 #[cfg(feature = "host")]
 pub mod host;
 pub mod port;
+pub mod slcan;
 
 #[cfg(all(target_arch = "arm", target_os = "none"))]
 pub mod cortex_m;

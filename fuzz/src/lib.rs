@@ -207,6 +207,18 @@ mod targets {
             .for_each(|steps| assert!(cw_bsp::port::preempt::spec::stacks_stay_apart(steps)));
     }
 
+    /// Any writes, received bytes, transmitter room and interrupt work on the SLCAN
+    /// controller over a model UART: each accepted frame confirmed once, in order, its
+    /// line out whole (`cw_bsp::slcan::spec`).
+    #[test]
+    fn slcan_controller() {
+        bolero::check!()
+            .with_type::<Vec<(u8, u8, u8)>>()
+            .for_each(|ops| {
+                assert!(cw_bsp::slcan::spec::operations_confirm_each_frame_once(ops));
+            });
+    }
+
     /// Any run of WdgM's main functions with any alive indications: the supervision keeps
     /// its rule (`cw_core::wdgm::spec::alive_rule`) on the ECU's own configuration.
     #[test]

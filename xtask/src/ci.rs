@@ -21,6 +21,7 @@ pub const FUZZ_TARGETS: &[&str] = &[
     "targets::view_replay",
     "targets::port_switch",
     "targets::wdgm_alive",
+    "targets::slcan_controller",
 ];
 
 /// How long the `fuzz` stage runs each target (cargo-bolero `-T`).
@@ -76,7 +77,7 @@ const BUDGET_S: &[(&str, u32)] = &[
     ("interop", 20),
     ("view", 15),
     ("docs", 180),
-    ("fuzz", 360),
+    ("fuzz", 380),
     ("bench", 85),
 ];
 

@@ -8,7 +8,7 @@
 #![no_std]
 #![no_main]
 
-use cw_bsp::mps2::{self, Led, SensorUart, SlcanCan};
+use cw_bsp::mps2::{self, Led, SensorUart};
 use cw_bsp::port::Slot;
 use cw_core::sonar::SonarConfig;
 use cw_firmware::board::{BoardParts, Leds, ModeInputs, NoFaults, SerialSensor};
@@ -28,7 +28,7 @@ fn main() -> ! {
         watchdog: mps2::CmsdkWatchdog::new(),
         faults: NoFaults,
         port: Mps2PortDriver,
-        can: SlcanCan::uart0(),
+        can: mps2::slcan_uart0(),
         leds: Leds {
             red: Led::RED,
             yellow: Led::YELLOW,

@@ -4,7 +4,7 @@
 #![no_std]
 #![no_main]
 
-use cw_bsp::mps2::{self, FatalEnd, Led, SlcanCan};
+use cw_bsp::mps2::{self, FatalEnd, Led};
 use cw_bsp::port::Slot;
 use cw_core::sonar::SonarConfig;
 use cw_firmware::board::{BoardParts, Leds, ModeInputs, Stalls};
@@ -39,7 +39,7 @@ fn main() -> ! {
         watchdog: mps2::CmsdkWatchdog::new(),
         faults: stalls,
         port: Mps2PortDriver,
-        can: SlcanCan::uart0(),
+        can: mps2::slcan_uart0(),
         leds: Leds {
             red: Led::RED,
             yellow: Led::YELLOW,
