@@ -120,20 +120,20 @@ pub struct Stalls<const N: usize> {
 }
 
 impl<const N: usize> Stalls<N> {
-    /// The stalls of `scenario`.
+    /// The stalls of `scenario`, its task names found in `tasks` (the OS configuration's).
     ///
     /// # Errors
-    /// The first name that is no task of the configuration.
+    /// The first name that is no task of `tasks`.
     pub fn of<const M: usize>(
         scenario: &cw_core::scenario::Scenario<M>,
+        tasks: &[cw_core::os::TaskConfig],
     ) -> Result<Self, cw_core::scenario::TaskName> {
         let mut stalls = Self {
             stalls: [(0, TaskId(0)); N],
             len: 0,
         };
         for (at, name) in &scenario.stalls {
-            let task = crate::config::OS
-                .tasks()
+            let task = tasks
                 .iter()
                 .position(|t| t.name == name.as_str())
                 .ok_or(*name)?;

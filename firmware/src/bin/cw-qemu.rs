@@ -32,7 +32,7 @@ fn main() -> ! {
     };
     let scenario: &'static ImageScenario = scenario;
     let end_ms = scenario.duration_ms();
-    let Ok(stalls) = Stalls::of(scenario) else {
+    let Ok(stalls) = Stalls::of(scenario, config::OS.tasks()) else {
         mps2::fatal("the scenario's `stall` names no task of the OS configuration")
     };
     let parts = BoardParts::<Mps2Board> {

@@ -226,7 +226,7 @@ impl Simulation {
             untriggered: 0,
         }));
         let port_inits = Rc::new(Cell::new(0));
-        let stalls = Stalls::of(&scenario).map_err(|name| {
+        let stalls = Stalls::of(&scenario, config::OS.tasks()).map_err(|name| {
             SimulationError(format!(
                 "scenario: `stall {}`: no task of that name",
                 name.as_str()

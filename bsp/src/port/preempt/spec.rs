@@ -35,6 +35,22 @@ struct Saved {
     sp: u32,
 }
 
+/// The running job ends and the context below it resumes: whether the switch gave that
+/// context back exactly its saved stack pointer.
+fn end_running(s: &mut Sched, running: &mut Saved, below: &[Saved], depth: &mut usize) -> bool {
+    *depth -= 1;
+    let Some(&back) = below.get(*depth) else {
+        return false;
+    };
+    s.ended = true;
+    s.next = back.slot;
+    if decide(s, running.sp, GUARD) != Switch::Resume(back.sp) {
+        return false;
+    }
+    *running = back;
+    true
+}
+
 /// Runs the schedule `steps` (each `(op, arg)`) and returns whether the switch kept every
 /// property above at every step.
 pub fn stacks_stay_apart(steps: &[(u8, u8)]) -> bool {
@@ -121,14 +137,9 @@ pub fn stacks_stay_apart(steps: &[(u8, u8)]) -> bool {
                 if running.slot == IDLE || depth == 0 {
                     continue;
                 }
-                depth -= 1;
-                let back = below[depth];
-                s.ended = true;
-                s.next = back.slot;
-                if decide(&mut s, running.sp, GUARD) != Switch::Resume(back.sp) {
+                if !end_running(&mut s, &mut running, &below, &mut depth) {
                     return false;
                 }
-                running = back;
             }
             // The running task, one with its own stack, waits; the context below resumes.
             3 => {
@@ -168,14 +179,9 @@ pub fn stacks_stay_apart(steps: &[(u8, u8)]) -> bool {
     // ended too. The shared stack must then be whole.
     loop {
         if running.slot != IDLE && depth > 0 {
-            depth -= 1;
-            let back = below[depth];
-            s.ended = true;
-            s.next = back.slot;
-            if decide(&mut s, running.sp, GUARD) != Switch::Resume(back.sp) {
+            if !end_running(&mut s, &mut running, &below, &mut depth) {
                 return false;
             }
-            running = back;
         } else if let Some(t) = (OWN_FROM..TASKS).find(|&t| waiting[usize::from(t)].is_some()) {
             let Some(sp) = waiting[usize::from(t)].take() else {
                 return false;
