@@ -14,7 +14,10 @@ use core::sync::atomic::{AtomicU32, Ordering};
 
 use cw_core::can::confinement::{ErrorState, Failure, TransmitErrors};
 use cw_core::can::timing::{self, Stuffing};
-use cw_core::can::{slcan, CanBusy, CanDriver, CanFrame, CanId, ControllerMode, Hth, ModeRefused};
+use cw_core::can::{
+    slcan, CanBusy, CanDriver, CanFrame, CanId, ControllerConfig, ControllerMode, ErrorCounters,
+    Hth, InitRefused, ModeRefused,
+};
 
 #[cfg(feature = "host")]
 pub mod spec;
@@ -326,6 +329,8 @@ pub struct SlcanCan<U, B: 'static> {
     source: TxSource,
     /// Frame lines carry the time stamp (Lawicel `Z1`, on from reset here).
     timestamps: bool,
+    /// The bus's bitrate (`Can_Init`), a Lawicel adapter's.
+    bitrate: u32,
     decoder: slcan::Decoder,
     rx: [Option<CanFrame>; RX_QUEUE],
     rx_head: usize,
@@ -360,6 +365,7 @@ impl<U: ByteUart, B: SlcanBoard> SlcanCan<U, B> {
             confirmed: None,
             source: TxSource::Idle,
             timestamps: true,
+            bitrate: 500_000,
             decoder: slcan::Decoder::new(),
             rx: [None; RX_QUEUE],
             rx_head: 0,
@@ -372,6 +378,24 @@ impl<U: ByteUart, B: SlcanBoard> SlcanCan<U, B> {
             recovery_end_us: 0,
             deferred: None,
         }
+    }
+
+    /// Cancels the pending transmission: no confirmation. A line already on the wire is
+    /// finished, so the other end never sees half a line.
+    fn withdraw(&mut self) {
+        self.pdu = None;
+        self.mailbox = None;
+        self.deferred = None;
+        self.bus.deferred_due_ms.store(0, Ordering::Relaxed);
+        if self.source != TxSource::Frame {
+            self.len = 0;
+            self.sent = 0;
+        }
+    }
+
+    /// The bitrate `init` took (500 kbit/s until then).
+    pub const fn bitrate(&self) -> u32 {
+        self.bitrate
     }
 
     /// The bus (its counters, its faults).
@@ -607,7 +631,47 @@ impl<U: ByteUart, B: SlcanBoard> SlcanCan<U, B> {
     }
 }
 
+/// The bitrates a Lawicel adapter's `Sn` command sets, by `n`.
+pub const LAWICEL_BITRATES: [u32; 9] = [
+    10_000, 20_000, 50_000, 100_000, 125_000, 250_000, 500_000, 800_000, 1_000_000,
+];
+
 impl<U: ByteUart, B: SlcanBoard> CanDriver for SlcanCan<U, B> {
+    /// Takes a bitrate a Lawicel adapter can be set to (`S0` to `S8`); the UART itself
+    /// carries the frames at its own baud rate, so the sample point is the adapter's.
+    /// Stops the controller, its waiting frame withdrawn.
+    fn init(&mut self, config: &ControllerConfig) -> Result<(), InitRefused> {
+        if !LAWICEL_BITRATES.contains(&config.bitrate) {
+            return Err(InitRefused {
+                bitrate: config.bitrate,
+            });
+        }
+        self.bitrate = config.bitrate;
+        self.withdraw();
+        self.mode = ControllerMode::Stopped;
+        Ok(())
+    }
+
+    fn error_counters(&self) -> ErrorCounters {
+        ErrorCounters {
+            state: if self.bus_off {
+                ErrorState::BusOff
+            } else {
+                self.errors.state()
+            },
+            tec: self.errors.tec(),
+            // A UART link has no receive errors of the CAN kind: a malformed line is
+            // counted by the bus (`rx_malformed`), not by an error counter.
+            rec: 0,
+        }
+    }
+
+    /// One mailbox for every HTH: the waiting frame (or a transmission the bus holds
+    /// back) goes, without confirmation; a line already on the wire finishes.
+    fn abort(&mut self, _hth: Hth) {
+        self.withdraw();
+    }
+
     fn write(&mut self, _hth: Hth, pdu: u16, frame: &CanFrame) -> Result<(), CanBusy> {
         // Busy while a line is waiting or on its way (also one a stop let finish), or its
         // confirmation is not yet taken.
@@ -641,16 +705,7 @@ impl<U: ByteUart, B: SlcanBoard> CanDriver for SlcanCan<U, B> {
             return Err(ModeRefused);
         }
         if mode != ControllerMode::Started {
-            // The pending transmission is cancelled: no confirmation. A line already on
-            // the wire is finished, so the other end never sees half a line.
-            self.pdu = None;
-            self.mailbox = None;
-            self.deferred = None;
-            self.bus.deferred_due_ms.store(0, Ordering::Relaxed);
-            if self.source != TxSource::Frame {
-                self.len = 0;
-                self.sent = 0;
-            }
+            self.withdraw();
         } else if BUS_FAULTS && self.mode != ControllerMode::Started && self.bus_off {
             // Restart after bus-off: 128 x 11 recessive bits before the next attempt,
             // with the counter at 0.

@@ -13,6 +13,21 @@ use std::hint::black_box;
 /// A controller with one transmit mailbox that empties itself (the frame left).
 struct Mailbox;
 impl CanDriver for Mailbox {
+    fn init(
+        &mut self,
+        _: &cw_core::can::ControllerConfig,
+    ) -> Result<(), cw_core::can::InitRefused> {
+        Ok(())
+    }
+    // The frame leaves at once: nothing waits, no error is counted.
+    fn error_counters(&self) -> cw_core::can::ErrorCounters {
+        cw_core::can::ErrorCounters {
+            state: cw_core::can::confinement::ErrorState::Active,
+            tec: 0,
+            rec: 0,
+        }
+    }
+    fn abort(&mut self, _: Hth) {}
     fn write(&mut self, _: Hth, _: u16, frame: &CanFrame) -> Result<(), CanBusy> {
         black_box(frame);
         Ok(())

@@ -24,6 +24,27 @@ struct Mailbox {
 }
 
 impl CanDriver for Mailbox {
+    fn init(
+        &mut self,
+        _: &cw_core::can::ControllerConfig,
+    ) -> Result<(), cw_core::can::InitRefused> {
+        self.frame = None;
+        Ok(())
+    }
+
+    // A register model without a bus: no transmission fails.
+    fn error_counters(&self) -> cw_core::can::ErrorCounters {
+        cw_core::can::ErrorCounters {
+            state: cw_core::can::confinement::ErrorState::Active,
+            tec: 0,
+            rec: 0,
+        }
+    }
+
+    fn abort(&mut self, _hth: Hth) {
+        self.frame = None;
+    }
+
     #[inline]
     fn write(&mut self, _hth: Hth, _pdu: u16, frame: &CanFrame) -> Result<(), CanBusy> {
         if self.frame.is_some() {

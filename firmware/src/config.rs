@@ -232,6 +232,13 @@ pub const DISTANCE_INVALID: u64 = 0xFFFF_FFFF;
 /// The Com main functions run in `OsBswServiceTask`, every 10 ms.
 pub const BSW_PERIOD_MS: u32 = 10;
 
+/// The CAN controller (`CanControllerBaudrateConfig`): 500 kbit/s, the paper's bus, sampled
+/// at 87.5 % (CiA 301's recommendation).
+pub const CAN_CONTROLLER: cw_core::can::ControllerConfig = cw_core::can::ControllerConfig {
+    bitrate: 500_000,
+    sample_permille: 875,
+};
+
 /// Com: the distance frame is sent directly, once per sonar sample (the distance
 /// triggers, the level travels with it); the thresholds arrive from the PC.
 pub static COM: ComConfig<8, 1, 1, 4> = match ComConfig::new(

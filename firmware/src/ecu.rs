@@ -148,6 +148,9 @@ pub struct ComStack<C> {
     frames: FrameCounts,
     rx_dropped: u32,
     mode_requests_refused: u32,
+    /// `Can_Init` refused the controller's configuration: CanSM's starts will be refused
+    /// too, and it retries as after a bus-off.
+    pub can_init_refused: bool,
 }
 
 impl<C: cw_core::can::CanDriver + CanEvents> ComStack<C> {
@@ -161,6 +164,7 @@ impl<C: cw_core::can::CanDriver + CanEvents> ComStack<C> {
             frames: FrameCounts::default(),
             rx_dropped: 0,
             mode_requests_refused: 0,
+            can_init_refused: false,
         }
     }
 
@@ -469,6 +473,10 @@ impl<P: Port<Kernel = Kernel>, B: Board> Ecu<P, B> {
         if let Some(mut port) = self.port_driver.take() {
             port.port_init();
         }
+        // Can_Init: the controller at the configured bitrate, stopped until CanSM starts it.
+        let stack = self.com.get_mut();
+        stack.can_init_refused =
+            cw_core::can::CanDriver::init(&mut stack.can, &config::CAN_CONTROLLER).is_err();
         // Wdg_Init: the watchdog runs from here on; WdgM's first main function (the first
         // `OsBswServiceTask` job, 10 ms after StartOS) triggers it well within its timeout.
         self.wdg

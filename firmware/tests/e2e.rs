@@ -408,6 +408,10 @@ fn the_supervised_tasks_are_named_as_in_the_os_configuration() {
 #[test]
 fn a_healthy_run_keeps_every_supervision_and_the_watchdog_triggered() {
     let mut sim = run("hold 500 3000");
+    assert!(
+        !sim.ecu().com_stack().can_init_refused,
+        "Can_Init at 500 kbit/s, the bus's"
+    );
     assert_eq!(sim.reset_at_us(), None);
     assert_eq!(
         sim.ecu().supervision(),

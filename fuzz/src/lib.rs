@@ -219,6 +219,30 @@ mod targets {
             });
     }
 
+    /// Any clock, bitrate and sample point: the bit timing found is within FlexCAN's
+    /// limits, exact, and has the nearest sample point, or none exists
+    /// (`cw_core::can::bittiming::spec`, on limits small enough to search exhaustively).
+    #[test]
+    fn bit_timing() {
+        bolero::check!()
+            .with_type::<(u32, u32, u16)>()
+            .cloned()
+            .for_each(|(clock, divisor, sample)| {
+                let limits = cw_core::can::bittiming::BitTimingLimits {
+                    prescaler: (1, 16),
+                    ..cw_core::can::bittiming::FLEXCAN
+                };
+                let clock = clock % 100_000_000 + 1;
+                let bitrate = clock / (divisor % 400 + 1);
+                assert!(cw_core::can::bittiming::spec::find_is_exact_and_nearest(
+                    clock,
+                    bitrate,
+                    sample % 1000,
+                    &limits
+                ));
+            });
+    }
+
     /// Any run of WdgM's main functions with any alive indications: the supervision keeps
     /// its rule (`cw_core::wdgm::spec::alive_rule`) on the ECU's own configuration.
     #[test]

@@ -40,6 +40,26 @@ pub struct Controller {
 }
 
 impl CanDriver for Controller {
+    fn init(
+        &mut self,
+        _config: &cw_core::can::ControllerConfig,
+    ) -> Result<(), cw_core::can::InitRefused> {
+        self.mode = ControllerMode::Stopped;
+        Ok(())
+    }
+
+    // The model's controller sends nothing (every write is refused): no error counted,
+    // nothing to abort.
+    fn error_counters(&self) -> cw_core::can::ErrorCounters {
+        cw_core::can::ErrorCounters {
+            state: cw_core::can::confinement::ErrorState::Active,
+            tec: 0,
+            rec: 0,
+        }
+    }
+
+    fn abort(&mut self, _hth: Hth) {}
+
     fn write(&mut self, _hth: Hth, _pdu: u16, _frame: &CanFrame) -> Result<(), CanBusy> {
         Err(CanBusy)
     }

@@ -22,6 +22,7 @@ pub const FUZZ_TARGETS: &[&str] = &[
     "targets::port_switch",
     "targets::wdgm_alive",
     "targets::slcan_controller",
+    "targets::bit_timing",
 ];
 
 /// How long the `fuzz` stage runs each target (cargo-bolero `-T`).
@@ -77,7 +78,7 @@ const BUDGET_S: &[(&str, u32)] = &[
     ("interop", 20),
     ("view", 15),
     ("docs", 180),
-    ("fuzz", 380),
+    ("fuzz", 420),
     ("bench", 85),
 ];
 

@@ -134,3 +134,42 @@ fn any_operations_confirm_each_frame_once_after_its_whole_line() {
         .with_type::<Vec<(u8, u8, u8)>>()
         .for_each(|ops| assert!(super::spec::operations_confirm_each_frame_once(ops)));
 }
+
+#[test]
+fn can_init_takes_a_lawicel_bitrate_and_leaves_the_controller_stopped() {
+    static BUS: SlcanBus = SlcanBus::new();
+    let (mut c, _uart) = controller(&BUS);
+    let at = |bitrate| ControllerConfig {
+        bitrate,
+        sample_permille: 875,
+    };
+    assert_eq!(c.init(&at(250_000)), Ok(()));
+    assert_eq!(c.bitrate(), 250_000);
+    assert_eq!(
+        c.write(Hth(0), 1, &frame(0x100, &[1])),
+        Err(CanBusy),
+        "stopped after Can_Init"
+    );
+    assert_eq!(c.init(&at(83_333)), Err(InitRefused { bitrate: 83_333 }));
+    assert_eq!(c.bitrate(), 250_000, "a refusal keeps the configuration");
+}
+
+#[test]
+fn an_aborted_frame_is_neither_sent_nor_confirmed_and_the_counters_are_error_active() {
+    static BUS: SlcanBus = SlcanBus::new();
+    let (mut c, uart) = controller(&BUS);
+    assert_eq!(c.write(Hth(0), 5, &frame(0x100, &[1])), Ok(()));
+    c.abort(Hth(0));
+    assert_eq!(events(&mut c), []);
+    assert!(uart.0.borrow().sent.is_empty());
+    assert_eq!(
+        c.write(Hth(0), 6, &frame(0x100, &[2])),
+        Ok(()),
+        "free again"
+    );
+    let e = c.error_counters();
+    assert_eq!(
+        (e.state, e.tec, e.rec),
+        (cw_core::can::confinement::ErrorState::Active, 0, 0)
+    );
+}

@@ -7,6 +7,7 @@
 //! identifier for static configuration tables; it converts to and from
 //! [`embedded_can::Id`].
 
+pub mod bittiming;
 pub mod confinement;
 pub mod slcan;
 pub mod text;
@@ -218,8 +219,46 @@ pub enum ControllerMode {
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct ModeRefused;
 
+/// A controller's configuration (AUTOSAR `CanControllerBaudrateConfig`): the bitrate and
+/// the sample point the driver turns into its bit timing ([`bittiming::find`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub struct ControllerConfig {
+    /// Bits per second.
+    pub bitrate: u32,
+    /// The sample point, per mille of the bit.
+    pub sample_permille: u16,
+}
+
+/// The controller refused its configuration (`Can_Init` / `Can_SetBaudrate`: `E_NOT_OK`):
+/// no bit timing gives the bitrate from its clock, or its bus runs at another bitrate.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct InitRefused {
+    /// The bitrate refused.
+    pub bitrate: u32,
+}
+
+/// A controller's error state and counters (`Can_GetControllerErrorState`,
+/// `Can_GetControllerTxErrorCounter`, `Can_GetControllerRxErrorCounter`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct ErrorCounters {
+    /// Error active, error passive or bus-off.
+    pub state: confinement::ErrorState,
+    /// The transmit error counter (above 255 only while bus-off).
+    pub tec: u16,
+    /// The receive error counter.
+    pub rec: u8,
+}
+
 /// What the stack needs from a CAN controller driver.
 pub trait CanDriver {
+    /// `Can_Init` for this controller: its bitrate and sample point. The controller is
+    /// stopped afterwards; [`CanDriver::set_controller_mode`] starts it.
+    ///
+    /// # Errors
+    /// [`InitRefused`] when the driver cannot run at `config` (the controller keeps its
+    /// previous configuration).
+    fn init(&mut self, config: &ControllerConfig) -> Result<(), InitRefused>;
+
     /// `Can_Write`: puts `frame` into a free mailbox of `hth`. `pdu` is the stack's handle,
     /// handed back with the transmit confirmation.
     ///
@@ -232,6 +271,16 @@ pub trait CanDriver {
     /// # Errors
     /// [`ModeRefused`] for a transition the controller does not allow.
     fn set_controller_mode(&mut self, mode: ControllerMode) -> Result<(), ModeRefused>;
+
+    /// The error state and counters now.
+    fn error_counters(&self) -> ErrorCounters;
+
+    /// Withdraws the frames waiting in the mailboxes of `hth`: they are neither sent nor
+    /// confirmed. A frame whose transmission has begun may still finish, with its
+    /// confirmation, as a controller's hardware finishes it (the SLCAN controller finishes
+    /// a line on the wire; the host model, which settles a frame at its end, withdraws
+    /// it).
+    fn abort(&mut self, hth: Hth);
 }
 
 #[cfg(test)]

@@ -63,9 +63,32 @@ struct Recorder {
     busy: bool,
     written: Vec<(Hth, u16, CanFrame)>,
     mode: Option<ControllerMode>,
+    aborted: Vec<Hth>,
 }
 
 impl CanDriver for Recorder {
+    fn init(
+        &mut self,
+        _config: &crate::can::ControllerConfig,
+    ) -> Result<(), crate::can::InitRefused> {
+        self.mode = Some(ControllerMode::Stopped);
+        Ok(())
+    }
+
+    // The recorder never fails a transmission: error active, no errors counted.
+    fn error_counters(&self) -> crate::can::ErrorCounters {
+        crate::can::ErrorCounters {
+            state: crate::can::confinement::ErrorState::Active,
+            tec: 0,
+            rec: 0,
+        }
+    }
+
+    fn abort(&mut self, hth: Hth) {
+        self.aborted.push(hth);
+        self.written.retain(|w| w.0 != hth);
+    }
+
     fn write(&mut self, hth: Hth, pdu: u16, frame: &CanFrame) -> Result<(), CanBusy> {
         if self.busy {
             return Err(CanBusy);

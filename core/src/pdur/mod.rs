@@ -300,6 +300,21 @@ mod tests {
     #[derive(Default)]
     struct Bus(Vec<CanFrame>);
     impl CanDriver for Bus {
+        fn init(
+            &mut self,
+            _: &crate::can::ControllerConfig,
+        ) -> Result<(), crate::can::InitRefused> {
+            Ok(())
+        }
+        // Frames leave at once: nothing waits to be aborted, no error is counted.
+        fn error_counters(&self) -> crate::can::ErrorCounters {
+            crate::can::ErrorCounters {
+                state: crate::can::confinement::ErrorState::Active,
+                tec: 0,
+                rec: 0,
+            }
+        }
+        fn abort(&mut self, _: Hth) {}
         fn write(&mut self, _: Hth, _: u16, frame: &CanFrame) -> Result<(), CanBusy> {
             self.0.push(*frame);
             Ok(())

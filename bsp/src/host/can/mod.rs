@@ -94,7 +94,10 @@ use std::collections::VecDeque;
 use std::rc::Rc;
 use std::vec::Vec;
 
-use cw_core::can::{CanBusy, CanDriver, CanFrame, CanId, ControllerMode, Hrh, Hth, ModeRefused};
+use cw_core::can::{
+    bittiming, CanBusy, CanDriver, CanFrame, CanId, ControllerConfig, ControllerMode,
+    ErrorCounters, Hrh, Hth, InitRefused, ModeRefused,
+};
 
 use super::clock::VirtualClock;
 pub use timing::Stuffing;
@@ -1056,7 +1059,71 @@ impl HostCan {
     }
 }
 
+/// The modelled controllers' clock, Hz: an S32K144's FlexCAN on its 80 MHz system
+/// clock. `Can_Init` takes a bitrate only if a FlexCAN bit timing gives it exactly from
+/// this clock ([`cw_core::can::bittiming::FLEXCAN`]).
+pub const HOST_CAN_CLOCK_HZ: u32 = 80_000_000;
+
 impl CanDriver for HostCan {
+    /// Refused when no FlexCAN bit timing gives the bitrate from [`HOST_CAN_CLOCK_HZ`],
+    /// or when the bus runs at another bitrate (the controller would see only errors).
+    /// Stops the controller, its pending frames withdrawn.
+    fn init(&mut self, config: &ControllerConfig) -> Result<(), InitRefused> {
+        let refused = InitRefused {
+            bitrate: config.bitrate,
+        };
+        bittiming::find(
+            HOST_CAN_CLOCK_HZ,
+            config.bitrate,
+            config.sample_permille,
+            &bittiming::FLEXCAN,
+        )
+        .map_err(|_| refused)?;
+        let mut bus = bus_mut(&self.bus);
+        let bus_bps = (1_000_000_000 + bus.bit_ns / 2) / bus.bit_ns.max(1);
+        if bus_bps != u64::from(config.bitrate) {
+            return Err(refused);
+        }
+        let c = bus.controller_mut(self.node).ok_or(refused)?;
+        c.abort_all();
+        c.mode = ControllerMode::Stopped;
+        Ok(())
+    }
+
+    fn error_counters(&self) -> ErrorCounters {
+        self.with(
+            ErrorCounters {
+                state: ErrorState::Active,
+                tec: 0,
+                rec: 0,
+            },
+            |n| ErrorCounters {
+                state: match &n.role {
+                    Role::Controller(c) if c.bus_off => ErrorState::BusOff,
+                    _ => n.errors.state(),
+                },
+                tec: n.errors.tec(),
+                // The virtual bus has no receive errors (a receiver sees every frame the
+                // arbitration lets through): the counter stays 0.
+                rec: 0,
+            },
+        )
+    }
+
+    fn abort(&mut self, hth: Hth) {
+        let mut bus = bus_mut(&self.bus);
+        if let Some(c) = bus.controller_mut(self.node) {
+            let first = usize::from(hth.0) * c.mailboxes_per_hth;
+            let mut aborted = 0;
+            for slot in c.mailboxes.iter_mut().skip(first).take(c.mailboxes_per_hth) {
+                if slot.take().is_some() {
+                    aborted += 1;
+                }
+            }
+            c.stats.tx_aborted += aborted;
+        }
+    }
+
     /// Every refusal of [`HostCan::try_write`] is [`CanBusy`], including an HTH the
     /// controller does not have and a controller that is not started.
     fn write(&mut self, hth: Hth, pdu: u16, frame: &CanFrame) -> Result<(), CanBusy> {

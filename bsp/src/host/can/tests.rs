@@ -608,3 +608,72 @@ fn the_end_of_time_saturates_instead_of_overflowing() {
     assert_eq!(bus.stats().frames, 1, "one frame ends when time runs out");
     assert!(bus.next_event_us().is_some_and(|t| t >= u64::MAX / 1_000));
 }
+
+#[test]
+fn can_init_takes_the_bus_bitrate_a_flexcan_timing_reaches_and_refuses_others() {
+    let clock = VirtualClock::new();
+    let bus = worst_case_bus(&clock);
+    let mut can = started(&bus, &HostCanConfig::new(&[]));
+    let at = |bitrate| ControllerConfig {
+        bitrate,
+        sample_permille: 875,
+    };
+    assert_eq!(can.init(&at(500_000)), Ok(()));
+    assert_eq!(
+        can.mode(),
+        ControllerMode::Stopped,
+        "Can_Init leaves it stopped"
+    );
+    // Reachable from 80 MHz, but not the bus's bitrate: the node would see only errors.
+    assert_eq!(
+        can.init(&at(250_000)),
+        Err(InitRefused { bitrate: 250_000 })
+    );
+    // No FlexCAN timing gives it from 80 MHz.
+    assert_eq!(
+        can.init(&at(333_333)),
+        Err(InitRefused { bitrate: 333_333 })
+    );
+}
+
+#[test]
+fn the_error_counters_follow_failed_attempts_and_bus_off() {
+    let clock = VirtualClock::new();
+    let bus = worst_case_bus(&clock);
+    let mut can = started(&bus, &HostCanConfig::new(&[]));
+    let _tester = bus.attach_tester();
+    let fresh = can.error_counters();
+    assert_eq!(
+        (fresh.state, fresh.tec, fresh.rec),
+        (ErrorState::Active, 0, 0)
+    );
+    can.inject_tx_errors(17);
+    assert_eq!(can.write(Hth(0), 1, &frame(id(0x100), &[1; 8])), Ok(()));
+    clock.advance_us(17 * FAILED8_SLOT_US);
+    bus.run_until_now();
+    // 16 failed attempts (8 each) make it error passive.
+    let passive = can.error_counters();
+    assert_eq!((passive.state, passive.tec), (ErrorState::Passive, 128));
+    can.inject_tx_errors(100);
+    clock.advance_us(1_000_000);
+    bus.run_until_now();
+    assert_eq!(can.error_counters().state, ErrorState::BusOff);
+    assert_eq!(can.error_counters().tec, can.tec());
+}
+
+#[test]
+fn an_aborted_mailbox_is_neither_sent_nor_confirmed() {
+    let clock = VirtualClock::new();
+    let bus = worst_case_bus(&clock);
+    let config = HostCanConfig::new(&[]).with_hths(2);
+    let mut can = started(&bus, &config);
+    let mut tester = bus.attach_tester();
+    assert_eq!(can.write(Hth(0), 1, &frame(id(0x200), &[1])), Ok(()));
+    assert_eq!(can.write(Hth(1), 2, &frame(id(0x100), &[2])), Ok(()));
+    can.abort(Hth(0));
+    assert_eq!(can.stats().tx_aborted, 1);
+    clock.advance_us(10_000);
+    bus.run_until_now();
+    assert_eq!(confirmed(&can.take_events()).len(), 1, "only HTH 1's frame");
+    assert_eq!(received_ids(&tester.take_received()), [0x100]);
+}
