@@ -146,14 +146,19 @@ impl<const N: usize> WdgM<N> {
     pub fn main_function(&mut self, indications: &[u32; N]) -> Verdict {
         self.main_functions = self.main_functions.saturating_add(1);
         let was = self.global;
-        for (e, config) in self.config.iter().enumerate() {
-            let (Some(calls), Some(count), Some(&new)) = (
-                self.calls.get_mut(e),
-                self.counts.get_mut(e),
-                indications.get(e),
-            ) else {
-                continue;
-            };
+        // Every table has one entry per entity: walked together, without an index.
+        let entities = self
+            .config
+            .iter()
+            .enumerate()
+            .zip(self.calls.iter_mut().zip(self.counts.iter_mut()))
+            .zip(indications)
+            .zip(
+                self.judging
+                    .iter_mut()
+                    .zip(self.failed.iter_mut().zip(self.local.iter_mut())),
+            );
+        for ((((e, config), (calls, count)), &new), (judging, (failed, local))) in entities {
             *count = count.saturating_add(new);
             *calls = calls.saturating_add(1);
             if *calls < config.reference_cycle.max(1) {
@@ -161,16 +166,9 @@ impl<const N: usize> WdgM<N> {
             }
             let counted = core::mem::take(count);
             *calls = 0;
-            let Some(judging) = self.judging.get_mut(e) else {
-                continue;
-            };
             if !core::mem::replace(judging, true) {
                 continue;
             }
-            let (Some(failed), Some(local)) = (self.failed.get_mut(e), self.local.get_mut(e))
-            else {
-                continue;
-            };
             if config.passes(counted) || *local == Status::Expired {
                 continue;
             }

@@ -132,10 +132,7 @@ pub fn find(
             continue;
         };
         for tseg1 in limits.tseg1.0..=limits.tseg1.1 {
-            let Some(tseg2) = q.checked_sub(1 + u32::from(tseg1)) else {
-                continue;
-            };
-            let Ok(tseg2) = u8::try_from(tseg2) else {
+            let Some(tseg2) = quanta.checked_sub(1).and_then(|q| q.checked_sub(tseg1)) else {
                 continue;
             };
             let timing = BitTiming {

@@ -42,6 +42,87 @@ fn the_resynchronisation_jump_is_as_wide_as_allowed() {
     assert_eq!(t.sjw, FLEXCAN.sjw_max.min(t.tseg2));
 }
 
+#[test]
+fn a_timing_outside_any_one_limit_does_not_fit_and_a_zero_prescaler_has_no_bitrate() {
+    let good = BitTiming {
+        prescaler: 4,
+        tseg1: 13,
+        tseg2: 6,
+        sjw: 4,
+    };
+    assert!(good.fits(&FLEXCAN));
+    let outside = [
+        BitTiming {
+            prescaler: 0,
+            ..good
+        },
+        BitTiming {
+            prescaler: 257,
+            ..good
+        },
+        BitTiming { tseg1: 1, ..good },
+        BitTiming { tseg1: 17, ..good },
+        BitTiming {
+            tseg2: 1,
+            sjw: 1,
+            ..good
+        },
+        BitTiming { tseg2: 9, ..good },
+        BitTiming { sjw: 0, ..good },
+        BitTiming {
+            sjw: 5,
+            tseg2: 8,
+            ..good
+        },
+        BitTiming {
+            sjw: 4,
+            tseg2: 3,
+            ..good
+        },
+        BitTiming {
+            tseg1: 2,
+            tseg2: 2,
+            sjw: 2,
+            ..good
+        },
+    ];
+    for t in outside {
+        assert!(!t.fits(&FLEXCAN), "{t:?}");
+    }
+    // More quanta than a controller allows (FlexCAN's segments reach 25 at most).
+    let twenty = BitTimingLimits {
+        quanta: (8, 20),
+        ..FLEXCAN
+    };
+    let long = BitTiming {
+        tseg1: 16,
+        tseg2: 8,
+        ..good
+    };
+    assert!(long.fits(&FLEXCAN) && !long.fits(&twenty));
+    assert_eq!(
+        BitTiming {
+            prescaler: 0,
+            ..good
+        }
+        .bitrate(80_000_000),
+        None
+    );
+    assert_eq!(
+        good.bitrate(80_000_001),
+        None,
+        "not a whole number of bits per second"
+    );
+}
+
+#[test]
+fn bitrates_beyond_the_arithmetic_or_the_prescaler_are_refused() {
+    // bitrate x quanta overflows 32 bits.
+    assert!(find(4_000_000_000, u32::MAX, 875, &FLEXCAN).is_err());
+    // A prescaler above 16 bits.
+    assert!(find(4_000_000_000, 1, 875, &FLEXCAN).is_err());
+}
+
 /// Small limits, so that the rule's exhaustive search is quick.
 const SMALL: BitTimingLimits = BitTimingLimits {
     prescaler: (1, 16),
