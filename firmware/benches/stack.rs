@@ -21,11 +21,7 @@ impl CanDriver for Mailbox {
     }
     // The frame leaves at once: nothing waits, no error is counted.
     fn error_counters(&self) -> cw_core::can::ErrorCounters {
-        cw_core::can::ErrorCounters {
-            state: cw_core::can::confinement::ErrorState::Active,
-            tec: 0,
-            rec: 0,
-        }
+        cw_core::can::ErrorCounters::ACTIVE
     }
     fn abort(&mut self, _: Hth) {}
     fn write(&mut self, _: Hth, _: u16, frame: &CanFrame) -> Result<(), CanBusy> {

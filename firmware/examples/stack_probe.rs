@@ -34,11 +34,7 @@ impl CanDriver for Mailbox {
 
     // A register model without a bus: no transmission fails.
     fn error_counters(&self) -> cw_core::can::ErrorCounters {
-        cw_core::can::ErrorCounters {
-            state: cw_core::can::confinement::ErrorState::Active,
-            tec: 0,
-            rec: 0,
-        }
+        cw_core::can::ErrorCounters::ACTIVE
     }
 
     fn abort(&mut self, _hth: Hth) {

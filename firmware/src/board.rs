@@ -96,6 +96,9 @@ pub trait Board {
 
 /// Faults a test board injects into the tasks.
 pub trait TaskFaults {
+    /// Whether this board injects faults at all (`false`: the ECU does not even read the
+    /// time for [`TaskFaults::hangs`] at each job's start).
+    const INJECTS: bool = true;
     /// Whether the job of `task` that starts at `now_ms` hangs at its first line.
     fn hangs(&self, task: TaskId, now_ms: u64) -> bool;
 }
@@ -105,6 +108,7 @@ pub trait TaskFaults {
 pub struct NoFaults;
 
 impl TaskFaults for NoFaults {
+    const INJECTS: bool = false;
     #[inline(always)]
     fn hangs(&self, _task: TaskId, _now_ms: u64) -> bool {
         false

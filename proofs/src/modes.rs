@@ -51,11 +51,7 @@ impl CanDriver for Controller {
     // The model's controller sends nothing (every write is refused): no error counted,
     // nothing to abort.
     fn error_counters(&self) -> cw_core::can::ErrorCounters {
-        cw_core::can::ErrorCounters {
-            state: cw_core::can::confinement::ErrorState::Active,
-            tec: 0,
-            rec: 0,
-        }
+        cw_core::can::ErrorCounters::ACTIVE
     }
 
     fn abort(&mut self, _hth: Hth) {}

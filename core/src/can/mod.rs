@@ -249,6 +249,15 @@ pub struct ErrorCounters {
     pub rec: u8,
 }
 
+impl ErrorCounters {
+    /// Error active, no error counted: a controller fresh from reset.
+    pub const ACTIVE: Self = Self {
+        state: confinement::ErrorState::Active,
+        tec: 0,
+        rec: 0,
+    };
+}
+
 /// What the stack needs from a CAN controller driver.
 pub trait CanDriver {
     /// `Can_Init` for this controller: its bitrate and sample point. The controller is

@@ -308,11 +308,7 @@ mod tests {
         }
         // Frames leave at once: nothing waits to be aborted, no error is counted.
         fn error_counters(&self) -> crate::can::ErrorCounters {
-            crate::can::ErrorCounters {
-                state: crate::can::confinement::ErrorState::Active,
-                tec: 0,
-                rec: 0,
-            }
+            crate::can::ErrorCounters::ACTIVE
         }
         fn abort(&mut self, _: Hth) {}
         fn write(&mut self, _: Hth, _: u16, frame: &CanFrame) -> Result<(), CanBusy> {

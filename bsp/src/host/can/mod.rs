@@ -1091,23 +1091,16 @@ impl CanDriver for HostCan {
     }
 
     fn error_counters(&self) -> ErrorCounters {
-        self.with(
-            ErrorCounters {
-                state: ErrorState::Active,
-                tec: 0,
-                rec: 0,
+        self.with(ErrorCounters::ACTIVE, |n| ErrorCounters {
+            state: match &n.role {
+                Role::Controller(c) if c.bus_off => ErrorState::BusOff,
+                _ => n.errors.state(),
             },
-            |n| ErrorCounters {
-                state: match &n.role {
-                    Role::Controller(c) if c.bus_off => ErrorState::BusOff,
-                    _ => n.errors.state(),
-                },
-                tec: n.errors.tec(),
-                // The virtual bus has no receive errors (a receiver sees every frame the
-                // arbitration lets through): the counter stays 0.
-                rec: 0,
-            },
-        )
+            tec: n.errors.tec(),
+            // The virtual bus has no receive errors (a receiver sees every frame the
+            // arbitration lets through): the counter stays 0.
+            rec: 0,
+        })
     }
 
     fn abort(&mut self, hth: Hth) {
