@@ -16,7 +16,7 @@ use cw_core::can::confinement::{ErrorState, Failure, TransmitErrors};
 use cw_core::can::timing::{self, Stuffing};
 use cw_core::can::{
     slcan, CanBusy, CanDriver, CanFrame, CanId, ControllerConfig, ControllerMode, ErrorCounters,
-    Hth, InitRefused, ModeRefused,
+    Hth, InitRefused, ModeChange, ModeRefused,
 };
 
 #[cfg(feature = "host")]
@@ -63,6 +63,9 @@ pub enum SlcanEvent {
     /// The controller went bus-off (more than 255 in its transmit error counter): its
     /// frame is dropped without confirmation and it is stopped until restarted.
     BusOff,
+    /// The controller reached a mode it could not reach at once: a stop asked for while a
+    /// frame's line was on the UART takes effect when the line's last character has left.
+    ModeIndication(ControllerMode),
 }
 
 /// What the SLCAN link has counted since start-up.
@@ -347,6 +350,10 @@ pub struct SlcanCan<U, B: 'static> {
     recovery_end_us: u64,
     /// A transmission the bus holds back.
     deferred: Option<Deferred>,
+    /// The mode a stop (or sleep) asked for during a line takes when the line is out.
+    switching_to: Option<ControllerMode>,
+    /// A mode reached late, not yet indicated to `CanIsr`.
+    mode_event: Option<ControllerMode>,
 }
 
 impl<U: ByteUart, B: SlcanBoard> SlcanCan<U, B> {
@@ -377,6 +384,8 @@ impl<U: ByteUart, B: SlcanBoard> SlcanCan<U, B> {
             bus_off_event: false,
             recovery_end_us: 0,
             deferred: None,
+            switching_to: None,
+            mode_event: None,
         }
     }
 
@@ -483,6 +492,10 @@ impl<U: ByteUart, B: SlcanBoard> SlcanCan<U, B> {
                 if let Some(pdu) = self.pdu.take() {
                     self.confirmed = Some(pdu);
                     let _ = self.errors.sent();
+                }
+                if let Some(mode) = self.switching_to.take() {
+                    self.mode = mode;
+                    self.mode_event = Some(mode);
                 }
             }
             byte
@@ -625,6 +638,9 @@ impl<U: ByteUart, B: SlcanBoard> SlcanCan<U, B> {
         if core::mem::take(&mut self.bus_off_event) {
             return Some(SlcanEvent::BusOff);
         }
+        if let Some(mode) = self.mode_event.take() {
+            return Some(SlcanEvent::ModeIndication(mode));
+        }
         let frame = self.rx.get_mut(self.rx_head).and_then(Option::take)?;
         self.rx_head = (self.rx_head + 1) % RX_QUEUE;
         Some(SlcanEvent::Received(frame))
@@ -649,6 +665,7 @@ impl<U: ByteUart, B: SlcanBoard> CanDriver for SlcanCan<U, B> {
         self.bitrate = config.bitrate;
         self.withdraw();
         self.mode = ControllerMode::Stopped;
+        self.switching_to = None;
         Ok(())
     }
 
@@ -676,6 +693,7 @@ impl<U: ByteUart, B: SlcanBoard> CanDriver for SlcanCan<U, B> {
         // Busy while a line is waiting or on its way (also one a stop let finish), or its
         // confirmation is not yet taken.
         if self.mode != ControllerMode::Started
+            || self.switching_to.is_some()
             || self.mailbox.is_some()
             || self.sent < self.len
             || self.confirmed.is_some()
@@ -700,12 +718,21 @@ impl<U: ByteUart, B: SlcanBoard> CanDriver for SlcanCan<U, B> {
         Ok(())
     }
 
-    fn set_controller_mode(&mut self, mode: ControllerMode) -> Result<(), ModeRefused> {
-        if self.mode == ControllerMode::Sleep && mode == ControllerMode::Started {
+    /// A stop (or sleep) asked for while a frame's line is on the UART waits for the
+    /// line's end ([`ModeChange::Pending`], then [`SlcanEvent::ModeIndication`]), so the
+    /// other end never sees half a line; meanwhile the controller takes no frame and
+    /// refuses to start. Every other change is reached at once.
+    fn set_controller_mode(&mut self, mode: ControllerMode) -> Result<ModeChange, ModeRefused> {
+        let switching = self.switching_to.is_some();
+        if mode == ControllerMode::Started && (switching || self.mode == ControllerMode::Sleep) {
             return Err(ModeRefused);
         }
         if mode != ControllerMode::Started {
             self.withdraw();
+            if switching || (self.source == TxSource::Frame && self.sent < self.len) {
+                self.switching_to = Some(mode);
+                return Ok(ModeChange::Pending);
+            }
         } else if BUS_FAULTS && self.mode != ControllerMode::Started && self.bus_off {
             // Restart after bus-off: 128 x 11 recessive bits before the next attempt,
             // with the counter at 0.
@@ -715,6 +742,6 @@ impl<U: ByteUart, B: SlcanBoard> CanDriver for SlcanCan<U, B> {
                 B::now_us() + (u64::from(timing::BUS_OFF_RECOVERY_BITS) * BIT_NS).div_ceil(1000);
         }
         self.mode = mode;
-        Ok(())
+        Ok(ModeChange::Reached)
     }
 }

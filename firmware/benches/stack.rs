@@ -3,7 +3,9 @@
 //! `cargo xtask callgrind` (firmware/examples/stack_probe.rs).
 
 use criterion::{criterion_group, criterion_main, Criterion};
-use cw_core::can::{CanBusy, CanDriver, CanFrame, ControllerMode, Hrh, Hth, ModeRefused};
+use cw_core::can::{
+    CanBusy, CanDriver, CanFrame, ControllerMode, Hrh, Hth, ModeChange, ModeRefused,
+};
 use cw_core::canif::{CanIf, PduMode, RxPduId, TxPduId};
 use cw_core::com::ipdu::Com;
 use cw_core::com::signal::SignalValue;
@@ -28,8 +30,8 @@ impl CanDriver for Mailbox {
         black_box(frame);
         Ok(())
     }
-    fn set_controller_mode(&mut self, _: ControllerMode) -> Result<(), ModeRefused> {
-        Ok(())
+    fn set_controller_mode(&mut self, _: ControllerMode) -> Result<ModeChange, ModeRefused> {
+        Ok(ModeChange::Reached)
     }
 }
 

@@ -7,7 +7,9 @@
 //! checks) -> PduR -> Com (copy into the I-PDU) -> Com_ReceiveSignal (unpack). Each layer
 //! is also probed alone, so its share is the difference between neighbours.
 
-use cw_core::can::{CanBusy, CanDriver, CanFrame, ControllerMode, Hrh, Hth, ModeRefused};
+use cw_core::can::{
+    CanBusy, CanDriver, CanFrame, ControllerMode, Hrh, Hth, ModeChange, ModeRefused,
+};
 use cw_core::canif::{CanIf, PduMode, RxPduId, TxPduId};
 use cw_core::com::ipdu::Com;
 use cw_core::com::signal::SignalValue;
@@ -50,8 +52,8 @@ impl CanDriver for Mailbox {
         Ok(())
     }
 
-    fn set_controller_mode(&mut self, _mode: ControllerMode) -> Result<(), ModeRefused> {
-        Ok(())
+    fn set_controller_mode(&mut self, _mode: ControllerMode) -> Result<ModeChange, ModeRefused> {
+        Ok(ModeChange::Reached)
     }
 }
 

@@ -36,11 +36,15 @@ pub enum CanInterrupt {
     Received(cw_core::can::Hrh, cw_core::can::CanFrame),
     /// The controller went bus-off.
     BusOff,
+    /// The controller reached a mode it could not reach when asked
+    /// (`CanIf_ControllerModeIndication`).
+    ModeIndication(cw_core::can::ControllerMode),
 }
 
 /// The CAN controller's interrupt sources, as `CanIsr` reads them.
 pub trait CanEvents {
-    /// The oldest event not yet taken (transmit confirmation, reception, bus-off).
+    /// The oldest event not yet taken (transmit confirmation, reception, bus-off, mode
+    /// indication).
     fn take_event(&mut self) -> Option<CanInterrupt>;
 }
 

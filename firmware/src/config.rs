@@ -47,7 +47,7 @@
 
 use cw_core::can::{CanId, Hrh, Hth};
 use cw_core::canif::{CanIfConfig, RxPduConfig, TxPduConfig, TxPduId};
-use cw_core::cansm::CanSmConfig;
+use cw_core::cansm::{CanSmConfig, CanSmTimesMs};
 use cw_core::com::ipdu::{
     ComConfig, RxIpduConfig, RxIpduId, SignalConfig, SignalDirection, SignalId, TransferProperty,
     TxIpduConfig, TxIpduId, TxMode,
@@ -313,7 +313,18 @@ pub static PDUR: PduRConfig<1, 1, 1, 1> =
     };
 
 /// CanSM: two fast recoveries after 10 ms, then 1 s; 100 ms on the bus ensures recovery.
-pub const CANSM: CanSmConfig = match CanSmConfig::from_ms(BSW_PERIOD_MS, 2, 10, 1000, 100) {
+/// A controller mode change not indicated within 10 ms is asked for again, three times.
+pub const CANSM: CanSmConfig = match CanSmConfig::from_ms(
+    BSW_PERIOD_MS,
+    CanSmTimesMs {
+        fast_retries: 2,
+        fast: 10,
+        slow: 1000,
+        tx_ensured: 100,
+        mode_request: 10,
+        mode_request_repeats: 3,
+    },
+) {
     Ok(cfg) => cfg,
     Err(_) => panic!("CanSM timing is not a whole number of BSW periods"),
 };

@@ -131,6 +131,9 @@ pub struct EcuStats {
     pub pin_faults: u32,
     /// Mode requests BswM refused (their rule's condition did not hold).
     pub mode_requests_refused: u32,
+    /// Controller mode changes reported after the request (a stop asked for during a
+    /// frame on the wire completes at the frame's end).
+    pub mode_indications: u32,
 }
 
 /// The Com stack and the CAN controller it drives (`RES_COM`).
@@ -148,6 +151,7 @@ pub struct ComStack<C> {
     frames: FrameCounts,
     rx_dropped: u32,
     mode_requests_refused: u32,
+    mode_indications: u32,
     /// `Can_Init` refused the controller's configuration: CanSM's starts will be refused
     /// too, and it retries as after a bus-off.
     pub can_init_refused: bool,
@@ -164,6 +168,7 @@ impl<C: cw_core::can::CanDriver + CanEvents> ComStack<C> {
             frames: FrameCounts::default(),
             rx_dropped: 0,
             mode_requests_refused: 0,
+            mode_indications: 0,
             can_init_refused: false,
         }
     }
@@ -237,10 +242,10 @@ impl<C: cw_core::can::CanDriver + CanEvents> ComStack<C> {
                     self.rx_dropped = self.rx_dropped.saturating_add(1);
                 }
             },
-            CanInterrupt::BusOff => {
-                self.canif.controller_bus_off();
-                let actions = self.cansm.controller_bus_off();
-                cansm::apply(&mut self.cansm, &mut self.canif, &mut self.can, actions);
+            CanInterrupt::BusOff => cansm::bus_off(&mut self.cansm, &mut self.canif, &mut self.can),
+            CanInterrupt::ModeIndication(mode) => {
+                self.mode_indications = self.mode_indications.saturating_add(1);
+                cansm::mode_indication(&mut self.cansm, &mut self.canif, &mut self.can, mode);
             }
         }
     }
@@ -451,6 +456,7 @@ impl<P: Port<Kernel = Kernel>, B: Board> Ecu<P, B> {
             os_errors: hooks.errors.saturating_add(hooks.port_errors),
             pin_faults,
             mode_requests_refused: com.mode_requests_refused,
+            mode_indications: com.mode_indications,
         }
     }
 

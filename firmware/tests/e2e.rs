@@ -291,6 +291,37 @@ fn no_communication_silences_the_bus_but_not_the_leds_then_frames_resume() {
     assert_eq!(sim.ecu().stats().os_errors, 0);
 }
 
+/// The no-communication request reaches the controller while the PC's frame is on the
+/// wire: the controller finishes that frame (and receives it) before it stops, and says so
+/// with a mode indication; CanSM reaches no communication then, and full communication
+/// again when the window ends. Without a frame on the wire, the stop is immediate.
+#[test]
+fn a_stop_during_a_frame_on_the_wire_completes_at_its_end_and_is_indicated() {
+    let text = "hold 500 3000\nno-communication 1000 1000";
+    let mut sim = run(&format!("{text}\nframe 1000 7FF#0102030405060708"));
+    assert_eq!(sim.ecu().stats().mode_indications, 1);
+    assert_eq!(
+        sim.ecu().stats().rx_dropped,
+        1,
+        "received, then dropped by id"
+    );
+    assert_eq!(
+        sim.ecu().cansm().current_mode(),
+        cw_core::cansm::ComMode::Full
+    );
+    assert_eq!(sim.ecu().cansm().mode_request_timeouts(), 0);
+    let silent = |sim: &Simulation| {
+        sim.frames()
+            .iter()
+            .filter(|f| f.frame.can_id() == config::DISTANCE_FRAME_ID)
+            .all(|f| f.time_us < 1_011_000 || f.time_us >= 2_000_000)
+    };
+    assert!(silent(&sim));
+    let mut at_once = run(text);
+    assert_eq!(at_once.ecu().stats().mode_indications, 0);
+    assert!(silent(&at_once));
+}
+
 #[test]
 fn ignition_off_goes_through_post_run_to_shutdown_with_leds_dark_and_bus_silent() {
     let mut sim = run("hold 500 3000\nshutdown 1000");

@@ -260,6 +260,32 @@ mod targets {
             });
     }
 
+    /// Any run of ComM requests, bus-offs, controller mode indications (on time, late,
+    /// never), refusals and main-function periods keeps CanSM's promises
+    /// (`cw_core::cansm::spec::events_keep_the_promises`) on the ECU's timing (10 ms BSW
+    /// period: fast recovery 10 ms twice, slow 1 s, ensured after 100 ms; a mode request
+    /// asked again after 10 ms, three times).
+    #[test]
+    fn cansm_modes() {
+        let cfg = cw_core::cansm::CanSmConfig::from_ms(
+            10,
+            cw_core::cansm::CanSmTimesMs {
+                fast_retries: 2,
+                fast: 10,
+                slow: 1000,
+                tx_ensured: 100,
+                mode_request: 10,
+                mode_request_repeats: 3,
+            },
+        )
+        .expect("the ECU's CanSM timing");
+        bolero::check!()
+            .with_type::<Vec<u8>>()
+            .for_each(|events: &Vec<u8>| {
+                assert!(cw_core::cansm::spec::events_keep_the_promises(cfg, events))
+            });
+    }
+
     /// The ECU's alive supervision (`cw-firmware`'s `config::ALIVE`, written out: the fuzz
     /// targets do not link the firmware).
     static ALIVE: [cw_core::wdgm::AliveSupervision; 3] = [

@@ -1,25 +1,28 @@
 //! Model checking of the ECU's communication modes: EcuM start-up, run, post-run and
 //! shutdown; BswM's rules; ComM requests to CanSM; CanSM's bus-off recovery; CanIf's
-//! controller and PDU modes; and a CAN controller that may leave the bus or refuse to
-//! start.
+//! controller and PDU modes; and a CAN controller that may leave the bus, refuse to start,
+//! report its mode changes late (a FlexCAN entering freeze mode at the end of a frame) or
+//! never.
 //!
 //! The state is the real `EcuM`, `CanSm` and `CanIf` with the ECU's own configuration
 //! (`cw_firmware::config::{CANSM, CANIF}`), plus the controller. Every transition calls the
 //! code the firmware calls (`bswm_execute`, `cansm::apply`, `CanSm::main_function`,
-//! `CanIf::controller_bus_off`, `EcuM::main_function`), under every interleaving of mode
-//! requests, main-function periods, bus-offs and controller faults. Bus-offs are bounded
-//! (at most [`MAX_BUS_OFFS`] per run) so that the space is finite; every recovery path,
-//! fast and slow, is still reached.
+//! `cansm::bus_off`, `cansm::mode_indication`, `EcuM::main_function`), under every
+//! interleaving of mode requests, main-function periods, bus-offs, late mode indications
+//! and controller faults. Bus-offs and timed-out mode requests are bounded (at most
+//! [`MAX_BUS_OFFS`] and [`MAX_TIMEOUTS`] per run) so that the space is finite; every
+//! recovery path, fast and slow, is still reached.
 //!
 //! Checked in every state:
 //! - the channel is online only on a started controller in full communication, and CanIf
 //!   never believes a stopped controller started;
 //! - a bus-off wait is never longer than configured, and the slow wait comes only after
 //!   the fast retries;
+//! - a mode request never waits for its indication longer than its repetitions allow;
 //! - a shut-down ECU has stopped communicating;
 //! - EcuM only moves forward (Off, start-up one, start-up two, RUN, post-run, shutdown).
 
-use cw_core::can::{CanBusy, CanDriver, CanFrame, ControllerMode, Hth, ModeRefused};
+use cw_core::can::{CanBusy, CanDriver, CanFrame, ControllerMode, Hth, ModeChange, ModeRefused};
 use cw_core::canif::{CanIf, PduMode};
 use cw_core::cansm::{self, CanSm, CanSmState, ComMode};
 use cw_core::ecum::{bswm_execute, BswMRequest, EcuM, EcuMState};
@@ -29,14 +32,22 @@ use stateright::{Model, Property};
 /// Bus-offs per explored run.
 pub const MAX_BUS_OFFS: u32 = 4;
 
-/// The CAN controller as the model sees it: its mode, and whether it refuses to start
-/// (a hardware fault the environment may switch on and off).
+/// Mode requests that time out per explored run.
+pub const MAX_TIMEOUTS: u32 = 2;
+
+/// The CAN controller as the model sees it: its mode, whether it refuses to start and
+/// whether it reports mode changes late (faults the environment may switch on and off),
+/// and the mode it was asked for and has not reached yet.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub struct Controller {
     /// The mode the hardware is in.
     pub mode: ControllerMode,
     /// Starting is refused while this holds.
     pub refuses_start: bool,
+    /// Mode changes are reached later, and indicated then (or never).
+    pub slow: bool,
+    /// The mode asked for and not yet reached.
+    pub pending: Option<ControllerMode>,
 }
 
 impl CanDriver for Controller {
@@ -60,12 +71,17 @@ impl CanDriver for Controller {
         Err(CanBusy)
     }
 
-    fn set_controller_mode(&mut self, mode: ControllerMode) -> Result<(), ModeRefused> {
+    fn set_controller_mode(&mut self, mode: ControllerMode) -> Result<ModeChange, ModeRefused> {
         if mode == ControllerMode::Started && self.refuses_start {
             return Err(ModeRefused);
         }
+        if self.slow {
+            self.pending = Some(mode);
+            return Ok(ModeChange::Pending);
+        }
         self.mode = mode;
-        Ok(())
+        self.pending = None;
+        Ok(ModeChange::Reached)
     }
 }
 
@@ -82,6 +98,8 @@ pub struct ModeState {
     pub controller: Controller,
     /// A broken transition rule, if any.
     pub violation: Option<&'static str>,
+    /// The channel went online at a late start indication.
+    pub online_after_late_start: bool,
 }
 
 /// One step of the ECU or its environment.
@@ -96,8 +114,12 @@ pub enum ModeStep {
     MainFunction,
     /// The controller leaves the bus (only a started controller can).
     BusOff,
+    /// The controller reaches the mode it was asked for and indicates it.
+    Indicate,
     /// The controller starts refusing, or stops refusing, to start.
     ControllerFault(bool),
+    /// The controller starts, or stops, reporting its mode changes late.
+    SlowModes(bool),
 }
 
 /// The model: the ECU's configuration.
@@ -136,6 +158,13 @@ pub fn broken_rule(s: &ModeState) -> Option<&'static str> {
     if s.canif.controller_mode() == ControllerMode::Started && !started {
         return Some("CanIf believes a stopped controller started");
     }
+    if let CanSmState::StartRequested { waited, .. } | CanSmState::StopRequested { waited } =
+        s.cansm.state()
+    {
+        if waited >= cfg.mode_request_timeout_cycles {
+            return Some("a mode request waits longer than its repetitions allow");
+        }
+    }
     if let CanSmState::BusOff { remaining } = s.cansm.state() {
         if remaining == 0 || remaining > cfg.fast_cycles.max(cfg.slow_cycles) {
             return Some("a bus-off wait outside the configured times");
@@ -164,8 +193,11 @@ impl Model for ModeModel {
             controller: Controller {
                 mode: ControllerMode::Stopped,
                 refuses_start: false,
+                slow: false,
+                pending: None,
             },
             violation: None,
+            online_after_late_start: false,
         }]
     }
 
@@ -182,7 +214,11 @@ impl Model for ModeModel {
         if s.controller.mode == ControllerMode::Started {
             actions.push(ModeStep::BusOff);
         }
+        if s.controller.pending.is_some() {
+            actions.push(ModeStep::Indicate);
+        }
         actions.push(ModeStep::ControllerFault(!s.controller.refuses_start));
+        actions.push(ModeStep::SlowModes(!s.controller.slow));
     }
 
     fn next_state(&self, last: &ModeState, step: ModeStep) -> Option<ModeState> {
@@ -223,11 +259,18 @@ impl Model for ModeModel {
             }
             ModeStep::BusOff => {
                 s.controller.mode = ControllerMode::Stopped;
-                s.canif.controller_bus_off();
-                let actions = s.cansm.controller_bus_off();
-                cansm::apply(&mut s.cansm, &mut s.canif, &mut s.controller, actions);
+                cansm::bus_off(&mut s.cansm, &mut s.canif, &mut s.controller);
+            }
+            ModeStep::Indicate => {
+                if let Some(mode) = s.controller.pending.take() {
+                    s.controller.mode = mode;
+                    let offline = s.canif.pdu_mode() != PduMode::Online;
+                    cansm::mode_indication(&mut s.cansm, &mut s.canif, &mut s.controller, mode);
+                    s.online_after_late_start |= offline && s.canif.pdu_mode() == PduMode::Online;
+                }
             }
             ModeStep::ControllerFault(on) => s.controller.refuses_start = on,
+            ModeStep::SlowModes(on) => s.controller.slow = on,
         }
         if stage(s.ecum.state()) < stage(last.ecum.state()) {
             s.violation = Some("EcuM moved backwards");
@@ -236,7 +279,7 @@ impl Model for ModeModel {
     }
 
     fn within_boundary(&self, s: &ModeState) -> bool {
-        s.cansm.bus_off_total() <= MAX_BUS_OFFS
+        s.cansm.bus_off_total() <= MAX_BUS_OFFS && s.cansm.mode_request_timeouts() <= MAX_TIMEOUTS
     }
 
     fn properties(&self) -> Vec<Property<Self>> {
@@ -266,6 +309,12 @@ impl Model for ModeModel {
                             since_restart: Some(_)
                         }
                     )
+            }),
+            Property::sometimes("online after a start indicated late", |_, s: &ModeState| {
+                s.online_after_late_start
+            }),
+            Property::sometimes("a mode request timed out", |_, s: &ModeState| {
+                s.cansm.mode_request_timeouts() > 0
             }),
             Property::sometimes("shut down", |_, s: &ModeState| {
                 s.ecum.state() == EcuMState::Shutdown

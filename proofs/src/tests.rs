@@ -44,6 +44,9 @@ fn mode_model_holds_and_its_rules_can_fail() {
         s = ModeModel.next_state(&s, step).expect("a next state");
     }
     let _ = s.cansm.request(cw_core::cansm::ComMode::Full);
+    let _ = s
+        .cansm
+        .controller_mode_indication(cw_core::can::ControllerMode::Started);
     let _ = s.ecum.main_function();
     assert!(broken_rule(&s).is_some());
 }

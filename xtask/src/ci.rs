@@ -23,6 +23,7 @@ pub const FUZZ_TARGETS: &[&str] = &[
     "targets::wdgm_alive",
     "targets::slcan_controller",
     "targets::bit_timing",
+    "targets::cansm_modes",
 ];
 
 /// How long the `fuzz` stage runs each target (cargo-bolero `-T`).

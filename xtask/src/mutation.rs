@@ -56,6 +56,7 @@ pub const KERNEL_FILES: &[&str] = &[
     "core/src/com/signal.rs",
     "core/src/com/ipdu.rs",
     "core/src/canif/mod.rs",
+    "core/src/cansm/mod.rs",
     "core/src/os/queue.rs",
     "core/src/os/kernel/mod.rs",
     "core/src/os/kernel/alarm.rs",

@@ -63,7 +63,7 @@ use cortex_m::register::{basepri, basepri_max};
 use cw_core::os::{InterruptMask, IsrCategory, TaskId};
 
 use crate::port::preempt::{Arch, Mark, PortFault, Preemptive};
-use crate::port::{OsKernel, Port};
+use crate::port::OsKernel;
 
 pub mod trace;
 
@@ -562,7 +562,7 @@ pub fn start<K: OsKernel>(app: &'static dyn App, port: &'static CortexMPort<K>) 
     port.set_shared_stack(basic_bottom, basic_top);
     port.start_checked();
     // The kernel lock's level: the highest category-2 ISR's.
-    let os_priority = port.inspect(|k| {
+    let os_priority = port.before_start(|k, _| {
         k.isrs()
             .iter()
             .filter(|i| i.category == IsrCategory::Two)

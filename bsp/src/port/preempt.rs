@@ -418,14 +418,27 @@ impl<K: OsKernel, A: Arch> Preemptive<K, A> {
     /// Runs `f` on the tables with every interrupt masked, outside any kernel call
     /// (set-up, reports).
     fn with_sched<R>(&self, f: impl FnOnce(&mut Sched) -> R) -> R {
+        self.masked(|_, sched| f(sched))
+    }
+
+    /// Runs `f` on the kernel (to read it) and the tables with every interrupt masked,
+    /// outside any kernel call: for set-up before the OS starts, where there is no
+    /// decision of the kernel to carry out and no category-1 ISR to delay yet.
+    pub fn before_start<R>(&self, f: impl FnOnce(&K, &mut Sched) -> R) -> R {
+        self.masked(f)
+    }
+
+    fn masked<R>(&self, f: impl FnOnce(&K, &mut Sched) -> R) -> R {
         let masked = self.arch.all_masked();
         self.arch.disable_all();
         if self.in_kernel.load(Ordering::Relaxed) {
             self.fatal(PortFault::KernelReentered);
         }
         // SAFETY: every interrupt is masked and no kernel call is under way: the only
-        // reference to the tables.
-        let result = f(unsafe { &mut *self.sched.get() });
+        // references to the kernel and the tables.
+        let result = f(unsafe { &*self.kernel.get() }, unsafe {
+            &mut *self.sched.get()
+        });
         if !masked {
             self.arch.enable_all();
         }
@@ -481,7 +494,8 @@ impl<K: OsKernel, A: Arch> Preemptive<K, A> {
     /// does not fit. Called by the CPU's start, before the OS starts.
     pub fn start_checked(&self) {
         let stacks = self.own_stacks();
-        let refused = self.inspect(|k| check(k.tasks(), k.isrs(), A::ISR_PRIORITIES, Some(stacks)));
+        let refused =
+            self.before_start(|k, _| check(k.tasks(), k.isrs(), A::ISR_PRIORITIES, Some(stacks)));
         if let Err(r) = refused {
             self.fatal(PortFault::Refused(r));
         }

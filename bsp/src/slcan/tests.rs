@@ -87,7 +87,10 @@ fn a_stopped_controller_refuses_frames_and_drops_the_one_waiting() {
     static BUS: SlcanBus = SlcanBus::new();
     let (mut c, uart) = controller(&BUS);
     assert_eq!(c.write(Hth(0), 3, &frame(0x100, &[9])), Ok(()));
-    assert_eq!(c.set_controller_mode(ControllerMode::Stopped), Ok(()));
+    assert_eq!(
+        c.set_controller_mode(ControllerMode::Stopped),
+        Ok(ModeChange::Reached)
+    );
     assert_eq!(
         events(&mut c),
         [],
@@ -95,12 +98,59 @@ fn a_stopped_controller_refuses_frames_and_drops_the_one_waiting() {
     );
     assert!(uart.0.borrow().sent.is_empty());
     assert_eq!(c.write(Hth(0), 4, &frame(0x100, &[9])), Err(CanBusy));
-    assert_eq!(c.set_controller_mode(ControllerMode::Sleep), Ok(()));
+    assert_eq!(
+        c.set_controller_mode(ControllerMode::Sleep),
+        Ok(ModeChange::Reached)
+    );
     assert_eq!(
         c.set_controller_mode(ControllerMode::Started),
         Err(ModeRefused),
         "not from sleep"
     );
+}
+
+/// A stop asked for while a frame's line is on the UART lets the line finish (no
+/// confirmation: the frame was withdrawn) and takes effect after its last character; the
+/// controller takes no frame and refuses to start meanwhile. With no line under way, a
+/// stop is immediate.
+#[test]
+fn a_stop_during_a_line_waits_for_its_end_and_is_indicated() {
+    static BUS: SlcanBus = SlcanBus::new();
+    let (mut c, uart) = controller(&BUS);
+    uart.0.borrow_mut().room = 3;
+    assert_eq!(c.write(Hth(0), 1, &frame(0x123, &[0xAA; 8])), Ok(()));
+    assert_eq!(events(&mut c), [], "three bytes out");
+    assert_eq!(
+        c.set_controller_mode(ControllerMode::Stopped),
+        Ok(ModeChange::Pending)
+    );
+    assert_eq!(c.write(Hth(0), 2, &frame(0x100, &[1])), Err(CanBusy));
+    assert_eq!(
+        c.set_controller_mode(ControllerMode::Started),
+        Err(ModeRefused)
+    );
+    assert_eq!(
+        c.set_controller_mode(ControllerMode::Stopped),
+        Ok(ModeChange::Pending),
+        "still on the way"
+    );
+    uart.0.borrow_mut().room = usize::MAX;
+    assert_eq!(
+        events(&mut c),
+        [SlcanEvent::ModeIndication(ControllerMode::Stopped)],
+        "the line finished, unconfirmed, then the stop"
+    );
+    assert!(uart.0.borrow().sent.ends_with(b"\r"));
+    assert_eq!(
+        c.set_controller_mode(ControllerMode::Started),
+        Ok(ModeChange::Reached)
+    );
+    assert_eq!(
+        c.set_controller_mode(ControllerMode::Stopped),
+        Ok(ModeChange::Reached),
+        "no line under way"
+    );
+    assert_eq!(events(&mut c), []);
 }
 
 #[test]

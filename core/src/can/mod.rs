@@ -219,6 +219,19 @@ pub enum ControllerMode {
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct ModeRefused;
 
+/// How a controller took a mode request it accepted (`Can_SetControllerMode` returned
+/// `E_OK`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum ModeChange {
+    /// The controller is in the mode now. No indication follows: the caller indicates it
+    /// (`CanIf_ControllerModeIndication` from within `Can_SetControllerMode`).
+    Reached,
+    /// The controller gets there later and then reports the mode it reached as an event
+    /// (`CanIf_ControllerModeIndication` from its interrupt or `Can_MainFunction_Mode`): a
+    /// FlexCAN asked to stop enters freeze mode only once the frame on the wire has ended.
+    Pending,
+}
+
 /// A controller's configuration (AUTOSAR `CanControllerBaudrateConfig`): the bitrate and
 /// the sample point the driver turns into its bit timing ([`bittiming::find`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -275,11 +288,13 @@ pub trait CanDriver {
     /// [`CanBusy`] when no mailbox of `hth` is free.
     fn write(&mut self, hth: Hth, pdu: u16, frame: &CanFrame) -> Result<(), CanBusy>;
 
-    /// `Can_SetControllerMode`.
+    /// `Can_SetControllerMode`: asks for `mode`. The controller may get there at once
+    /// ([`ModeChange::Reached`]) or later ([`ModeChange::Pending`]: it reports the mode as
+    /// an event when it gets there, and only then).
     ///
     /// # Errors
     /// [`ModeRefused`] for a transition the controller does not allow.
-    fn set_controller_mode(&mut self, mode: ControllerMode) -> Result<(), ModeRefused>;
+    fn set_controller_mode(&mut self, mode: ControllerMode) -> Result<ModeChange, ModeRefused>;
 
     /// The error state and counters now.
     fn error_counters(&self) -> ErrorCounters;

@@ -8,13 +8,16 @@
 //!   ids (sorted at configuration time), checks the receive handle (HRH) and the DLC, and
 //!   hands the PDU up. A frame with an unknown id, on the wrong HRH or too short is dropped
 //!   and counted, and nothing else changes.
-//! - Modes: the controller mode (`CanIf_SetControllerMode`) and the PDU channel mode
+//! - Modes: the controller mode (`CanIf_SetControllerMode`, learned from the driver's
+//!   `CanIf_ControllerModeIndication`, at once or later) and the PDU channel mode
 //!   (`CanIf_SetPduMode`): offline, receive-only (TX offline) or online. Bus-off stops the
 //!   controller and clears the transmit buffers.
 //!
 //! Configuration is a `const` [`CanIfConfig`], validated when it is built.
 
-use crate::can::{CanBusy, CanDriver, CanFrame, CanId, ControllerMode, Hrh, Hth, ModeRefused};
+use crate::can::{
+    CanBusy, CanDriver, CanFrame, CanId, ControllerMode, Hrh, Hth, ModeChange, ModeRefused,
+};
 use crate::tables::Tables;
 
 /// A transmit L-PDU of CanIf.
@@ -289,7 +292,9 @@ impl<const TX: usize, const RX: usize, C: Tables<CanIfConfig<TX, RX>>> CanIf<TX,
             .is_some_and(|&l| l != EMPTY)
     }
 
-    /// `CanIf_SetControllerMode`. Stopping (or sleeping) discards the transmit buffers.
+    /// `CanIf_SetControllerMode`: asks the driver for `mode`. A mode the controller
+    /// reaches at once is indicated here ([`Self::controller_mode_indication`]); a pending
+    /// one when the driver reports it. Until then CanIf keeps the mode it had.
     ///
     /// # Errors
     /// [`ModeRefused`] from the driver; the mode is unchanged then.
@@ -297,13 +302,21 @@ impl<const TX: usize, const RX: usize, C: Tables<CanIfConfig<TX, RX>>> CanIf<TX,
         &mut self,
         driver: &mut D,
         mode: ControllerMode,
-    ) -> Result<(), ModeRefused> {
-        driver.set_controller_mode(mode)?;
+    ) -> Result<ModeChange, ModeRefused> {
+        let change = driver.set_controller_mode(mode)?;
+        if change == ModeChange::Reached {
+            self.controller_mode_indication(mode);
+        }
+        Ok(change)
+    }
+
+    /// `CanIf_ControllerModeIndication`: the controller reached `mode`. Any mode but
+    /// started discards the transmit buffers.
+    pub fn controller_mode_indication(&mut self, mode: ControllerMode) {
         self.controller = mode;
         if mode != ControllerMode::Started {
             self.discard_buffers();
         }
-        Ok(())
     }
 
     /// `CanIf_SetPduMode`.
@@ -317,8 +330,7 @@ impl<const TX: usize, const RX: usize, C: Tables<CanIfConfig<TX, RX>>> CanIf<TX,
     /// `CanIf_ControllerBusOff`: the controller left the bus. CanIf marks it stopped and
     /// discards the transmit buffers; the caller tells CanSM, which decides on recovery.
     pub fn controller_bus_off(&mut self) {
-        self.controller = ControllerMode::Stopped;
-        self.discard_buffers();
+        self.controller_mode_indication(ControllerMode::Stopped);
     }
 
     fn discard_buffers(&mut self) {

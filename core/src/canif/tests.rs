@@ -64,6 +64,8 @@ struct Recorder {
     written: Vec<(Hth, u16, CanFrame)>,
     mode: Option<ControllerMode>,
     aborted: Vec<Hth>,
+    /// Mode changes are reported later, as a FlexCAN's are.
+    slow_modes: bool,
 }
 
 impl CanDriver for Recorder {
@@ -93,12 +95,16 @@ impl CanDriver for Recorder {
         Ok(())
     }
 
-    fn set_controller_mode(&mut self, mode: ControllerMode) -> Result<(), ModeRefused> {
+    fn set_controller_mode(&mut self, mode: ControllerMode) -> Result<ModeChange, ModeRefused> {
         if self.mode == Some(ControllerMode::Sleep) && mode == ControllerMode::Started {
             return Err(ModeRefused);
         }
         self.mode = Some(mode);
-        Ok(())
+        Ok(if self.slow_modes {
+            ModeChange::Pending
+        } else {
+            ModeChange::Reached
+        })
     }
 }
 
@@ -114,7 +120,7 @@ fn online_with<const TX: usize, const RX: usize>(
     let mut can = Recorder::default();
     assert_eq!(
         canif.set_controller_mode(&mut can, ControllerMode::Started),
-        Ok(())
+        Ok(ModeChange::Reached)
     );
     canif.set_pdu_mode(PduMode::Online);
     (canif, can)
@@ -169,7 +175,7 @@ fn transmit_needs_a_started_controller_and_an_online_channel() {
     );
     assert_eq!(
         canif.set_controller_mode(&mut can, ControllerMode::Started),
-        Ok(())
+        Ok(ModeChange::Reached)
     );
     canif.set_pdu_mode(PduMode::TxOffline);
     assert_eq!(
@@ -297,14 +303,14 @@ fn bus_off_stops_the_controller_and_discards_buffers() {
     can.busy = false;
     assert_eq!(
         canif.set_controller_mode(&mut can, ControllerMode::Started),
-        Ok(())
+        Ok(ModeChange::Reached)
     );
     assert_eq!(canif.transmit(&mut can, TxPduId(0), &[5; 8]), Ok(()));
     assert_eq!(can.written.len(), 1);
     // A refused mode change leaves the mode as it was.
     assert_eq!(
         canif.set_controller_mode(&mut can, ControllerMode::Sleep),
-        Ok(())
+        Ok(ModeChange::Reached)
     );
     assert_eq!(
         canif.set_controller_mode(&mut can, ControllerMode::Started),
@@ -371,7 +377,10 @@ fn buffers_are_discarded_exactly_when_the_channel_stops_sending() {
         (ControllerMode::Sleep, false),
     ] {
         let (mut canif, mut can) = buffered();
-        assert_eq!(canif.set_controller_mode(&mut can, mode), Ok(()));
+        assert_eq!(
+            canif.set_controller_mode(&mut can, mode),
+            Ok(ModeChange::Reached)
+        );
         assert_eq!(canif.controller_mode(), mode);
         check(&canif, kept, &mode);
     }
@@ -517,4 +526,39 @@ fn of_two_buffered_pdus_with_one_id_the_first_configured_goes_first() {
             (Hth(0), 1, frame(0x100, &[2]))
         ]
     );
+}
+
+/// A controller that changes modes later (a FlexCAN entering freeze mode at the end of the
+/// frame on the wire): CanIf keeps the mode it knows until the driver indicates the new
+/// one, so a pending stop keeps the buffers and a pending start sends nothing yet.
+#[test]
+fn a_pending_mode_change_takes_effect_at_its_indication() {
+    let (mut canif, mut can) = online();
+    can.busy = true;
+    can.slow_modes = true;
+    assert_eq!(canif.transmit(&mut can, TxPduId(0), &[1; 8]), Ok(()));
+    assert_eq!(
+        canif.set_controller_mode(&mut can, ControllerMode::Stopped),
+        Ok(ModeChange::Pending)
+    );
+    assert_eq!(can.mode, Some(ControllerMode::Stopped), "asked");
+    assert_eq!(canif.controller_mode(), ControllerMode::Started, "not yet");
+    assert!(canif.is_buffered(TxPduId(0)));
+    canif.controller_mode_indication(ControllerMode::Stopped);
+    assert_eq!(canif.controller_mode(), ControllerMode::Stopped);
+    assert!(!canif.is_buffered(TxPduId(0)));
+    assert_eq!(canif.stats().tx_discarded, 1);
+    // A pending start: nothing is sent before the controller says it started.
+    can.busy = false;
+    assert_eq!(
+        canif.set_controller_mode(&mut can, ControllerMode::Started),
+        Ok(ModeChange::Pending)
+    );
+    assert_eq!(
+        canif.transmit(&mut can, TxPduId(0), &[2; 8]),
+        Err(TransmitError::Offline)
+    );
+    canif.controller_mode_indication(ControllerMode::Started);
+    assert_eq!(canif.transmit(&mut can, TxPduId(0), &[3; 8]), Ok(()));
+    assert_eq!(can.written.len(), 1);
 }

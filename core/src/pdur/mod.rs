@@ -190,7 +190,7 @@ impl<const COM_TX: usize, const CANIF_TX: usize, const CANIF_RX: usize, const CO
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::can::{CanBusy, CanFrame, CanId, ControllerMode, Hrh, Hth, ModeRefused};
+    use crate::can::{CanBusy, CanFrame, CanId, ControllerMode, Hrh, Hth, ModeChange, ModeRefused};
     use crate::canif::{PduMode, RxPduConfig, TxPduConfig};
     use crate::com::ipdu::{
         ComConfig, RxIpduConfig, RxIpduId, SignalConfig, SignalDirection, SignalId,
@@ -315,8 +315,8 @@ mod tests {
             self.0.push(*frame);
             Ok(())
         }
-        fn set_controller_mode(&mut self, _: ControllerMode) -> Result<(), ModeRefused> {
-            Ok(())
+        fn set_controller_mode(&mut self, _: ControllerMode) -> Result<ModeChange, ModeRefused> {
+            Ok(ModeChange::Reached)
         }
     }
 
@@ -327,7 +327,7 @@ mod tests {
         let mut bus = Bus::default();
         assert_eq!(
             canif.set_controller_mode(&mut bus, ControllerMode::Started),
-            Ok(())
+            Ok(ModeChange::Reached)
         );
         canif.set_pdu_mode(PduMode::Online);
         let r = com.send_signal(SignalId(0), SignalValue::Unsigned(1500), |ipdu, sdu| {

@@ -43,6 +43,7 @@ impl CanEvents for HostCan {
             CanEvent::TxConfirmation { pdu } => CanInterrupt::TxConfirmation(pdu),
             CanEvent::Received { hrh, frame } => CanInterrupt::Received(hrh, frame),
             CanEvent::BusOff => CanInterrupt::BusOff,
+            CanEvent::ModeIndication { mode } => CanInterrupt::ModeIndication(mode),
         })
     }
 }

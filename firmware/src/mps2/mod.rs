@@ -45,6 +45,7 @@ impl CanEvents for SlcanCan {
             // The UART is one receive mailbox; CanIf filters by id.
             SlcanEvent::Received(frame) => CanInterrupt::Received(Hrh(0), frame),
             SlcanEvent::BusOff => CanInterrupt::BusOff,
+            SlcanEvent::ModeIndication(mode) => CanInterrupt::ModeIndication(mode),
         })
     }
 }

@@ -71,6 +71,14 @@
 //! error only; the hardware state is the same either way). Only a started controller that
 //! is not bus-off transmits, receives and acknowledges.
 //!
+//! A stop asked for while a frame is on the wire completes when that frame ends, as a
+//! FlexCAN enters freeze mode only in the intermission or on an idle bus: the request is
+//! [`ModeChange::Pending`], the controller finishes the frame (sending or receiving it),
+//! then stops and queues [`CanEvent::ModeIndication`]. Meanwhile it takes no frame to send
+//! and refuses to start. Every other mode change is reached at once (a FlexCAN leaves
+//! freeze mode within a few clock cycles; the bus integration after a bus-off is the
+//! recovery above, with frames waiting in their mailboxes).
+//!
 //! # Writes that cannot be taken
 //!
 //! [`HostCan::try_write`] says why ([`WriteError`]); through [`CanDriver::write`] every
@@ -96,7 +104,7 @@ use std::vec::Vec;
 
 use cw_core::can::{
     bittiming, CanBusy, CanDriver, CanFrame, CanId, ControllerConfig, ControllerMode,
-    ErrorCounters, Hrh, Hth, InitRefused, ModeRefused,
+    ErrorCounters, Hrh, Hth, InitRefused, ModeChange, ModeRefused,
 };
 
 use super::clock::VirtualClock;
@@ -182,6 +190,12 @@ pub enum CanEvent {
     },
     /// The controller went bus-off (`CanIf_ControllerBusOff`).
     BusOff,
+    /// The controller reached a mode it was asked for and could not reach at once
+    /// (`CanIf_ControllerModeIndication`).
+    ModeIndication {
+        /// The mode it is in now.
+        mode: ControllerMode,
+    },
 }
 
 /// A [`CanEvent`] and the virtual time at which it happened.
@@ -303,6 +317,8 @@ struct Controller {
     bus_off: bool,
     /// Set by a start after bus-off: when the 128 x 11 recessive bits are complete.
     recovery_end_ns: Option<u64>,
+    /// Asked to stop while a frame was on the wire: it stops at the frame's end.
+    stopping: bool,
     hth_count: usize,
     mailboxes_per_hth: usize,
     /// `hth_count * mailboxes_per_hth` slots, HTH-major.
@@ -329,6 +345,7 @@ impl Controller {
             mode: ControllerMode::Stopped,
             bus_off: false,
             recovery_end_ns: None,
+            stopping: false,
             hth_count: usize::from(config.hth_count),
             mailboxes_per_hth: usize::from(config.mailboxes_per_hth),
             mailboxes: std::vec![None; slots],
@@ -664,7 +681,27 @@ impl Bus {
         }
     }
 
+    /// The frame `f` has ended: its outcome delivered, then the controllers that were
+    /// asked to stop during it stop.
     fn complete(&mut self, f: InFlight) {
+        self.deliver(f);
+        let time_us = ns_to_us_ceil(f.end_ns);
+        for node in &mut self.nodes {
+            if let Role::Controller(c) = &mut node.role {
+                if core::mem::take(&mut c.stopping) {
+                    c.mode = ControllerMode::Stopped;
+                    c.events.push_back(TimedCanEvent {
+                        time_us,
+                        event: CanEvent::ModeIndication {
+                            mode: ControllerMode::Stopped,
+                        },
+                    });
+                }
+            }
+        }
+    }
+
+    fn deliver(&mut self, f: InFlight) {
         self.plan_cache.set(None);
         self.idle_at_ns = f.end_ns.saturating_add(self.bits_ns(INTERMISSION_BITS));
         let suspend_until_ns = self
@@ -962,7 +999,7 @@ impl HostCan {
         let c = bus
             .controller_mut(self.node)
             .ok_or(WriteError::NotStarted)?;
-        if c.mode != ControllerMode::Started {
+        if c.mode != ControllerMode::Started || c.stopping {
             return Err(WriteError::NotStarted);
         }
         if usize::from(hth.0) >= c.hth_count {
@@ -1087,6 +1124,7 @@ impl CanDriver for HostCan {
         let c = bus.controller_mut(self.node).ok_or(refused)?;
         c.abort_all();
         c.mode = ControllerMode::Stopped;
+        c.stopping = false;
         Ok(())
     }
 
@@ -1123,16 +1161,31 @@ impl CanDriver for HostCan {
         self.try_write(hth, pdu, frame).map_err(CanBusy::from)
     }
 
-    fn set_controller_mode(&mut self, mode: ControllerMode) -> Result<(), ModeRefused> {
+    /// A stop asked for while a frame is on the wire (anyone's: the controller finishes
+    /// the frame it sends or receives, as a FlexCAN enters freeze mode only at the
+    /// frame's end) is [`ModeChange::Pending`] until that frame ends; then a
+    /// [`CanEvent::ModeIndication`] follows. Every other change is reached at once. A
+    /// controller on its way to stopped refuses to start.
+    fn set_controller_mode(&mut self, mode: ControllerMode) -> Result<ModeChange, ModeRefused> {
         use ControllerMode::{Sleep, Started, Stopped};
         let mut bus = bus_mut(&self.bus);
         let now_ns = bus.now_ns();
+        // The bus up to now, so that the frame on the wire is the one there now.
+        bus.run_until_ns(now_ns);
+        let on_the_wire = bus.in_flight.is_some_and(|f| f.end_ns > now_ns);
         let recovery_ns = bus.bits_ns(BUS_OFF_RECOVERY_BITS);
         let node = bus.nodes.get_mut(self.node).ok_or(ModeRefused)?;
         let _ = node.settle(now_ns);
         let Role::Controller(c) = &mut node.role else {
             return Err(ModeRefused);
         };
+        if c.stopping {
+            return if mode == Stopped {
+                Ok(ModeChange::Pending)
+            } else {
+                Err(ModeRefused)
+            };
+        }
         match (c.mode, mode) {
             (Started, Started) | (Stopped, Stopped) | (Sleep, Sleep) => {}
             (Stopped, Started) => {
@@ -1143,12 +1196,16 @@ impl CanDriver for HostCan {
             }
             (Started, Stopped) => {
                 c.abort_all();
+                if on_the_wire {
+                    c.stopping = true;
+                    return Ok(ModeChange::Pending);
+                }
                 c.mode = Stopped;
             }
             (Stopped, Sleep) | (Sleep, Stopped) => c.mode = mode,
             (Sleep, Started) | (Started, Sleep) => return Err(ModeRefused),
         }
-        Ok(())
+        Ok(ModeChange::Reached)
     }
 }
 

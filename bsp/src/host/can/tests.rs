@@ -30,7 +30,10 @@ const FAILED8_SLOT_US: u64 = (138 + 3) * 2;
 
 fn started(bus: &VirtualBus, config: &HostCanConfig) -> HostCan {
     let mut can = bus.attach(config);
-    assert_eq!(can.set_controller_mode(ControllerMode::Started), Ok(()));
+    assert_eq!(
+        can.set_controller_mode(ControllerMode::Started),
+        Ok(ModeChange::Reached)
+    );
     can
 }
 
@@ -214,7 +217,10 @@ fn writes_to_a_missing_hth_or_a_stopped_controller_are_refused_as_busy() {
     let f = frame(id(0x100), &[1]);
     assert_eq!(ecu.try_write(Hth(0), 0, &f), Err(WriteError::NotStarted));
     assert_eq!(ecu.write(Hth(0), 0, &f), Err(CanBusy));
-    assert_eq!(ecu.set_controller_mode(ControllerMode::Started), Ok(()));
+    assert_eq!(
+        ecu.set_controller_mode(ControllerMode::Started),
+        Ok(ModeChange::Reached)
+    );
     assert_eq!(ecu.try_write(Hth(1), 0, &f), Err(WriteError::UnknownHth));
     assert_eq!(ecu.write(Hth(255), 0, &f), Err(CanBusy));
     let mut none = started(&bus, &HostCanConfig::new(&[]).with_mailboxes_per_hth(0));
@@ -264,14 +270,24 @@ fn stopping_aborts_pending_frames_without_confirmation() {
     assert_eq!(other.write(Hth(0), 0, &frame(id(0x010), &[0; 8])), Ok(()));
     assert_eq!(ecu.write(Hth(0), 1, &frame(id(0x100), &[0; 8])), Ok(()));
     assert_eq!(ecu.write(Hth(1), 2, &frame(id(0x101), &[0; 8])), Ok(()));
-    bus.run_until(FRAME8_US / 2); // `other` holds the bus
-    assert_eq!(ecu.set_controller_mode(ControllerMode::Stopped), Ok(()));
+    clock.advance_us(FRAME8_US / 2); // `other` holds the bus
+    assert_eq!(
+        ecu.set_controller_mode(ControllerMode::Stopped),
+        Ok(ModeChange::Pending)
+    );
     assert_eq!(ecu.pending_count(), 0);
     assert_eq!(ecu.stats().tx_aborted, 2);
     bus.run_until(10_000);
-    assert!(
-        ecu.take_events().is_empty(),
-        "no confirmation for aborted frames"
+    let stopped = CanEvent::ModeIndication {
+        mode: ControllerMode::Stopped,
+    };
+    assert_eq!(
+        ecu.take_events(),
+        [TimedCanEvent {
+            time_us: FRAME8_US,
+            event: stopped
+        }],
+        "no confirmation for aborted frames; stopped at the end of the frame on the wire"
     );
     assert_eq!(received_ids(&tester.take_received()), [0x010]);
 }
@@ -283,10 +299,90 @@ fn a_frame_already_on_the_wire_finishes_when_its_sender_stops() {
     let mut tester = bus.attach_tester();
     let mut ecu = started(&bus, &HostCanConfig::new(&[]));
     assert_eq!(ecu.write(Hth(0), 1, &frame(id(0x100), &[0; 8])), Ok(()));
-    bus.run_until(10);
-    assert_eq!(ecu.set_controller_mode(ControllerMode::Stopped), Ok(()));
+    clock.advance_us(10);
+    assert_eq!(
+        ecu.set_controller_mode(ControllerMode::Stopped),
+        Ok(ModeChange::Pending)
+    );
     bus.run_until(10_000);
     assert_eq!(received_ids(&tester.take_received()), [0x100]);
+    assert_eq!(
+        ecu.take_events()
+            .iter()
+            .map(|e| e.event)
+            .collect::<Vec<_>>(),
+        [CanEvent::ModeIndication {
+            mode: ControllerMode::Stopped
+        }],
+        "no confirmation"
+    );
+    assert_eq!(ecu.mode(), ControllerMode::Stopped);
+}
+
+/// Asked to stop during a frame, the controller finishes that frame (here it receives
+/// it), takes nothing to send, refuses to start, and stops at the frame's end; on an idle
+/// bus it stops at once.
+#[test]
+fn a_stop_during_a_frame_completes_at_its_end() {
+    let clock = VirtualClock::new();
+    let bus = worst_case_bus(&clock);
+    let mut tester = bus.attach_tester();
+    let mut ecu = started(&bus, &HostCanConfig::new(&[(id(0x7DF), Hrh(1))]));
+    tester.send(&frame(id(0x7DF), &[1; 8]));
+    clock.advance_us(100);
+    assert_eq!(
+        ecu.set_controller_mode(ControllerMode::Stopped),
+        Ok(ModeChange::Pending)
+    );
+    assert_eq!(ecu.mode(), ControllerMode::Started, "until the frame ends");
+    assert_eq!(
+        ecu.try_write(Hth(0), 1, &frame(id(0x100), &[0; 8])),
+        Err(WriteError::NotStarted)
+    );
+    assert_eq!(
+        ecu.set_controller_mode(ControllerMode::Started),
+        Err(ModeRefused)
+    );
+    assert_eq!(
+        ecu.set_controller_mode(ControllerMode::Stopped),
+        Ok(ModeChange::Pending),
+        "asked again: still on the way"
+    );
+    clock.advance_us(FRAME8_US);
+    bus.run_until_now();
+    let events: Vec<_> = ecu
+        .take_events()
+        .iter()
+        .map(|e| (e.time_us, e.event))
+        .collect();
+    assert_eq!(
+        events,
+        [
+            (
+                FRAME8_US,
+                CanEvent::Received {
+                    hrh: Hrh(1),
+                    frame: frame(id(0x7DF), &[1; 8])
+                }
+            ),
+            (
+                FRAME8_US,
+                CanEvent::ModeIndication {
+                    mode: ControllerMode::Stopped
+                }
+            ),
+        ]
+    );
+    assert_eq!(ecu.mode(), ControllerMode::Stopped);
+    assert_eq!(
+        ecu.set_controller_mode(ControllerMode::Started),
+        Ok(ModeChange::Reached)
+    );
+    assert_eq!(
+        ecu.set_controller_mode(ControllerMode::Stopped),
+        Ok(ModeChange::Reached),
+        "an idle bus: stopped at once"
+    );
     assert!(ecu.take_events().is_empty());
 }
 
@@ -343,7 +439,10 @@ fn stopped_and_sleeping_controllers_neither_receive_nor_acknowledge() {
     let bus = worst_case_bus(&clock);
     let mut ecu = started(&bus, &HostCanConfig::new(&[]));
     let mut asleep = bus.attach(&HostCanConfig::new(&[]).with_catch_all(Hrh(0)));
-    assert_eq!(asleep.set_controller_mode(ControllerMode::Sleep), Ok(()));
+    assert_eq!(
+        asleep.set_controller_mode(ControllerMode::Sleep),
+        Ok(ModeChange::Reached)
+    );
     assert_eq!(ecu.write(Hth(0), 1, &frame(id(0x100), &[0; 8])), Ok(()));
     bus.run_until(200_000);
     // Alone on the bus: every attempt lacks an acknowledgement. TEC climbs to error
@@ -356,8 +455,14 @@ fn stopped_and_sleeping_controllers_neither_receive_nor_acknowledge() {
     assert_eq!(bus.stats().frames, 0);
     assert!(bus.stats().error_frames > 100);
     // A listener arrives: the frame goes out and TEC starts to come down.
-    assert_eq!(asleep.set_controller_mode(ControllerMode::Stopped), Ok(()));
-    assert_eq!(asleep.set_controller_mode(ControllerMode::Started), Ok(()));
+    assert_eq!(
+        asleep.set_controller_mode(ControllerMode::Stopped),
+        Ok(ModeChange::Reached)
+    );
+    assert_eq!(
+        asleep.set_controller_mode(ControllerMode::Started),
+        Ok(ModeChange::Reached)
+    );
     clock.advance_us(200_000);
     bus.run_until(201_000);
     assert_eq!(confirmed(&ecu.take_events()).len(), 1);
@@ -460,7 +565,10 @@ fn bus_off_stops_the_controller_and_recovery_takes_128_times_11_bits() {
 
     // CanSM restarts the controller; a frame written at once waits for the recovery.
     let restart_us = clock.advance_us(50_000);
-    assert_eq!(ecu.set_controller_mode(ControllerMode::Started), Ok(()));
+    assert_eq!(
+        ecu.set_controller_mode(ControllerMode::Started),
+        Ok(ModeChange::Reached)
+    );
     assert_eq!(ecu.write(Hth(0), 4, &frame(id(0x100), &[0; 8])), Ok(()));
     let recovery_us = 128 * 11 * 2;
     assert_eq!(recovery_us, 2_816);
@@ -490,7 +598,10 @@ fn a_recovering_controller_does_not_receive() {
     assert!(ecu.is_bus_off());
     let _ = ecu.take_events();
     clock.advance_us(50_000);
-    assert_eq!(ecu.set_controller_mode(ControllerMode::Started), Ok(()));
+    assert_eq!(
+        ecu.set_controller_mode(ControllerMode::Started),
+        Ok(ModeChange::Reached)
+    );
     tester.send(&frame(id(0x222), &[]));
     bus.run_until(clock.now_us() + 1_000);
     assert!(ecu.take_events().is_empty(), "bus-off until recovered");
