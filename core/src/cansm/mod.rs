@@ -669,10 +669,19 @@ mod tests {
         }
         assert_eq!(sm.bus_off_total(), 4);
         assert_eq!(sm.bus_off_consecutive(), 4);
-        // 50 ms (5 cycles) without bus-off: the recovery is ensured, the counter resets.
-        for _ in 0..5 {
+        // 50 ms (5 cycles) without bus-off: the recovery is ensured, the counter resets;
+        // not before.
+        for _ in 0..4 {
             sm.main_function();
         }
+        assert_eq!(
+            sm.state(),
+            CanSmState::FullCommunication {
+                since_restart: Some(4)
+            }
+        );
+        assert_eq!(sm.bus_off_consecutive(), 4);
+        sm.main_function();
         assert_eq!(
             sm.state(),
             CanSmState::FullCommunication {
