@@ -489,7 +489,8 @@ pub mod spec {
         }
     }
 
-    /// Runs CanSM on `cfg` through `events` ([`step`]) and checks after each: the
+    /// Runs CanSM on `cfg` through `events` (each byte one event: a ComM request, a
+    /// bus-off, an indication, a refusal or a period) and checks after each: the
     /// controller is asked to start only while full communication is requested; the
     /// channel opens only in full communication; ComM is told exactly the changes of the
     /// mode it sees; a bus-off wait never exceeds the slow recovery time, nor does the
