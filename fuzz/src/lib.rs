@@ -219,6 +219,20 @@ mod targets {
             });
     }
 
+    /// Any sequence of `Can_Write`, aborts, mode changes, frames sent, failed and
+    /// received, idle bus and interrupt work on the FlexCAN driver over the register-level
+    /// model: no frame confirmed that was not sent, one owner per message buffer, no
+    /// received frame lost uncounted (`cw_bsp::chip::flexcan::spec`).
+    #[test]
+    fn flexcan_mailboxes() {
+        bolero::check!().with_type::<Vec<u8>>().for_each(|bytes| {
+            let ops: Vec<_> = cw_bsp::chip::flexcan::spec::decode(bytes).collect();
+            assert!(cw_bsp::chip::flexcan::spec::mailboxes_keep_their_promises(
+                &ops
+            ));
+        });
+    }
+
     /// Any clock, bitrate and sample point: the bit timing found is within FlexCAN's
     /// limits, exact, and has the nearest sample point, or none exists
     /// (`cw_core::can::bittiming::spec`, on limits small enough to search exhaustively).

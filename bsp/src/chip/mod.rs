@@ -7,11 +7,19 @@
 //! host unchanged; what the silicon does in reply (a FIFO, a counter) is the board test's
 //! (QEMU) or the hardware's.
 //!
+//! A peripheral whose accesses have side effects the driver relies on (FlexCAN: a read
+//! locks a buffer, a write of one clears a flag, an acknowledge comes later) is reached
+//! through an access path instead ([`flexcan::regs::Access`]): the same typed registers,
+//! volatile accesses on silicon and a register-level model on the host that answers each
+//! access as the module does.
+//!
 //! - [`cmsdk`]: Arm's Cortex-M System Design Kit peripherals: the APB UART and the APB
 //!   watchdog (Arm DDI 0479C);
+//! - [`flexcan`]: NXP's FlexCAN (S32K1xx, MPC574x), with its register-level model;
 //! - [`fpgaio`]: the MPS2 FPGA images' FPGAIO block (the LEDs).
 //!
-//! Next: the S32K144's LPUART, FlexCAN and WDOG, and the MPC5748G's.
+//! Next: the S32K144's LPUART and WDOG, and the MPC5748G's modules.
 
 pub mod cmsdk;
+pub mod flexcan;
 pub mod fpgaio;

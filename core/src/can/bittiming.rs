@@ -34,6 +34,18 @@ pub const FLEXCAN: BitTimingLimits = BitTimingLimits {
     quanta: (8, 25),
 };
 
+/// The sample point CiA 301 recommends for `bitrate`, per mille of the bit: 87.5 % up to
+/// 500 kbit/s, 80 % up to 800 kbit/s, 75 % above.
+pub const fn cia_sample_permille(bitrate: u32) -> u16 {
+    if bitrate <= 500_000 {
+        875
+    } else if bitrate <= 800_000 {
+        800
+    } else {
+        750
+    }
+}
+
 /// One bit timing.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub struct BitTiming {

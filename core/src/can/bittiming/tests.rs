@@ -150,3 +150,13 @@ fn any_request_gets_the_exact_and_nearest_timing_or_a_refusal() {
             ));
         });
 }
+
+#[test]
+fn the_cia_sample_points_step_down_at_500_and_800_kbit_s() {
+    assert_eq!(cia_sample_permille(125_000), 875);
+    assert_eq!(cia_sample_permille(500_000), 875);
+    assert_eq!(cia_sample_permille(500_001), 800);
+    assert_eq!(cia_sample_permille(800_000), 800);
+    assert_eq!(cia_sample_permille(800_001), 750);
+    assert_eq!(cia_sample_permille(1_000_000), 750);
+}
