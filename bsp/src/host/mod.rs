@@ -11,9 +11,11 @@
 //!   [`SimInput`], an input pin whose level the simulation sets;
 //! - [`sonar`]: [`HcSr04`], the ultrasonic sensor: true distance in, [`Echo`] out, with
 //!   seeded noise, dropouts and the 38 ms no-echo behaviour;
-//! - [`can`]: [`VirtualBus`] with [`HostCan`] controllers (AUTOSAR `Can` driver semantics,
-//!   mailboxes, acceptance filters, arbitration, frame timing, error counters and bus-off)
-//!   and [`Tester`] nodes that put arbitrary frames on the bus;
+//! - [`can`]: [`VirtualBus`] with [`HostFlexcan`] controllers (the FlexCAN driver over a
+//!   register-level model of the module: the ECU's), [`HostCan`] controllers (AUTOSAR
+//!   `Can` driver semantics, mailboxes, acceptance filters, arbitration, frame timing,
+//!   error counters and bus-off, behaviourally) and [`Tester`] nodes that put arbitrary
+//!   frames on the bus;
 //! - [`candump`]: [`CandumpLog`], the bus trace in `candump -l` format;
 //! - [`watchdog`]: [`SimWatchdog`], the watchdog that resets the ECU when WdgM stops
 //!   triggering it.
@@ -65,7 +67,8 @@ pub mod watchdog;
 
 pub use can::{
     BusConfig, BusConfigError, BusRecord, BusStats, CanEvent, HostCan, HostCanConfig, HostCanStats,
-    NodeId, Stuffing, Tester, TimedCanEvent, UnknownNode, VirtualBus, WriteError,
+    HostFlexcan, HostFlexcanAccess, NodeId, Stuffing, Tester, TimedCanEvent, UnknownNode,
+    VirtualBus, WriteError,
 };
 pub use candump::CandumpLog;
 pub use clock::{SimDelay, TimeWentBackwards, VirtualClock};

@@ -3,9 +3,12 @@
 use std::cell::{Cell, RefCell};
 use std::rc::Rc;
 
+use cw_bsp::chip::flexcan::driver::INIT_POLLS;
+use cw_bsp::chip::flexcan::{ClockSource, FlexcanConfig, FlexcanEvent, RxFilter};
+use cw_bsp::host::can::HOST_CAN_CLOCK_HZ;
 use cw_bsp::host::{
-    BusRecord, CanEvent, HcSr04, HostCan, HostCanConfig, HostPort, Noise, SimDelay, SimInput,
-    SimPin, SimWatchdog, Tester, VirtualBus, VirtualClock,
+    BusRecord, HcSr04, HostFlexcan, HostPort, Noise, SimDelay, SimInput, SimPin, SimWatchdog,
+    Tester, VirtualBus, VirtualClock,
 };
 use cw_core::can::{CanFrame, Hrh};
 use cw_core::os::TaskId;
@@ -25,7 +28,7 @@ use embedded_hal::digital::OutputPin;
 pub struct HostBoard;
 
 impl Board for HostBoard {
-    type Can = HostCan;
+    type Can = HostFlexcan;
     type Led = SimPin;
     type Sensor = EchoSensor<SimPin, SimInput, SimDelay, HostSonar>;
     type ModeInput = SimInput;
@@ -37,16 +40,35 @@ impl Board for HostBoard {
 /// The ECU on the host port and board.
 pub type HostEcu = Ecu<HostPort<Kernel>, HostBoard>;
 
-impl CanEvents for HostCan {
+impl CanEvents for HostFlexcan {
     fn take_event(&mut self) -> Option<CanInterrupt> {
-        self.pop_event().map(|timed| match timed.event {
-            CanEvent::TxConfirmation { pdu } => CanInterrupt::TxConfirmation(pdu),
-            CanEvent::Received { hrh, frame } => CanInterrupt::Received(hrh, frame),
-            CanEvent::BusOff => CanInterrupt::BusOff,
-            CanEvent::ModeIndication { mode } => CanInterrupt::ModeIndication(mode),
+        HostFlexcan::take_event(self).map(|event| match event {
+            FlexcanEvent::TxConfirmation(pdu) => CanInterrupt::TxConfirmation(pdu),
+            FlexcanEvent::Received(hrh, frame) => CanInterrupt::Received(hrh, frame),
+            FlexcanEvent::BusOff => CanInterrupt::BusOff,
+            FlexcanEvent::ModeIndication(mode) => CanInterrupt::ModeIndication(mode),
         })
     }
 }
+
+/// The ECU's FlexCAN: the threshold frame into HRH 0 through its exact filter, and, like
+/// a controller with an open filter, every other frame too (standard and extended), so
+/// CanIf's own checks (unknown id, DLC) are exercised; one transmit buffer; FlexCAN0 of an
+/// S32K144 on an 80 MHz peripheral clock.
+const CAN_FILTERS: [RxFilter; 3] = [
+    RxFilter::exact(config::THRESHOLD_FRAME_ID, Hrh(0)),
+    RxFilter::any(Hrh(0), false),
+    RxFilter::any(Hrh(0), true),
+];
+
+const CAN_CONFIG: FlexcanConfig<'static> = FlexcanConfig {
+    clock_source: ClockSource::PeripheralClock,
+    clock_hz: HOST_CAN_CLOCK_HZ,
+    mailboxes: 32,
+    rx: &CAN_FILTERS,
+    tx: &[1],
+    init_polls: INIT_POLLS,
+};
 
 /// The simulated Port driver: drives the output pins low and counts its calls.
 pub struct HostPortDriver {
@@ -203,12 +225,9 @@ impl Simulation {
         let clock = VirtualClock::new();
         let bus = VirtualBus::new(&clock);
         bus.set_tracing(true);
-        // The ECU's controller accepts the threshold frame into HRH 0 and, like a
-        // controller with an open filter, everything else too, so CanIf's own checks
-        // (unknown id, DLC) are exercised.
-        let can = bus.attach(
-            &HostCanConfig::new(&[(config::THRESHOLD_FRAME_ID, Hrh(0))]).with_catch_all(Hrh(0)),
-        );
+        let can = bus
+            .attach_flexcan(&CAN_CONFIG)
+            .map_err(|e| SimulationError(format!("the CAN controller's buffers: {e}")))?;
         let pc = bus.attach_tester();
         let sensor = HcSr04::new(SonarConfig::HC_SR04)
             .with_noise(Noise::from(scenario.noise))

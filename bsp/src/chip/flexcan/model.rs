@@ -106,6 +106,8 @@ const CTRL1_FREEZE_ONLY: u32 =
     0xFFFF_0000 | (1 << 12) | (1 << 7) | (1 << 5) | (1 << 4) | (1 << 3) | 0b111;
 /// `CTRL1[CLKSRC]`, writable only while disabled.
 const CTRL1_CLKSRC: u32 = 1 << 13;
+/// `CTRL1[BOFFMSK]`.
+const CTRL1_BOFFMSK: u32 = 1 << 15;
 /// `CTRL1[BOFFREC]`.
 const CTRL1_BOFFREC: u32 = 1 << 6;
 /// `ESR1`'s write-1-to-clear flags: `BOFFDONEINT`, `TWRNINT`, `RWRNINT`, `BOFFINT`,
@@ -292,6 +294,13 @@ impl FlexcanModel {
         self.state.borrow().bus_off
     }
 
+    /// Whether a bus-off module may recover once it has seen the recessive sequences:
+    /// `CTRL1[BOFFREC]` clear, or negated by software during this bus-off.
+    pub fn may_recover(&self) -> bool {
+        let s = self.state.borrow();
+        s.ctrl1 & CTRL1_BOFFREC == 0 || s.boffrec_negated
+    }
+
     /// The transmit error counter.
     pub fn tec(&self) -> u16 {
         self.state.borrow().errors.tec()
@@ -325,10 +334,20 @@ impl FlexcanModel {
     /// lowest identifier (then the lowest number). `None` when it has none, is not on the
     /// bus, or a frame is already on the wire.
     pub fn offer(&self) -> Option<(usize, CanFrame)> {
-        let s = self.state.borrow();
-        if s.phase != Phase::Normal || s.bus_off || s.wire.is_some() {
-            return None;
+        {
+            let s = self.state.borrow();
+            if s.phase != Phase::Normal || s.bus_off || s.wire.is_some() {
+                return None;
+            }
         }
+        self.next_frame()
+    }
+
+    /// The frame the module would send next once on the bus, and its buffer: the pending
+    /// buffer with the lowest identifier (then the lowest number), whatever the module's
+    /// state (a bus that plans ahead asks it while the module is still recovering).
+    pub fn next_frame(&self) -> Option<(usize, CanFrame)> {
+        let s = self.state.borrow();
         let last = s.last();
         s.mb.iter()
             .enumerate()
@@ -336,6 +355,22 @@ impl FlexcanModel {
             .filter(|(_, b)| b.code() == CODE_TX_DATA)
             .map(|(i, b)| (i, frame_of(b)))
             .min_by_key(|&(i, f)| (arbitration_key(f.can_id()), i))
+    }
+
+    /// The frame on the wire (another node's) ended in an error frame: nothing received.
+    pub fn end_rx_failed(&self) {
+        let mut s = self.state.borrow_mut();
+        if s.wire == Some(Wire::Rx) {
+            s.wire = None;
+        }
+        s.settle_phase();
+    }
+
+    /// Whether the interrupt line is raised: a buffer flag unmasked in `IMASK1`, or
+    /// bus-off with `CTRL1[BOFFMSK]`.
+    pub fn interrupt(&self) -> bool {
+        let s = self.state.borrow();
+        s.iflag1 & s.imask1 != 0 || (s.esr1 & ESR1_BOFFINT != 0 && s.ctrl1 & CTRL1_BOFFMSK != 0)
     }
 
     /// Buffer `mb`'s frame starts on the wire.

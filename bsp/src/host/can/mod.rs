@@ -8,6 +8,10 @@
 //!   acceptance filter mapping CAN ids to hardware receive handles (HRH), controller modes,
 //!   a transmit error counter (TEC) and bus-off. What the interrupt handlers would report
 //!   is queued as [`TimedCanEvent`]s for the firmware to hand to CanIf.
+//! - [`HostFlexcan`]: a FlexCAN, register by register
+//!   ([`crate::chip::flexcan::FlexcanModel`]), and the FlexCAN driver over it: the host
+//!   ECU's controller. It keeps the promises below as the module does (see the `flexcan`
+//!   module here for how the bus drives the model).
 //! - [`Tester`]: an external node (a PC interface, another ECU) that puts arbitrary frames
 //!   on the bus, including ids and lengths no ECU table knows, and sees every frame.
 //!
@@ -108,6 +112,7 @@ use cw_core::can::{
 };
 
 use super::clock::VirtualClock;
+pub use flexcan::{HostFlexcan, HostFlexcanAccess};
 pub use timing::Stuffing;
 use timing::{
     failed_attempt_bits, frame_bits, BUS_OFF_RECOVERY_BITS, INTERMISSION_BITS,
@@ -388,6 +393,7 @@ struct TesterState {
 enum Role {
     Controller(Controller),
     Tester(TesterState),
+    Flexcan(flexcan::FlexNode),
 }
 
 #[derive(Debug)]
@@ -411,6 +417,7 @@ impl Node {
                 Some(recovered.max(self.ready_at_ns))
             }
             Role::Tester(_) => Some(self.ready_at_ns),
+            Role::Flexcan(f) => f.transmit_ready_ns().map(|r| r.max(self.ready_at_ns)),
         }
     }
 
@@ -418,19 +425,22 @@ impl Node {
     fn pending(&self) -> impl Iterator<Item = (usize, &Pending)> {
         let (mailboxes, queue_head) = match &self.role {
             Role::Controller(c) => (c.mailboxes.as_slice(), None),
-            Role::Tester(t) => (&[][..], t.queue.front()),
+            Role::Tester(t) => (&[][..], t.queue.front().map(|p| (0, p))),
+            // The module's own arbitration picked its frame; its slot is its buffer.
+            Role::Flexcan(f) => (&[][..], f.offer.as_ref().map(|p| (usize::from(p.pdu), p))),
         };
         mailboxes
             .iter()
             .enumerate()
             .filter_map(|(i, m)| m.as_ref().map(|p| (i, p)))
-            .chain(queue_head.map(|p| (0, p)))
+            .chain(queue_head)
     }
 
     fn pending_at(&self, slot: usize) -> Option<&Pending> {
         match &self.role {
             Role::Controller(c) => c.mailboxes.get(slot).and_then(Option::as_ref),
             Role::Tester(t) => t.queue.front().filter(|_| slot == 0),
+            Role::Flexcan(f) => f.offer.as_ref().filter(|p| usize::from(p.pdu) == slot),
         }
     }
 
@@ -438,12 +448,20 @@ impl Node {
         match &self.role {
             Role::Controller(c) => c.is_active_at(t_ns),
             Role::Tester(_) => true,
+            Role::Flexcan(f) => f.is_active_at(t_ns),
         }
     }
 
     /// Completes a bus-off recovery that has ended by `t_ns`.
     /// Returns whether a recovery ended (the node's state changed).
     fn settle(&mut self, t_ns: u64) -> bool {
+        if let Role::Flexcan(f) = &mut self.role {
+            if let Some(end_ns) = f.settle(t_ns) {
+                self.ready_at_ns = self.ready_at_ns.max(end_ns);
+                return true;
+            }
+            return false;
+        }
         if let Role::Controller(c) = &mut self.role {
             if let Some(end_ns) = c.recovery_end_ns.filter(|&r| c.bus_off && r <= t_ns) {
                 c.bus_off = false;
@@ -476,6 +494,8 @@ impl Node {
                     false
                 }
             }
+            // The module clears its buffer itself at the frame's end.
+            Role::Flexcan(_) => false,
         }
     }
 }
@@ -507,6 +527,17 @@ struct InFlight {
     pdu: u16,
     end_ns: u64,
     outcome: Outcome,
+}
+
+impl InFlight {
+    /// The failure this attempt ended with, if it failed.
+    fn outcome_failure(&self) -> Option<Failure> {
+        match self.outcome {
+            Outcome::Sent => None,
+            Outcome::InjectedError => Some(Failure::Error),
+            Outcome::NoAck => Some(Failure::NoAcknowledge),
+        }
+    }
 }
 
 /// Bitwise arbitration order: the 11-bit base id, then standard before extended (RTR
@@ -645,6 +676,15 @@ impl Bus {
         let Some(p) = node.pending_at(plan.slot).copied() else {
             return;
         };
+        for (j, other) in self.nodes.iter().enumerate() {
+            if let Role::Flexcan(f) = &other.role {
+                if j == plan.node {
+                    f.model.begin_tx(plan.slot);
+                } else {
+                    f.model.begin_rx();
+                }
+            }
+        }
         self.in_flight = Some(InFlight {
             node: plan.node,
             slot: plan.slot,
@@ -717,10 +757,18 @@ impl Bus {
         } else {
             self.stats.error_frames += 1;
         }
+        let (bit_ns, seq) = (self.bit_ns, self.next_seq);
+        self.next_seq += 1;
         let Some(sender) = self.nodes.get_mut(f.node) else {
             return;
         };
-        let state = if sent {
+        let state = if let Role::Flexcan(flex) = &mut sender.role {
+            let state = flex.end_tx(f.outcome_failure());
+            // The module's buffers changed at the frame's end: the bus plans with what it
+            // offers now.
+            flex.refresh(f.end_ns, bit_ns, seq);
+            state
+        } else if sent {
             if sender.remove_pending(f.slot, f.seq) {
                 if let Role::Controller(c) = &mut sender.role {
                     c.stats.tx_confirmed += 1;
@@ -749,11 +797,18 @@ impl Bus {
                     });
                 }
                 Role::Tester(_) => sender.errors.cap(),
+                // The module raised BOFFINT itself; its driver stops it.
+                Role::Flexcan(_) => {}
             },
             ErrorState::Passive => sender.ready_at_ns = suspend_until_ns,
             ErrorState::Active => {}
         }
         if !sent {
+            for node in &mut self.nodes {
+                if let Role::Flexcan(flex) = &mut node.role {
+                    flex.model.end_rx_failed();
+                }
+            }
             return;
         }
         let sender_id = NodeId(f.node);
@@ -785,6 +840,7 @@ impl Bus {
                     sender: sender_id,
                     frame: f.frame,
                 }),
+                Role::Flexcan(flex) => flex.receive(&f.frame),
             }
         }
         if self.tracing {
@@ -799,14 +855,14 @@ impl Bus {
     fn controller_mut(&mut self, node: usize) -> Option<&mut Controller> {
         match &mut self.nodes.get_mut(node)?.role {
             Role::Controller(c) => Some(c),
-            Role::Tester(_) => None,
+            Role::Tester(_) | Role::Flexcan(_) => None,
         }
     }
 
     fn controller(&self, node: usize) -> Option<&Controller> {
         match &self.nodes.get(node)?.role {
             Role::Controller(c) => Some(c),
-            Role::Tester(_) => None,
+            Role::Tester(_) | Role::Flexcan(_) => None,
         }
     }
 }
@@ -1021,7 +1077,7 @@ impl HostCan {
     pub fn mode(&self) -> ControllerMode {
         self.with(ControllerMode::Stopped, |n| match &n.role {
             Role::Controller(c) => c.mode,
-            Role::Tester(_) => ControllerMode::Started,
+            Role::Tester(_) | Role::Flexcan(_) => ControllerMode::Started,
         })
     }
 
@@ -1035,6 +1091,7 @@ impl HostCan {
         self.with(false, |n| match &n.role {
             Role::Controller(c) => c.bus_off,
             Role::Tester(_) => false,
+            Role::Flexcan(f) => f.model.is_bus_off(),
         })
     }
 
@@ -1258,6 +1315,8 @@ impl Tester {
         }
     }
 }
+
+mod flexcan;
 
 #[cfg(test)]
 mod tests;

@@ -1,7 +1,7 @@
 use super::*;
 use std::vec;
 
-fn id(raw: u16) -> CanId {
+pub(super) fn id(raw: u16) -> CanId {
     CanId::standard(raw).unwrap_or_else(|| panic!("bad id {raw:#x}"))
 }
 
@@ -9,13 +9,13 @@ fn ext(raw: u32) -> CanId {
     CanId::extended(raw).unwrap_or_else(|| panic!("bad id {raw:#x}"))
 }
 
-fn frame(id: CanId, data: &[u8]) -> CanFrame {
+pub(super) fn frame(id: CanId, data: &[u8]) -> CanFrame {
     CanFrame::from_parts(id, data).unwrap_or_else(|| panic!("bad test frame"))
 }
 
 /// A 500 kbit/s bus with worst-case stuffing, so frame times are easy to state:
 /// a standard 8-byte frame is 132 bits (264 us), plus 3 bits (6 us) of intermission.
-fn worst_case_bus(clock: &VirtualClock) -> VirtualBus {
+pub(super) fn worst_case_bus(clock: &VirtualClock) -> VirtualBus {
     let config = BusConfig {
         bitrate_bps: 500_000,
         stuffing: Stuffing::WorstCase,
@@ -23,8 +23,8 @@ fn worst_case_bus(clock: &VirtualClock) -> VirtualBus {
     VirtualBus::with_config(clock, config).unwrap_or_else(|e| panic!("{e}"))
 }
 
-const FRAME8_US: u64 = 264;
-const SLOT8_US: u64 = 270;
+pub(super) const FRAME8_US: u64 = 264;
+pub(super) const SLOT8_US: u64 = 270;
 /// A failed standard 8-byte attempt: 98 + 24 + 2 + 14 = 138 bits, plus intermission.
 const FAILED8_SLOT_US: u64 = (138 + 3) * 2;
 
