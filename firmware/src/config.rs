@@ -45,6 +45,7 @@
 //! book's instruction counts, `docs/src/performance.md`), and AUTOSAR's behaviour where OSEK and AUTOSAR differ (the
 //! paper's stack is an AUTOSAR one).
 
+use cw_bsp::chip::flexcan::RxFilter;
 use cw_core::can::{CanId, Hrh, Hth};
 use cw_core::canif::{CanIfConfig, RxPduConfig, TxPduConfig, TxPduId};
 use cw_core::cansm::{CanSmConfig, CanSmTimesMs};
@@ -186,6 +187,19 @@ const fn std_id(raw: u16) -> CanId {
 pub const DISTANCE_FRAME_ID: CanId = std_id(0x100);
 /// CAN id of the threshold configuration frame (DBC `ThresholdConfig`).
 pub const THRESHOLD_FRAME_ID: CanId = std_id(0x200);
+
+/// The ECU's FlexCAN receive buffers (CanIf's hardware receive objects): the threshold
+/// frame into HRH 0 through its exact filter, and, like a controller with an open filter,
+/// every other frame too (standard and extended), so CanIf's own checks (unknown id, DLC)
+/// see every frame.
+pub const CAN_FILTERS: [RxFilter; 3] = [
+    RxFilter::exact(THRESHOLD_FRAME_ID, Hrh(0)),
+    RxFilter::any(Hrh(0), false),
+    RxFilter::any(Hrh(0), true),
+];
+
+/// The ECU's FlexCAN transmit buffers: one for its one HTH.
+pub const CAN_TX_BUFFERS: [u8; 1] = [1];
 
 /// CanIf: one TX L-PDU (the distance frame), one RX L-PDU (thresholds from the PC).
 pub static CANIF: CanIfConfig<1, 1> = match CanIfConfig::new(

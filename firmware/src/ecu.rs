@@ -100,6 +100,27 @@ pub mod span {
     pub const RX_TO_COM: usize = 6;
     /// The port's calibration of its own measuring.
     pub const CALIBRATION: usize = 7;
+    /// The FlexCAN driver's `Can_Write` into a message buffer (ERR005829's two writes
+    /// included), against FlexCAN's register map in RAM (the measuring images only).
+    pub const FLEXCAN_WRITE: usize = 8;
+    /// The FlexCAN driver's interrupt work for a transmitted frame: the flag found, the
+    /// buffer's code read, the flag cleared, the confirmation handed out.
+    pub const FLEXCAN_TX_CONFIRMATION: usize = 9;
+    /// The FlexCAN driver's interrupt work for a received frame: the flag found, the
+    /// buffer read under its lock, the flag cleared, the timer read, the frame handed out.
+    pub const FLEXCAN_RX: usize = 10;
+    /// The FlexCAN spans' names.
+    pub const FLEXCAN_NAMES: [(usize, &str); 3] = [
+        (
+            FLEXCAN_WRITE,
+            "FlexCAN driver: Can_Write into a message buffer",
+        ),
+        (
+            FLEXCAN_TX_CONFIRMATION,
+            "FlexCAN driver: a transmit flag to its confirmation",
+        ),
+        (FLEXCAN_RX, "FlexCAN driver: a receive flag to its frame"),
+    ];
     /// The spans that are ISRs (bit per span): the trace takes their time off the spans
     /// and jobs they interrupt.
     pub const ISR_SPANS: u32 = 1 << CAN_ISR | 1 << TICK_NOTHING_DUE | 1 << TICK_ALARMS_DUE;

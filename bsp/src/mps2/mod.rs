@@ -513,3 +513,37 @@ static __INTERRUPTS: [extern "C" fn(); 32] = {
     v[SOFTWARE_IRQ as usize] = software_irq;
     v
 };
+
+/// FlexCAN's register map in ordinary RAM, for the measuring images: QEMU's mps2-an386
+/// has no FlexCAN, so the FlexCAN driver's own paths are counted against a block of RAM
+/// laid out as the module (the same loads and stores at the same offsets as on an
+/// S32K144: the instructions are the silicon's; what the module would do in reply, a
+/// caller does by hand).
+#[cfg(feature = "trace")]
+pub mod flexcan_ram {
+    use core::cell::UnsafeCell;
+    use core::sync::atomic::{AtomicBool, Ordering};
+
+    use crate::chip::flexcan::regs::{offset, Mmio, MAX_MAILBOXES};
+
+    /// Words of the block: through the individual masks of every buffer.
+    const WORDS: usize = (offset::RXIMR0 + 4 * MAX_MAILBOXES) / 4;
+
+    struct Block(UnsafeCell<[u32; WORDS]>);
+
+    // SAFETY: the block is reached only through the one `Mmio` that `take` hands out.
+    unsafe impl Sync for Block {}
+
+    static BLOCK: Block = Block(UnsafeCell::new([0; WORDS]));
+    static TAKEN: AtomicBool = AtomicBool::new(false);
+
+    /// The block as a FlexCAN's registers, all zero: once; `None` afterwards.
+    pub fn take() -> Option<Mmio> {
+        if TAKEN.swap(true, Ordering::AcqRel) {
+            return None;
+        }
+        // SAFETY: `TAKEN` hands the block out once, so the returned `Mmio` is its only
+        // user, and the block spans every offset the FlexCAN register view produces.
+        Some(unsafe { Mmio::new(BLOCK.0.get().cast()) })
+    }
+}

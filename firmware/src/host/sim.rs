@@ -4,13 +4,13 @@ use std::cell::{Cell, RefCell};
 use std::rc::Rc;
 
 use cw_bsp::chip::flexcan::driver::INIT_POLLS;
-use cw_bsp::chip::flexcan::{ClockSource, FlexcanConfig, FlexcanEvent, RxFilter};
+use cw_bsp::chip::flexcan::{ClockSource, FlexcanConfig, FlexcanEvent};
 use cw_bsp::host::can::HOST_CAN_CLOCK_HZ;
 use cw_bsp::host::{
     BusRecord, HcSr04, HostFlexcan, HostPort, Noise, SimDelay, SimInput, SimPin, SimWatchdog,
     Tester, VirtualBus, VirtualClock,
 };
-use cw_core::can::{CanFrame, Hrh};
+use cw_core::can::CanFrame;
 use cw_core::os::TaskId;
 use cw_core::sonar::{Echo, SonarConfig};
 use cw_core::warning::{Measurement, WarningLevel};
@@ -51,22 +51,14 @@ impl CanEvents for HostFlexcan {
     }
 }
 
-/// The ECU's FlexCAN: the threshold frame into HRH 0 through its exact filter, and, like
-/// a controller with an open filter, every other frame too (standard and extended), so
-/// CanIf's own checks (unknown id, DLC) are exercised; one transmit buffer; FlexCAN0 of an
-/// S32K144 on an 80 MHz peripheral clock.
-const CAN_FILTERS: [RxFilter; 3] = [
-    RxFilter::exact(config::THRESHOLD_FRAME_ID, Hrh(0)),
-    RxFilter::any(Hrh(0), false),
-    RxFilter::any(Hrh(0), true),
-];
-
+/// The ECU's FlexCAN (its buffers: `config::CAN_FILTERS`, `config::CAN_TX_BUFFERS`) as
+/// FlexCAN0 of an S32K144 on an 80 MHz peripheral clock.
 const CAN_CONFIG: FlexcanConfig<'static> = FlexcanConfig {
     clock_source: ClockSource::PeripheralClock,
     clock_hz: HOST_CAN_CLOCK_HZ,
     mailboxes: 32,
-    rx: &CAN_FILTERS,
-    tx: &[1],
+    rx: &config::CAN_FILTERS,
+    tx: &config::CAN_TX_BUFFERS,
     init_polls: INIT_POLLS,
 };
 

@@ -27,6 +27,8 @@ use tock_registers::interfaces::{Readable, Writeable};
 use tock_registers::RegisterLongName;
 
 pub use bits::{CTRL1, CTRL2, ECR, ESR1, MB_CS, MB_ID, MCR};
+/// The traits that read and write a [`Reg`] (`tock-registers`' interfaces).
+pub use tock_registers::interfaces;
 
 /// The registers' bitfields (the macro's items carry the docs written here, not every
 /// helper it generates).
