@@ -1338,7 +1338,16 @@ fn check_html(
         } else {
             normalize(&page.parent().unwrap_or(page).join(&path))
         };
-        if unchecked.is_some_and(|u| resolved.starts_with(u)) {
+        if let Some(api) = unchecked.filter(|u| resolved.starts_with(u)) {
+            // rustdoc's own links are its business, but a link meant for the book that
+            // stops one `../` short lands in the API docs, where no book is.
+            if resolved.starts_with(api.join("book")) {
+                checked += 1;
+                fail(format!(
+                    "it lands inside the API docs ({}): the book is beside them, one `../` up",
+                    shown(&resolved)
+                ));
+            }
             continue;
         }
         checked += 1;

@@ -3,7 +3,7 @@
 //! host, a register-level model of the module ([`model`]) that the driver's tests,
 //! harnesses and the host ECU run against.
 //!
-//! The book: [the FlexCAN chapter](../../../book/flexcan.html).
+//! The book: [the FlexCAN chapter](../../../../book/flexcan.html).
 
 pub mod driver;
 pub mod model;

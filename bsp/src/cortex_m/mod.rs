@@ -2,7 +2,7 @@
 //! S32K144): the CPU under the CPU-independent preemptive port
 //! ([`crate::port::preempt`]), its exception handlers and its time base.
 //!
-//! The book: [the Cortex-M4 image](../../book/cortex-m4.html) ("The port's guarantees",
+//! The book: [the Cortex-M4 image](../../../book/cortex-m4.html) ("The port's guarantees",
 //! "Layers").
 //!
 //! # Mechanism: PendSV context switching, one stack for the basic tasks

@@ -5,7 +5,7 @@
 //! its exceptions, BASEPRI, PRIMASK and MPU; the host tests run it over a model CPU
 //! (`tests.rs`), with bolero harnesses that are also fuzz targets and Kani proofs.
 //!
-//! The book: [the Cortex-M4 image](../../../book/cortex-m4.html), "The port's guarantees".
+//! The book: [the Cortex-M4 image](../../../../book/cortex-m4.html), "The port's guarantees".
 //!
 //! # The rules it keeps
 //!

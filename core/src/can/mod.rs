@@ -60,6 +60,19 @@ impl CanId {
         self.key
     }
 
+    /// The identifier's place in bitwise arbitration (ISO 11898-1): the lower key wins the
+    /// bus. The 11-bit base identifier first, then a standard frame before an extended
+    /// one with the same base (its dominant RTR meets the extended frame's recessive
+    /// SRR), then the 18-bit extension.
+    pub const fn arbitration_key(self) -> u32 {
+        if self.is_extended() {
+            let raw = self.raw();
+            ((raw >> 18) << 19) | (1 << 18) | (raw & 0x3_FFFF)
+        } else {
+            self.raw() << 19
+        }
+    }
+
     /// The identifier `raw` names once masked to its width (11 or 29 bits): total, so
     /// that harnesses and generators can draw any identifier from plain integers.
     pub const fn masked(raw: u32, extended: bool) -> Self {
@@ -333,6 +346,18 @@ mod tests {
         assert_eq!(CanId::from(Id::from(ext)), ext);
         assert_eq!(CanId::standard(0x800), None);
         assert_eq!(CanId::extended(0x2000_0000), None);
+    }
+
+    #[test]
+    fn arbitration_orders_base_ids_then_standard_before_extended() {
+        let key = |raw, extended| CanId::masked(raw, extended).arbitration_key();
+        assert!(key(0x100, false) < key(0x101, false));
+        // Same base id 0x100: the standard frame wins.
+        assert!(key(0x100, false) < key(0x100 << 18, true));
+        assert!(key(0x100 << 18, true) < key((0x100 << 18) | 1, true));
+        // A lower base id wins whatever the kind.
+        assert!(key((0x0FF << 18) | 0x3_FFFF, true) < key(0x100, false));
+        assert_eq!(key(0x7FF, false), 0x7FF << 19);
     }
 
     #[test]

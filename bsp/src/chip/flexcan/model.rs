@@ -354,7 +354,7 @@ impl FlexcanModel {
             .take(last + 1)
             .filter(|(_, b)| b.code() == CODE_TX_DATA)
             .map(|(i, b)| (i, frame_of(b)))
-            .min_by_key(|&(i, f)| (arbitration_key(f.can_id()), i))
+            .min_by_key(|&(i, f)| (f.can_id().arbitration_key(), i))
     }
 
     /// The frame on the wire (another node's) ended in an error frame: nothing received.
@@ -778,17 +778,6 @@ fn frame_of(b: &Buffer) -> CanFrame {
     };
     let len = ((b.cs >> 16) & 0xF).min(8) as u8;
     CanFrame::masked(CanId::masked(raw, extended), len, data_bytes(b.data))
-}
-
-/// Bitwise arbitration order: the 11-bit base id, then standard before extended, then
-/// the 18-bit extension.
-fn arbitration_key(id: CanId) -> u32 {
-    if id.is_extended() {
-        let raw = id.raw();
-        ((raw >> 18) << 19) | (1 << 18) | (raw & 0x3_FFFF)
-    } else {
-        id.raw() << 19
-    }
 }
 
 impl Access for FlexcanModel {

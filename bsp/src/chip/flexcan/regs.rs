@@ -1,4 +1,4 @@
-//! FlexCAN's registers: the bitfields, the register map and the access seam.
+//! FlexCAN's registers: the bitfields, the register map and their typed view.
 //!
 //! Offsets and fields as NXP's reference manuals give them for the FlexCAN module of the
 //! S32K1xx (S32K1XXRM, chapter "FlexCAN", section "Memory map and register definition")
@@ -6,13 +6,13 @@
 //! named; both chips lay these registers out alike.
 //!
 //! **The seam.** A driver reaches the module through [`Registers`], a typed view over
-//! one [`Access`]: on silicon [`Mmio`] (volatile loads and stores at the module's base),
-//! on the host the register-level model ([`super::model::FlexcanModel`]), which reacts to
-//! each access as the module does (a read of a mailbox's control word locks it, a write
-//! of one to a flag clears it). Each register is a [`Reg`], which implements
-//! `tock-registers`' `Readable` and `Writeable`: the driver reads and writes fields by
-//! name (`mcr.is_set(MCR::FRZACK)`, `ctrl1.modify(CTRL1::BOFFREC::SET)`), never masks
-//! and shifts, and the address arithmetic lives here alone.
+//! one [`Access`] ([`crate::chip::access`]): on silicon [`Mmio`] (volatile loads and
+//! stores at the module's base), on the host the register-level model
+//! ([`super::model::FlexcanModel`]), which reacts to each access as the module does (a
+//! read of a mailbox's control word locks it, a write of one to a flag clears it). Each
+//! register is a [`Reg`]: the driver reads and writes fields by name
+//! (`mcr.is_set(MCR::FRZACK)`, `ctrl1.modify(CTRL1::BOFFREC::SET)`), never masks and
+//! shifts, and the offsets live here alone.
 //!
 //! **Endianness.** Every access is one aligned 32-bit word, and FlexCAN keeps a frame's
 //! data bytes big-endian within each of its two data words (byte 0 in bits 31..24) on
@@ -21,10 +21,9 @@
 //! place that converts, on values, not on memory, so the same code is right on both
 //! (its tests also run under Miri on s390x, a big-endian target).
 
-use core::marker::PhantomData;
-
-use tock_registers::interfaces::{Readable, Writeable};
 use tock_registers::RegisterLongName;
+
+pub use crate::chip::access::{Access, Mmio, Reg};
 
 pub use bits::{CTRL1, CTRL2, ECR, ESR1, MB_CS, MB_ID, MCR};
 /// The traits that read and write a [`Reg`] (`tock-registers`' interfaces).
@@ -245,37 +244,6 @@ pub mod offset {
 /// instance of both chips has at least 16 (S32K144: 32, 16, 16; MPC5748G: 96 each).
 pub const MAX_MAILBOXES: usize = 32;
 
-/// One 32-bit register access path: where the driver's loads and stores go.
-pub trait Access {
-    /// The word at `offset` from the module's base.
-    fn read(&self, offset: usize) -> u32;
-    /// Stores `value` at `offset`.
-    fn write(&self, offset: usize, value: u32);
-}
-
-/// One register of the module, typed by its bitfields `R`.
-pub struct Reg<'a, A, R> {
-    access: &'a A,
-    offset: usize,
-    fields: PhantomData<R>,
-}
-
-impl<A: Access, R: RegisterLongName> Readable for Reg<'_, A, R> {
-    type T = u32;
-    type R = R;
-    fn get(&self) -> u32 {
-        self.access.read(self.offset)
-    }
-}
-
-impl<A: Access, R: RegisterLongName> Writeable for Reg<'_, A, R> {
-    type T = u32;
-    type R = R;
-    fn set(&self, value: u32) {
-        self.access.write(self.offset, value);
-    }
-}
-
 /// The module's registers over an access path.
 pub struct Registers<A> {
     access: A,
@@ -293,11 +261,7 @@ impl<A: Access> Registers<A> {
     }
 
     fn reg<R: RegisterLongName>(&self, offset: usize) -> Reg<'_, A, R> {
-        Reg {
-            access: &self.access,
-            offset,
-            fields: PhantomData,
-        }
+        Reg::new(&self.access, offset)
     }
 
     /// `MCR`.
@@ -386,35 +350,4 @@ pub fn data_bytes(words: [u32; 2]) -> [u8; 8] {
     let [a, b, c, d] = words[0].to_be_bytes();
     let [e, f, g, h] = words[1].to_be_bytes();
     [a, b, c, d, e, f, g, h]
-}
-
-/// The module on silicon: volatile 32-bit loads and stores at its base address.
-#[derive(Debug)]
-pub struct Mmio {
-    base: *mut u8,
-}
-
-impl Mmio {
-    /// The module at `base`.
-    ///
-    /// # Safety
-    /// `base` must be the base address of a FlexCAN module (its registers mapped at the
-    /// offsets of [`offset`]), and the caller the module's only user: every access made
-    /// through the returned value is a volatile access to that module.
-    pub const unsafe fn new(base: *mut u8) -> Self {
-        Self { base }
-    }
-}
-
-impl Access for Mmio {
-    fn read(&self, offset: usize) -> u32 {
-        // SAFETY: `Mmio::new`'s contract: `base` is a FlexCAN module's base, and every
-        // offset the typed view produces is a 4-aligned register inside its map.
-        unsafe { core::ptr::read_volatile(self.base.add(offset).cast::<u32>()) }
-    }
-
-    fn write(&self, offset: usize, value: u32) {
-        // SAFETY: as in `read`; the module is this value's alone (`Mmio::new`).
-        unsafe { core::ptr::write_volatile(self.base.add(offset).cast::<u32>(), value) }
-    }
 }

@@ -540,17 +540,6 @@ impl InFlight {
     }
 }
 
-/// Bitwise arbitration order: the 11-bit base id, then standard before extended (RTR
-/// dominant against SRR recessive), then the 18-bit extension.
-fn arbitration_key(id: CanId) -> u32 {
-    if id.is_extended() {
-        let raw = id.raw();
-        ((raw >> 18) << 19) | (1 << 18) | (raw & 0x3_FFFF)
-    } else {
-        id.raw() << 19
-    }
-}
-
 fn ns_to_us_ceil(ns: u64) -> u64 {
     ns.div_ceil(1_000)
 }
@@ -635,7 +624,7 @@ impl Bus {
         let start_ns = earliest_ns.max(self.idle_at_ns);
         let (node, slot, pending, _) = offers()
             .filter(|&(_, _, _, t)| t <= start_ns)
-            .min_by_key(|&(i, slot, p, _)| (arbitration_key(p.frame.can_id()), i, slot))?;
+            .min_by_key(|&(i, slot, p, _)| (p.frame.can_id().arbitration_key(), i, slot))?;
         let sender = self.nodes.get(node)?;
         let acked = self
             .nodes
