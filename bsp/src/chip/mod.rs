@@ -9,17 +9,20 @@
 //!
 //! A peripheral whose accesses have side effects the driver relies on (FlexCAN: a read
 //! locks a buffer, a write of one clears a flag, an acknowledge comes later) is reached
-//! through an access path instead ([`flexcan::regs::Access`]): the same typed registers,
+//! through an access path instead ([`access::Access`]): the same typed registers,
 //! volatile accesses on silicon and a register-level model on the host that answers each
 //! access as the module does.
 //!
 //! - [`cmsdk`]: Arm's Cortex-M System Design Kit peripherals: the APB UART and the APB
 //!   watchdog (Arm DDI 0479C);
 //! - [`flexcan`]: NXP's FlexCAN (S32K1xx, MPC574x), with its register-level model;
-//! - [`fpgaio`]: the MPS2 FPGA images' FPGAIO block (the LEDs).
+//! - [`fpgaio`]: the MPS2 FPGA images' FPGAIO block (the LEDs);
+//! - [`s32k144`]: NXP's S32K144: its watchdog, clocks, clock gates and pins.
 //!
-//! Next: the S32K144's LPUART and WDOG, and the MPC5748G's modules.
+//! Next: the S32K144's LPUART, FTM and LPSPI, and the MPC5748G's modules.
 
+pub mod access;
 pub mod cmsdk;
 pub mod flexcan;
 pub mod fpgaio;
+pub mod s32k144;
