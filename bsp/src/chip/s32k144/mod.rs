@@ -6,6 +6,9 @@
 //! - [`wdog`]: the watchdog, reconfigured at start-up and then WdgM's;
 //! - [`scg`]: the clocks, from the crystal through the SPLL, checked against the chip's
 //!   limits before anything is written;
+//! - [`flash`]: the flash configuration field at 0x400, checked never to secure the chip;
+//! - [`lpuart`]: the UARTs, as the byte UART the SLCAN controller and the UART sensor
+//!   take;
 //! - [`pcc`]: each peripheral's clock gate and functional clock;
 //! - [`port`]: the pins' functions and the GPIO pins (embedded-hal 1.0 pins).
 //!
@@ -17,6 +20,8 @@
 //!
 //! [`Recorder`]: crate::chip::access::Recorder
 
+pub mod flash;
+pub mod lpuart;
 pub mod pcc;
 pub mod port;
 pub mod scg;
