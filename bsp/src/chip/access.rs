@@ -106,8 +106,14 @@ pub struct Recorder<const WORDS: usize, const N: usize> {
     words: [Cell<u32>; WORDS],
     /// Bits that read as set whatever was stored (status bits the silicon sets).
     high: [Cell<u32>; WORDS],
+    /// Values the next loads of an offset return, in order, before the stored word
+    /// (what the silicon would change between two reads: a counter, a capture).
+    script: RefCell<[Option<(usize, u32)>; SCRIPT]>,
     log: RefCell<([Option<Seen>; N], usize)>,
 }
+
+/// Scripted loads a [`Recorder`] holds at once.
+const SCRIPT: usize = 16;
 
 impl<const WORDS: usize, const N: usize> Default for Recorder<WORDS, N> {
     fn default() -> Self {
@@ -121,6 +127,7 @@ impl<const WORDS: usize, const N: usize> Recorder<WORDS, N> {
         Self {
             words: core::array::from_fn(|_| Cell::new(0)),
             high: core::array::from_fn(|_| Cell::new(0)),
+            script: RefCell::new([None; SCRIPT]),
             log: RefCell::new(([None; N], 0)),
         }
     }
@@ -139,6 +146,37 @@ impl<const WORDS: usize, const N: usize> Recorder<WORDS, N> {
         if let Some(h) = self.high.get(offset / 4) {
             h.set(h.get() | mask);
         }
+    }
+
+    /// The next loads of `offset` return `values` in order (after any scripted before
+    /// them), then the stored word again; `false` if the script is full.
+    pub fn script(&self, offset: usize, values: &[u32]) -> bool {
+        let mut script = self.script.borrow_mut();
+        let free = script.iter().filter(|s| s.is_none()).count();
+        if values.len() > free {
+            return false;
+        }
+        let mut values = values.iter();
+        for slot in script.iter_mut().filter(|s| s.is_none()) {
+            match values.next() {
+                Some(&v) => *slot = Some((offset, v)),
+                None => break,
+            }
+        }
+        true
+    }
+
+    fn scripted(&self, offset: usize) -> Option<u32> {
+        let mut script = self.script.borrow_mut();
+        let i = script
+            .iter()
+            .position(|s| s.is_some_and(|(o, _)| o == offset))?;
+        let value = script.get_mut(i).and_then(Option::take).map(|(_, v)| v);
+        // The scripted loads stay a prefix, in the order given.
+        if let Some(rest) = script.get_mut(i..) {
+            rest.rotate_left(1);
+        }
+        value
     }
 
     /// The word at `offset` as a load returns it now.
@@ -175,7 +213,7 @@ impl<const WORDS: usize, const N: usize> Recorder<WORDS, N> {
 
 impl<const WORDS: usize, const N: usize> Access for Recorder<WORDS, N> {
     fn read(&self, offset: usize) -> u32 {
-        let value = self.word(offset);
+        let value = self.scripted(offset).unwrap_or_else(|| self.word(offset));
         self.record(Seen::Read(offset, value));
         value
     }
@@ -206,5 +244,17 @@ mod tests {
         );
         assert_eq!(r.writes().collect::<std::vec::Vec<_>>(), [(8, 1)]);
         assert_eq!(r.read(64), 0, "outside the words");
+    }
+
+    #[test]
+    fn scripted_loads_come_first_in_order_then_the_stored_word() {
+        let r: Recorder<4, 8> = Recorder::new();
+        r.preset(4, 9);
+        assert!(r.script(4, &[1, 2]));
+        assert!(r.script(0, &[5]));
+        assert_eq!([r.read(4), r.read(0)], [1, 5]);
+        assert!(r.script(4, &[3]));
+        assert_eq!([r.read(4), r.read(4), r.read(4)], [2, 3, 9]);
+        assert!(!r.script(4, &[0; 17]), "more than the script holds");
     }
 }

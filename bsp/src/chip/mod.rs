@@ -17,10 +17,10 @@
 //!   watchdog (Arm DDI 0479C);
 //! - [`flexcan`]: NXP's FlexCAN (S32K1xx, MPC574x), with its register-level model;
 //! - [`fpgaio`]: the MPS2 FPGA images' FPGAIO block (the LEDs);
-//! - [`s32k144`]: NXP's S32K144: its watchdog, clocks, clock gates, pins, UARTs and flash
-//!   configuration field.
+//! - [`s32k144`]: NXP's S32K144: its watchdog, clocks, clock gates, pins, UARTs, echo
+//!   capture and flash configuration field.
 //!
-//! Next: the S32K144's FTM (the sensor's echo capture), and the MPC5748G's modules.
+//! Next: the MPC5748G's modules.
 
 pub mod access;
 pub mod cmsdk;

@@ -7,6 +7,7 @@
 //! - [`scg`]: the clocks, from the crystal through the SPLL, checked against the chip's
 //!   limits before anything is written;
 //! - [`flash`]: the flash configuration field at 0x400, checked never to secure the chip;
+//! - [`ftm`]: a FlexTimer as the input capture that times the HC-SR04's echo;
 //! - [`lpuart`]: the UARTs, as the byte UART the SLCAN controller and the UART sensor
 //!   take;
 //! - [`pcc`]: each peripheral's clock gate and functional clock;
@@ -21,6 +22,7 @@
 //! [`Recorder`]: crate::chip::access::Recorder
 
 pub mod flash;
+pub mod ftm;
 pub mod lpuart;
 pub mod pcc;
 pub mod port;
