@@ -67,7 +67,7 @@ pub const STAGES: &[&str] = &[
 const BUDGET_S: &[(&str, u32)] = &[
     ("setup", 460),
     ("fmt", 10),
-    ("clippy", 95),
+    ("clippy", 85),
     ("test", 290),
     ("cross", 25),
     ("miri", 500),
@@ -81,7 +81,7 @@ const BUDGET_S: &[(&str, u32)] = &[
     ("view", 15),
     ("docs", 165),
     ("fuzz", 360),
-    ("bench", 75),
+    ("bench", 85),
 ];
 
 fn budget_s(stage: &str) -> u32 {
