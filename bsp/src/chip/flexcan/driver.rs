@@ -62,8 +62,8 @@ use cw_core::can::{
 };
 
 use super::regs::{
-    data_bytes, data_words, Access, Registers, CODE_BUSY, CTRL1, ECR, ESR1, MAX_MAILBOXES, MB_CS,
-    MB_ID, MCR,
+    data_bytes, data_words, id_of, id_word, Access, Registers, CODE_BUSY, CTRL1, ECR, ESR1,
+    MAX_MAILBOXES, MB_CS, MCR,
 };
 
 /// Polls of an acknowledge bit before a mode change is reported [`ModeChange::Pending`].
@@ -511,9 +511,9 @@ impl<A: Access> Flexcan<A> {
             self.regs.mb_data(mb, 1).set(0);
             match self.layout.role(mb) {
                 Role::Rx(filter) => {
-                    let (id, mask) = id_word_and_mask(filter.id, filter.mask);
-                    self.regs.mb_id(mb).set(id);
-                    self.regs.rximr(mb).set(mask);
+                    let extended = filter.id.is_extended();
+                    self.regs.mb_id(mb).set(id_word(filter.id.raw(), extended));
+                    self.regs.rximr(mb).set(id_word(filter.mask, extended));
                     cs.write(
                         MB_CS::CODE::RxEmpty + MB_CS::IDE.val(u32::from(filter.id.is_extended())),
                     );
@@ -671,7 +671,7 @@ impl<A: Access> Flexcan<A> {
             polls += 1;
             cs = cs_reg.extract();
         }
-        let id_word = self.regs.mb_id(mb).extract();
+        let word = self.regs.mb_id(mb).get();
         let words = [
             self.regs.mb_data(mb, 0).get(),
             self.regs.mb_data(mb, 1).get(),
@@ -691,11 +691,7 @@ impl<A: Access> Flexcan<A> {
             self.stats.rx_remote += 1;
             return None;
         }
-        let id = if cs.is_set(MB_CS::IDE) {
-            CanId::masked(id_word.read(MB_ID::EXT), true)
-        } else {
-            CanId::masked(id_word.read(MB_ID::STD), false)
-        };
+        let id = id_of(word, cs.is_set(MB_CS::IDE));
         let len = u8::try_from(cs.read(MB_CS::DLC).min(8)).unwrap_or(8);
         self.stats.rx_frames += 1;
         Some(FlexcanEvent::Received(
@@ -740,22 +736,6 @@ impl<A: Access> Flexcan<A> {
     }
 }
 
-/// A filter's identifier word and individual mask: the identifier bits in the buffer's
-/// layout (standard in bits 28..18, extended in 28..0).
-fn id_word_and_mask(id: CanId, mask: u32) -> (u32, u32) {
-    if id.is_extended() {
-        (
-            MB_ID::EXT.val(id.raw()).value,
-            MB_ID::EXT.val(mask & 0x1FFF_FFFF).value,
-        )
-    } else {
-        (
-            MB_ID::STD.val(id.raw()).value,
-            MB_ID::STD.val(mask & 0x7FF).value,
-        )
-    }
-}
-
 impl<A: Access> CanDriver for Flexcan<A> {
     fn init(&mut self, config: &ControllerConfig) -> Result<(), InitRefused> {
         self.init_checked(config).map_err(|_| InitRefused {
@@ -775,11 +755,7 @@ impl<A: Access> CanDriver for Flexcan<A> {
         let extended = id.is_extended();
         let cs = self.regs.mb_cs(mb);
         cs.write(MB_CS::CODE::TxInactive);
-        self.regs.mb_id(mb).write(if extended {
-            MB_ID::EXT.val(id.raw())
-        } else {
-            MB_ID::STD.val(id.raw())
-        });
+        self.regs.mb_id(mb).set(id_word(id.raw(), extended));
         let [w0, w1] = data_words(frame.bytes());
         self.regs.mb_data(mb, 0).set(w0);
         self.regs.mb_data(mb, 1).set(w1);

@@ -60,10 +60,10 @@
 use core::cell::RefCell;
 
 use cw_core::can::confinement::{ErrorState, Failure, TransmitErrors};
-use cw_core::can::{CanFrame, CanId};
+use cw_core::can::CanFrame;
 
 use super::regs::{
-    data_bytes, data_words, mb_of, offset, Access, MAX_MAILBOXES, MB_CS, MB_ID, MCR,
+    data_bytes, data_words, id_of, id_word, mb_of, offset, Access, MAX_MAILBOXES, MB_CS, MCR,
 };
 use tock_registers::fields::Field;
 use tock_registers::RegisterLongName;
@@ -680,7 +680,7 @@ impl State {
         } else {
             self.rxmgmask
         };
-        ((id_word(id) ^ b.id) & mask & 0x1FFF_FFFF) == 0
+        ((id_word(id.raw(), id.is_extended()) ^ b.id) & mask & 0x1FFF_FFFF) == 0
     }
 
     fn deliver(&mut self, frame: &CanFrame) -> RxOutcome {
@@ -742,7 +742,7 @@ impl State {
             | (u32::from(id.is_extended()) << 22)
             | (u32::from(frame.len()) << 16)
             | (timer & 0xFFFF);
-        b.id = id_word(id);
+        b.id = id_word(id.raw(), id.is_extended());
         b.data = data_words(frame.bytes());
         b.serviced = false;
         self.stats.rx_stored += 1;
@@ -759,25 +759,10 @@ impl State {
     }
 }
 
-/// A frame's identifier in a buffer's identifier word.
-fn id_word(id: CanId) -> u32 {
-    if id.is_extended() {
-        MB_ID::EXT.val(id.raw()).value
-    } else {
-        MB_ID::STD.val(id.raw()).value
-    }
-}
-
 /// The frame held by a transmit buffer.
 fn frame_of(b: &Buffer) -> CanFrame {
-    let extended = bit(b.cs, MB_CS::IDE);
-    let raw = if extended {
-        MB_ID::EXT.read(b.id)
-    } else {
-        MB_ID::STD.read(b.id)
-    };
     let len = ((b.cs >> 16) & 0xF).min(8) as u8;
-    CanFrame::masked(CanId::masked(raw, extended), len, data_bytes(b.data))
+    CanFrame::masked(id_of(b.id, bit(b.cs, MB_CS::IDE)), len, data_bytes(b.data))
 }
 
 impl Access for FlexcanModel {

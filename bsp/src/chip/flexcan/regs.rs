@@ -21,6 +21,7 @@
 //! place that converts, on values, not on memory, so the same code is right on both
 //! (its tests also run under Miri on s390x, a big-endian target).
 
+use cw_core::can::CanId;
 use tock_registers::RegisterLongName;
 
 pub use crate::chip::access::{Access, Mmio, Reg};
@@ -330,6 +331,25 @@ pub const fn mb_of(offset: usize) -> Option<(usize, usize)> {
     }
     let rel = offset - offset::MB0;
     Some((rel / offset::MB_STRIDE, (rel % offset::MB_STRIDE) / 4))
+}
+
+/// An identifier's bits in a buffer's identifier word (or an individual mask): a standard
+/// identifier in bits 28..18, an extended one in 28..0.
+pub const fn id_word(raw: u32, extended: bool) -> u32 {
+    if extended {
+        raw & 0x1FFF_FFFF
+    } else {
+        (raw & 0x7FF) << 18
+    }
+}
+
+/// The identifier an identifier word holds, of the kind `CS[IDE]` says.
+pub const fn id_of(word: u32, extended: bool) -> CanId {
+    if extended {
+        CanId::masked(word & 0x1FFF_FFFF, true)
+    } else {
+        CanId::masked((word >> 18) & 0x7FF, false)
+    }
 }
 
 /// A frame's data bytes as FlexCAN's two data words: byte 0 in bits 31..24 of word 0.

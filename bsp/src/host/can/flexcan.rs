@@ -263,10 +263,7 @@ impl CanDriver for HostFlexcan {
     /// virtual bus has no bit-level model in which a node at the wrong bitrate would see
     /// only errors, so the host board refuses it here, as its behavioural controller does.
     fn init(&mut self, config: &ControllerConfig) -> Result<(), InitRefused> {
-        let bus_bps = {
-            let bus = self.driver.registers().access().bus.borrow();
-            (1_000_000_000 + bus.bit_ns / 2) / bus.bit_ns.max(1)
-        };
+        let bus_bps = self.driver.registers().access().bus.borrow().bitrate_bps();
         if bus_bps != u64::from(config.bitrate) {
             return Err(InitRefused {
                 bitrate: config.bitrate,

@@ -576,6 +576,11 @@ impl Bus {
         self.clock.now_us().saturating_mul(1_000)
     }
 
+    /// The bus's bitrate, from its whole-nanosecond bit time (rounded to nearest).
+    fn bitrate_bps(&self) -> u64 {
+        (1_000_000_000 + self.bit_ns / 2) / self.bit_ns.max(1)
+    }
+
     fn bits_ns(&self, bits: u32) -> u64 {
         u64::from(bits) * self.bit_ns
     }
@@ -1163,8 +1168,7 @@ impl CanDriver for HostCan {
         )
         .map_err(|_| refused)?;
         let mut bus = bus_mut(&self.bus);
-        let bus_bps = (1_000_000_000 + bus.bit_ns / 2) / bus.bit_ns.max(1);
-        if bus_bps != u64::from(config.bitrate) {
+        if bus.bitrate_bps() != u64::from(config.bitrate) {
             return Err(refused);
         }
         let c = bus.controller_mut(self.node).ok_or(refused)?;
