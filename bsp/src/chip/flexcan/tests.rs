@@ -599,7 +599,12 @@ fn identifiers_sit_in_bits_28_to_18_or_28_to_0_of_their_word_and_read_back() {
         0x7FF << 18,
         "masked to 11 bits"
     );
-    for (raw, extended) in [(0x123, false), (0x7FF, false), (0x1ABC_DE, true), (0, true)] {
+    for (raw, extended) in [
+        (0x123, false),
+        (0x7FF, false),
+        (0x001A_BCDE, true),
+        (0, true),
+    ] {
         let id = CanId::masked(raw, extended);
         assert_eq!(id_of(id_word(raw, extended), extended), id);
     }
