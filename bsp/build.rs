@@ -1,20 +1,28 @@
 //! The memory layout of the board the image is linked for (cortex-m-rt's `memory.x`), and
-//! the interrupt vector's default names (`device.x`; the board defines its whole vector
+//! the interrupt vector's default names (`device.x`; each board defines its whole vector
 //! itself, so the file is empty).
 use std::path::PathBuf;
 
 fn main() {
     println!("cargo:rerun-if-changed=build.rs");
     println!("cargo:rerun-if-changed=src/mps2/memory.x");
+    println!("cargo:rerun-if-changed=src/s32k144evb/memory.x");
     let target = std::env::var("TARGET").unwrap_or_default();
-    if !target.starts_with("thumbv7em") || std::env::var_os("CARGO_FEATURE_MPS2").is_none() {
+    if !target.starts_with("thumbv7em") {
         return;
     }
+    let layout = if std::env::var_os("CARGO_FEATURE_S32K144EVB").is_some() {
+        "src/s32k144evb/memory.x"
+    } else if std::env::var_os("CARGO_FEATURE_MPS2").is_some() {
+        "src/mps2/memory.x"
+    } else {
+        return;
+    };
     let Some(out) = std::env::var_os("OUT_DIR").map(PathBuf::from) else {
         println!("cargo:warning=OUT_DIR is not set");
         return;
     };
-    let copied = std::fs::copy("src/mps2/memory.x", out.join("memory.x"))
+    let copied = std::fs::copy(layout, out.join("memory.x"))
         .and_then(|_| std::fs::write(out.join("device.x"), ""));
     if let Err(e) = copied {
         println!("cargo:warning=cannot write the linker scripts: {e}");

@@ -24,7 +24,10 @@
 //!   shared virtual clock, recording pins, an HC-SR04 model with seeded noise and
 //!   dropouts, a virtual CAN bus with arbitration, frame timing and error confinement,
 //!   and a candump log writer.
-//! - later: QEMU Cortex-M (mps2-an386) and the NXP MPC5748G register-level BSP. The
+//! - `mps2` (feature `mps2`, `thumbv7em-none-eabihf`): QEMU's mps2-an386 (Cortex-M4).
+//! - [`s32k144evb`] (feature `s32k144evb`, `thumbv7em-none-eabihf`): NXP's S32K144EVB,
+//!   with FlexCAN0; its pins and numbers are checked on the host.
+//! - later: the NXP MPC5748G register-level BSP. The
 //!   MPC5748G's cores execute only the VLE encoding, which LLVM (hence rustc) cannot emit:
 //!   Rust code for it can be built for a Book E PowerPC target and checked big-endian, but
 //!   does not run on that silicon.
@@ -49,3 +52,12 @@ pub mod slcan;
 pub mod cortex_m;
 #[cfg(all(feature = "mps2", target_arch = "arm", target_os = "none"))]
 pub mod mps2;
+pub mod s32k144evb;
+
+#[cfg(all(
+    feature = "mps2",
+    feature = "s32k144evb",
+    target_arch = "arm",
+    target_os = "none"
+))]
+compile_error!("an image is for one board: features `mps2` and `s32k144evb` exclude each other");

@@ -41,6 +41,18 @@ pub enum CanInterrupt {
     ModeIndication(cw_core::can::ControllerMode),
 }
 
+impl From<cw_bsp::chip::flexcan::FlexcanEvent> for CanInterrupt {
+    fn from(event: cw_bsp::chip::flexcan::FlexcanEvent) -> Self {
+        use cw_bsp::chip::flexcan::FlexcanEvent;
+        match event {
+            FlexcanEvent::TxConfirmation(pdu) => Self::TxConfirmation(pdu),
+            FlexcanEvent::Received(hrh, frame) => Self::Received(hrh, frame),
+            FlexcanEvent::BusOff => Self::BusOff,
+            FlexcanEvent::ModeIndication(mode) => Self::ModeIndication(mode),
+        }
+    }
+}
+
 /// The CAN controller's interrupt sources, as `CanIsr` reads them.
 pub trait CanEvents {
     /// The oldest event not yet taken (transmit confirmation, reception, bus-off, mode
@@ -160,6 +172,24 @@ impl<const N: usize> TaskFaults for Stalls<N> {
             .iter()
             .take(self.len)
             .any(|&(at, t)| t == task && now_ms >= at)
+    }
+}
+
+/// A mode input the board ties on (a board without an ignition or bus-enable line:
+/// ignition on, communication enabled; a vehicle's ECU reads pins).
+pub struct TiedOn;
+
+impl embedded_hal::digital::ErrorType for TiedOn {
+    type Error = core::convert::Infallible;
+}
+
+impl embedded_hal::digital::InputPin for TiedOn {
+    fn is_high(&mut self) -> Result<bool, Self::Error> {
+        Ok(true)
+    }
+
+    fn is_low(&mut self) -> Result<bool, Self::Error> {
+        Ok(false)
     }
 }
 

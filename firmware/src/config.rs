@@ -45,7 +45,8 @@
 //! book's instruction counts, `docs/src/performance.md`), and AUTOSAR's behaviour where OSEK and AUTOSAR differ (the
 //! paper's stack is an AUTOSAR one).
 
-use cw_bsp::chip::flexcan::RxFilter;
+use cw_bsp::chip::flexcan::driver::INIT_POLLS;
+use cw_bsp::chip::flexcan::{ClockSource, FlexcanConfig, RxFilter};
 use cw_core::can::{CanId, Hrh, Hth};
 use cw_core::canif::{CanIfConfig, RxPduConfig, TxPduConfig, TxPduId};
 use cw_core::cansm::{CanSmConfig, CanSmTimesMs};
@@ -200,6 +201,20 @@ pub const CAN_FILTERS: [RxFilter; 3] = [
 
 /// The ECU's FlexCAN transmit buffers: one for its one HTH.
 pub const CAN_TX_BUFFERS: [u8; 1] = [1];
+
+/// The ECU's FlexCAN controller on the protocol clock `clock_hz` from `clock_source`: 32
+/// message buffers, the receive filters [`CAN_FILTERS`] and transmit buffers
+/// [`CAN_TX_BUFFERS`], and the driver's bound on each acknowledge it waits for.
+pub const fn flexcan(clock_source: ClockSource, clock_hz: u32) -> FlexcanConfig<'static> {
+    FlexcanConfig {
+        clock_source,
+        clock_hz,
+        mailboxes: 32,
+        rx: &CAN_FILTERS,
+        tx: &CAN_TX_BUFFERS,
+        init_polls: INIT_POLLS,
+    }
+}
 
 /// CanIf: one TX L-PDU (the distance frame), one RX L-PDU (thresholds from the PC).
 pub static CANIF: CanIfConfig<1, 1> = match CanIfConfig::new(

@@ -10,6 +10,8 @@
 
 pub mod board;
 pub mod config;
+#[cfg(all(target_arch = "arm", target_os = "none"))]
+pub mod cortex_m;
 pub mod ecu;
 #[cfg(feature = "host")]
 pub mod host;
@@ -17,4 +19,6 @@ pub mod iohwab;
 #[cfg(all(feature = "mps2", target_arch = "arm", target_os = "none"))]
 pub mod mps2;
 pub mod rte;
+#[cfg(all(feature = "s32k144evb", target_arch = "arm", target_os = "none"))]
+pub mod s32k144evb;
 pub mod swc;

@@ -21,6 +21,9 @@
 //!   [--flash] [--serial tcp:PORT]`:
 //!   the ECU's Cortex-M4 image on QEMU's mps2-an386, the emulator-in-the-loop tests against
 //!   the host simulation (`tests/`), and python-can against it live;
+//! - `cargo xtask s32k144 [--flash] [--probe VID:PID]`: the ECU's image for NXP's
+//!   S32K144EVB built and checked (the flash configuration field at 0x400, the vector
+//!   table, flash and RAM), then written to the board through a debug probe (probe-rs);
 //! - `cargo xtask view`: `cw-can view` in headless Chromium on the ECU's Figure 7 log,
 //!   checked against the trace; the screenshots of the paper's Figure 8 in `docs/src/view/`;
 //! - `cargo xtask docs [--file PATH].. [--no-examples]`: the book (mdBook) and the API docs
@@ -29,9 +32,10 @@
 //!   and compared with its output as shown;
 //! - `cargo xtask book [--open]`: the book built and its links checked (no examples), in
 //!   `target/book/`;
-//! - `cargo xtask qemu-runner IMAGE [ARGS]..`: cargo's runner for the board's target
+//! - `cargo xtask qemu-runner IMAGE [ARGS]..`: cargo's runner for the boards' target
 //!   (`cargo run` on an image): QEMU with `ARGS` as the image's command line, its defmt
-//!   log decoded as it comes.
+//!   log decoded as it comes; the S32K144EVB's image (`cw-s32k144`) goes to the board
+//!   through probe-rs instead.
 //!
 //! Every command the runner starts is printed first, prefixed with `$`. Child processes get
 //! no stdin, so the runner behaves the same in a terminal and under `CI=true`.
@@ -50,6 +54,7 @@ mod process;
 mod profile;
 mod qemu;
 mod rng;
+mod s32k144;
 mod setup;
 mod view;
 
@@ -102,6 +107,10 @@ enum Command {
     Mutation(mutation::Options),
     /// Build the ECU's Cortex-M4 image and run it on QEMU's mps2-an386
     Qemu(qemu::Options),
+    /// Build and check the ECU's image for NXP's S32K144EVB (flash configuration field,
+    /// vector table, flash and RAM); with --flash, write it to the board with probe-rs and
+    /// show its log
+    S32k144(s32k144::Options),
     /// Check `cw-can view` in headless Chromium on the ECU's Figure 7 log, and write the
     /// four screenshots of the paper's Figure 8 to docs/src/view/
     View,
@@ -112,7 +121,8 @@ enum Command {
     /// Build the book (installing mdBook if missing) and check its links; print where it is
     Book(docs::BookOptions),
     /// Cargo's runner for thumbv7em-none-eabihf: IMAGE on QEMU with ARGS on its
-    /// semihosting command line, its defmt log decoded as it comes
+    /// semihosting command line, its defmt log decoded as it comes (the S32K144EVB's
+    /// image, cw-s32k144: onto the board with probe-rs)
     QemuRunner {
         /// The image (ELF)
         image: String,
@@ -147,6 +157,7 @@ fn run(command: Command) -> Result {
         Command::Mutants => mutants::run(),
         Command::Mutation(options) => mutation::run(&options),
         Command::Qemu(options) => qemu::run(&options),
+        Command::S32k144(options) => s32k144::run(&options),
         Command::View => view::run(),
         Command::Docs(options) => docs::run(&options),
         Command::Book(options) => docs::book(&options),

@@ -230,6 +230,46 @@ fn defmt_print() -> Result {
     )
 }
 
+/// The probe-rs version that writes the S32K144EVB's image (`cargo xtask s32k144
+/// --flash`): its target list names the chip [`crate::s32k144::PROBE_RS_CHIP`].
+pub const PROBE_RS_VERSION: &str = "0.32.0";
+
+/// probe-rs (crate `probe-rs-tools`), installed if missing: only `cargo xtask s32k144
+/// --flash` needs it (the check command has no board to write to). It prints its version
+/// as `probe-rs VERSION (git commit: ...)`.
+pub fn probe_rs() -> Result {
+    let found = tool_line("probe-rs", &["--version"]);
+    let says = |line: &str| line.starts_with(&format!("probe-rs {PROBE_RS_VERSION}"));
+    if let Some(line) = found.as_deref().filter(|l| says(l)) {
+        println!("ok: {line}");
+        return Ok(());
+    }
+    println!(
+        "probe-rs: wanted {PROBE_RS_VERSION}, found {}; installing probe-rs-tools (a few minutes)",
+        found.map_or_else(|| "none".into(), |f| format!("`{f}`"))
+    );
+    Cmd::new("cargo")
+        .args([
+            "install",
+            "--locked",
+            "probe-rs-tools",
+            "--version",
+            PROBE_RS_VERSION,
+        ])
+        .run()?;
+    match tool_line("probe-rs", &["--version"]) {
+        Some(line) if says(&line) => {
+            println!("ok: {line}");
+            Ok(())
+        }
+        other => Err(format!(
+            "probe-rs-tools {PROBE_RS_VERSION} installed, but `probe-rs --version` says {} \
+             (is another probe-rs earlier on PATH?)",
+            other.map_or_else(|| "nothing".into(), |f| format!("`{f}`"))
+        )),
+    }
+}
+
 /// The book's builder (`cargo xtask docs`, `cargo xtask book`), installed if missing.
 pub fn mdbook() -> Result {
     cargo_tool(

@@ -76,6 +76,11 @@ impl Mmio {
     }
 }
 
+// SAFETY: an `Mmio` is its peripheral's only user (`Mmio::new`'s contract); moving it to
+// another context (a task, an ISR, the OS resource that owns the driver) keeps it the only
+// user, and every access is a volatile load or store that needs no thread-local state.
+unsafe impl Send for Mmio {}
+
 impl Access for Mmio {
     fn read(&self, offset: usize) -> u32 {
         // SAFETY: `Mmio::new`'s contract: `base` is the peripheral's base, and every

@@ -30,7 +30,12 @@
 //!   0, moved at every switch (then DSB, ISB), makes inaccessible to the running context;
 //!   region 1 guards the main stack below its [`MAIN_STACK_BYTES`]. An overflow faults at
 //!   its first access (MemManage), and the OS shuts down with `E_OS_STACKFAULT`, also when
-//!   the overflow happened inside a kernel call.
+//!   the overflow happened inside a kernel call. A core built without the Arm MPU (the
+//!   S32K144's: `MPU_TYPE[DREGION]` reads 0) cannot enforce the guards; there they are
+//!   painted and checked instead, the outgoing context's at every switch, the main
+//!   stack's and the running context's at every OS tick, as AUTOSAR OS's stack monitoring
+//!   does: the overflow is found after the fact (within a tick), and memory below a guard
+//!   may already have been written.
 //! - **Masks.** The kernel's interrupt mask ([`cw_core::os::InterruptMask`]) becomes
 //!   BASEPRI (`UpTo(p)`: every ISR of OSEK priority up to `p`, and PendSV, held) after every
 //!   kernel call; PRIMASK is set and cleared only where the kernel's mask says
@@ -209,12 +214,20 @@ impl Arch for CortexM {
     }
 
     fn move_guard(&self, bottom: u32) {
+        if !mpu_guards() {
+            return;
+        }
         // SAFETY: only region 0's base moves, to the bottom of a 256-byte-aligned stack;
         // the switch runs with the kernel lock taken.
         unsafe { (*MPU::PTR).rbar.write(bottom | RBAR_VALID) };
         // The new guard is in force before the incoming context's first access.
         cortex_m::asm::dsb();
         cortex_m::asm::isb();
+    }
+
+    fn guard_intact(&self, bottom: u32) -> bool {
+        // With the MPU, the guard cannot have been written: the write would have faulted.
+        mpu_guards() || guard_painted(bottom)
     }
 
     fn quiet_active_line(&self) {
@@ -269,11 +282,12 @@ impl Arch for CortexM {
     }
 }
 
-/// An external interrupt line by number.
-#[derive(Clone, Copy)]
-struct Line(u16);
+/// An external interrupt line of the NVIC, by number (a board names only the lines its
+/// chip has; the port, the one active now, read from IPSR).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Line(pub u16);
 
-// SAFETY: the number comes from IPSR: the line whose interrupt is active.
+// SAFETY: the numbers are external interrupt lines of the chip: a board's own, or IPSR's.
 unsafe impl cortex_m::interrupt::InterruptNumber for Line {
     fn number(self) -> u16 {
         self.0
@@ -408,6 +422,34 @@ unsafe fn paint(bottom: u32, top: u32) {
     }
 }
 
+/// Whether the guard whose lowest address is `bottom` still holds its paint in every
+/// word (the check on a core without an MPU).
+fn guard_painted(bottom: u32) -> bool {
+    (0..GUARD_WORDS as u32).all(|i| {
+        // SAFETY: `bottom` is the lowest address of a stack the port painted (the shared
+        // stack, a task's own, or the main stack's guard), whose first GUARD_WORDS words
+        // are its guard; without an MPU nothing forbids reading them.
+        unsafe { ((bottom + 4 * i) as *const u32).read_volatile() == STACK_PAINT }
+    })
+}
+
+/// Whether the MPU enforces the stack guards. Set once at start from `MPU_TYPE`: a core
+/// built without the Arm MPU (the S32K144's has none: NXP fits a system MPU on the
+/// crossbar instead) reads `DREGION` 0, and the guards are then checked, not enforced
+/// ([`Arch::guard_intact`] at every switch for the task stacks, every OS tick for the
+/// main stack).
+static MPU_GUARDS: AtomicBool = AtomicBool::new(false);
+
+fn mpu_guards() -> bool {
+    MPU_GUARDS.load(Ordering::Relaxed)
+}
+
+/// Whether this core's stack guards are enforced by its MPU (`false`: checked in
+/// software, see [`Arch::guard_intact`]); known once the OS has started.
+pub fn stack_guards_enforced() -> bool {
+    mpu_guards()
+}
+
 /// The shared stack of the basic tasks (aligned for its MPU guard region).
 #[repr(C, align(256))]
 struct Stack(UnsafeCell<[u32; BASIC_STACK_WORDS]>);
@@ -497,6 +539,7 @@ struct Registered {
     port: *const (),
     switch: unsafe fn(*const (), u32) -> u32,
     fault: unsafe fn(*const (), StackFault) -> !,
+    monitor: unsafe fn(*const ()),
 }
 
 struct PortCell(UnsafeCell<Option<Registered>>);
@@ -531,6 +574,14 @@ unsafe fn switch_of<K: OsKernel>(port: *const (), sp: u32) -> u32 {
 
 /// # Safety
 /// As [`switch_of`].
+unsafe fn monitor_of<K: OsKernel>(port: *const ()) {
+    // SAFETY: the caller's contract.
+    let port = unsafe { &*port.cast::<CortexMPort<K>>() };
+    port.monitor_stack();
+}
+
+/// # Safety
+/// As [`switch_of`].
 unsafe fn fault_of<K: OsKernel>(port: *const (), which: StackFault) -> ! {
     // SAFETY: the caller's contract.
     let port = unsafe { &*port.cast::<CortexMPort<K>>() };
@@ -555,6 +606,7 @@ pub fn start<K: OsKernel>(app: &'static dyn App, port: &'static CortexMPort<K>) 
             port: (port as *const CortexMPort<K>).cast(),
             switch: switch_of::<K>,
             fault: fault_of::<K>,
+            monitor: monitor_of::<K>,
         });
     }
     let basic_bottom = BASIC_STACK.0.get() as u32;
@@ -590,16 +642,21 @@ pub fn start<K: OsKernel>(app: &'static dyn App, port: &'static CortexMPort<K>) 
     cp.SCB.enable(Exception::MemoryManagement);
     cp.SCB.enable(Exception::BusFault);
     cp.SCB.enable(Exception::UsageFault);
-    // SAFETY: region 0 becomes the running context's stack guard (256 bytes, no access,
-    // never executable); the background map keeps every other address as before for
-    // privileged code, which is all code here. The idle loop's guard (the shared stack's)
-    // is the first. Region 1 (the main stack's guard) is set when the main stack's top
-    // is known, before any interrupt.
-    unsafe {
-        cp.MPU.rnr.write(0);
-        cp.MPU.rbar.write(basic_bottom);
-        cp.MPU.rasr.write(GUARD_RASR);
-        cp.MPU.ctrl.write(MPU_ENABLE | MPU_PRIVDEFENA);
+    // MPU_TYPE[DREGION]: the data regions the core has (0: no MPU; two are needed).
+    let regions = (cp.MPU._type.read() >> 8) & 0xFF;
+    MPU_GUARDS.store(regions >= 2, Ordering::Relaxed);
+    if mpu_guards() {
+        // SAFETY: region 0 becomes the running context's stack guard (256 bytes, no
+        // access, never executable); the background map keeps every other address as
+        // before for privileged code, which is all code here. The idle loop's guard (the
+        // shared stack's) is the first. Region 1 (the main stack's guard) is set when the
+        // main stack's top is known, before any interrupt.
+        unsafe {
+            cp.MPU.rnr.write(0);
+            cp.MPU.rbar.write(basic_bottom);
+            cp.MPU.rasr.write(GUARD_RASR);
+            cp.MPU.ctrl.write(MPU_ENABLE | MPU_PRIVDEFENA);
+        }
     }
     cortex_m::asm::dsb();
     cortex_m::asm::isb();
@@ -657,17 +714,20 @@ extern "C" fn cw_port_idle() -> ! {
     if guard_bottom < core::ptr::addr_of!(_stack_end) as u32 {
         fatal(PortFault::Board("the main stack does not fit above .bss"));
     }
-    // SAFETY: between the guard and the main stack pointer, inside the RAM the linker
-    // leaves to the main stack: nothing lives there, and interrupts are still off.
-    unsafe { paint(guard_top, top) };
+    // SAFETY: the guard and the main stack below the main stack pointer, inside the RAM
+    // the linker leaves to the main stack: nothing lives there, and interrupts are still
+    // off. (The guard is painted for the check of a core without an MPU.)
+    unsafe { paint(guard_bottom, top) };
     MAIN_TOP.store(top, Ordering::Relaxed);
     CW_PORT_MAIN_GUARD_TOP.store(guard_top, Ordering::Relaxed);
-    // SAFETY: region 1 becomes the main stack's guard: 256 bytes below its budget, no
-    // access, never executable; nothing of the image lives there (checked above).
-    unsafe {
-        let mpu = &*MPU::PTR;
-        mpu.rbar.write(guard_bottom | RBAR_VALID | 1);
-        mpu.rasr.write(GUARD_RASR);
+    if mpu_guards() {
+        // SAFETY: region 1 becomes the main stack's guard: 256 bytes below its budget, no
+        // access, never executable; nothing of the image lives there (checked above).
+        unsafe {
+            let mpu = &*MPU::PTR;
+            mpu.rbar.write(guard_bottom | RBAR_VALID | 1);
+            mpu.rasr.write(GUARD_RASR);
+        }
     }
     cortex_m::asm::dsb();
     cortex_m::asm::isb();
@@ -727,6 +787,23 @@ const MPU_PRIVDEFENA: u32 = 1 << 2;
 /// MPU_RBAR: the address applies to the region number given with it.
 const RBAR_VALID: u32 = 1 << 4;
 
+/// On a core without an MPU, the stack monitoring of every OS tick: the main stack's
+/// guard, then the running context's ([`Preemptive::monitor_stack`]); a written guard is
+/// that stack's overflow (`ShutdownOS(E_OS_STACKFAULT)`).
+fn monitor_stacks() {
+    let Some(r) = registered() else {
+        return;
+    };
+    let guard_top = CW_PORT_MAIN_GUARD_TOP.load(Ordering::Relaxed);
+    if guard_top != 0 && !guard_painted(guard_top - (GUARD_WORDS * 4) as u32) {
+        cortex_m::interrupt::disable();
+        // SAFETY: registered by `start` for this port's kernel type.
+        unsafe { (r.fault)(r.port, StackFault::Main) };
+    }
+    // SAFETY: as above; SysTick is masked by the kernel lock, as `monitor_stack` needs.
+    unsafe { (r.monitor)(r.port) };
+}
+
 /// A MemManage fault (or a HardFault escalated from one): a stack guard was hit.
 /// `main_reset` is 1 when the entry found the main stack pointer inside the main stack's
 /// guard and moved it back to the main stack's top. Never returns.
@@ -773,6 +850,9 @@ extern "C" fn cw_port_hard_fault(main_reset: u32) -> ! {
 #[cortex_m_rt::exception]
 fn SysTick() {
     advance_ms();
+    if !mpu_guards() {
+        monitor_stacks();
+    }
     if let Some(app) = app() {
         app.tick();
     }

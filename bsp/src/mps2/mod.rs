@@ -307,16 +307,8 @@ pub fn put_frame_on_bus(frame: CanFrame) {
     cortex_m::peripheral::NVIC::pend(Irq(0));
 }
 
-/// An external interrupt line of this board.
-#[derive(Debug, Clone, Copy)]
-pub struct Irq(pub u16);
-
-// SAFETY: the numbers are the board's external interrupt lines (QEMU's mps2 wiring).
-unsafe impl cortex_m::interrupt::InterruptNumber for Irq {
-    fn number(self) -> u16 {
-        self.0
-    }
-}
+/// An external interrupt line of this board (QEMU's mps2 wiring).
+pub use crate::cortex_m::Line as Irq;
 
 // The log: `defmt` frames, written to the host's standard output over semihosting by
 // defmt-semihosting's global logger (its critical section is cortex-m's single-core one:

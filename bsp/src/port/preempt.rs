@@ -28,7 +28,9 @@
 //!   the ErrorHook, its resources and locks released, as AUTOSAR's SWS_Os_00052 and
 //!   SWS_Os_00069 say), instead of spinning at its priority for ever.
 //! - **Stack faults.** A context switch that finds the outgoing stack pointer inside the
-//!   stack's guard, or the CPU's guard fault, ends in `ShutdownOS(E_OS_STACKFAULT)` with
+//!   stack's guard or, on a CPU without an MPU, the guard's memory written
+//!   ([`Arch::guard_intact`]), or the CPU's guard fault, ends in
+//!   `ShutdownOS(E_OS_STACKFAULT)` with
 //!   the ShutdownHook, also when the fault interrupted a kernel call (whose context never
 //!   resumes).
 
@@ -90,6 +92,12 @@ pub trait Arch {
     /// Moves the running context's stack guard to the stack whose lowest address is
     /// `bottom`.
     fn move_guard(&self, bottom: u32);
+    /// Whether the guard of the stack whose lowest address is `bottom` is untouched. A
+    /// CPU that enforces the guards (an MPU) answers `true`; one that cannot checks the
+    /// guard's memory, and the switch calls this for the outgoing context: an overflow is
+    /// then found at the next switch instead of at its first access (AUTOSAR OS's stack
+    /// monitoring).
+    fn guard_intact(&self, bottom: u32) -> bool;
     /// Masks the interrupt line of the ISR running now (its entry was refused, so nothing
     /// clears its source).
     fn quiet_active_line(&self);
@@ -597,11 +605,19 @@ impl<K: OsKernel, A: Arch> Preemptive<K, A> {
 
     /// The switch (the CPU's switch exception calls it with the kernel lock taken): saves
     /// the outgoing stack pointer, returns the incoming one, building a new job's first
-    /// frame; moves the stack guard. A stack pointer found in its guard is a stack fault.
+    /// frame; moves the stack guard. A stack pointer found in its guard, or a guard found
+    /// written ([`Arch::guard_intact`]), is a stack fault.
     pub fn switch(&self, sp: u32) -> u32 {
         // SAFETY: the CPU calls this with the kernel lock taken, outside every kernel call
         // (the switch runs only when no ISR is active and the lock is free).
         let s = unsafe { &mut *self.sched.get() };
+        // A guard found written (a CPU without an MPU) is an overflow as a stack pointer
+        // inside it is: `decide` is given one (0 lies inside every guard).
+        let sp = if self.arch.guard_intact(s.stack_of(usize::from(s.current)).0) {
+            sp
+        } else {
+            0
+        };
         let new_sp = match decide(s, sp, A::GUARD_BYTES) {
             Switch::Overflow(task) => self.stack_fault(task.map(TaskId)),
             Switch::Resume(sp) => sp,
@@ -643,6 +659,19 @@ impl<K: OsKernel, A: Arch> Preemptive<K, A> {
         // kernel (its hooks' record), which a stopped OS serves.
         self.in_kernel.store(false, Ordering::Release);
         self.arch.stopped()
+    }
+
+    /// Stack monitoring from the OS tick, for a CPU that cannot enforce the guards: the
+    /// running context's guard checked ([`Arch::guard_intact`]); a written guard is a
+    /// stack fault, as at a switch. (A job that overflows and never yields is found
+    /// here, within a tick, instead of at its next switch.)
+    pub fn monitor_stack(&self) {
+        // SAFETY: called from the OS tick, an interrupt the kernel lock masks: no kernel
+        // call or switch is under way, so the table is not being written; a read.
+        let s = unsafe { &*self.sched.get() };
+        if !self.arch.guard_intact(s.stack_of(usize::from(s.current)).0) {
+            self.stack_fault(self.current_own_stack_task());
+        }
     }
 
     /// The task running now, when it has a stack of its own (for the guard fault).

@@ -3,8 +3,7 @@
 use std::cell::{Cell, RefCell};
 use std::rc::Rc;
 
-use cw_bsp::chip::flexcan::driver::INIT_POLLS;
-use cw_bsp::chip::flexcan::{ClockSource, FlexcanConfig, FlexcanEvent};
+use cw_bsp::chip::flexcan::{ClockSource, FlexcanConfig};
 use cw_bsp::host::can::HOST_CAN_CLOCK_HZ;
 use cw_bsp::host::{
     BusRecord, HcSr04, HostFlexcan, HostPort, Noise, SimDelay, SimInput, SimPin, SimWatchdog,
@@ -42,25 +41,13 @@ pub type HostEcu = Ecu<HostPort<Kernel>, HostBoard>;
 
 impl CanEvents for HostFlexcan {
     fn take_event(&mut self) -> Option<CanInterrupt> {
-        HostFlexcan::take_event(self).map(|event| match event {
-            FlexcanEvent::TxConfirmation(pdu) => CanInterrupt::TxConfirmation(pdu),
-            FlexcanEvent::Received(hrh, frame) => CanInterrupt::Received(hrh, frame),
-            FlexcanEvent::BusOff => CanInterrupt::BusOff,
-            FlexcanEvent::ModeIndication(mode) => CanInterrupt::ModeIndication(mode),
-        })
+        HostFlexcan::take_event(self).map(CanInterrupt::from)
     }
 }
 
-/// The ECU's FlexCAN (its buffers: `config::CAN_FILTERS`, `config::CAN_TX_BUFFERS`) as
-/// FlexCAN0 of an S32K144 on an 80 MHz peripheral clock.
-const CAN_CONFIG: FlexcanConfig<'static> = FlexcanConfig {
-    clock_source: ClockSource::PeripheralClock,
-    clock_hz: HOST_CAN_CLOCK_HZ,
-    mailboxes: 32,
-    rx: &config::CAN_FILTERS,
-    tx: &config::CAN_TX_BUFFERS,
-    init_polls: INIT_POLLS,
-};
+/// The ECU's FlexCAN as FlexCAN0 of an S32K144 on an 80 MHz peripheral clock.
+const CAN_CONFIG: FlexcanConfig<'static> =
+    config::flexcan(ClockSource::PeripheralClock, HOST_CAN_CLOCK_HZ);
 
 /// The simulated Port driver: drives the output pins low and counts its calls.
 pub struct HostPortDriver {

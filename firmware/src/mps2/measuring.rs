@@ -462,16 +462,10 @@ fn calibrate(port: &CortexMPort<Kernel>) {
 fn measure_flexcan(port: &CortexMPort<Kernel>) {
     use cw_bsp::chip::flexcan::regs::interfaces::Writeable;
     use cw_bsp::chip::flexcan::regs::MB_CS;
-    use cw_bsp::chip::flexcan::{driver::INIT_POLLS, ClockSource, Flexcan, FlexcanConfig};
+    use cw_bsp::chip::flexcan::{ClockSource, Flexcan};
     use cw_core::can::{CanDriver, CanFrame, ControllerMode, Hth};
-    let config = FlexcanConfig {
-        clock_source: ClockSource::Oscillator,
-        clock_hz: 8_000_000,
-        mailboxes: 32,
-        rx: &config::CAN_FILTERS,
-        tx: &config::CAN_TX_BUFFERS,
-        init_polls: INIT_POLLS,
-    };
+    // The S32K144EVB's FlexCAN0: the paper's 8 MHz oscillator clock.
+    let config = config::flexcan(ClockSource::Oscillator, 8_000_000);
     let Some(ram) = mps2::flexcan_ram::take() else {
         return;
     };

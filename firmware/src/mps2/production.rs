@@ -11,6 +11,7 @@ use super::{
     board_irq, isr_priority, report_supervision, shutdown_report, start_os_with_devices,
     Mps2PortDriver,
 };
+pub use crate::board::TiedOn;
 use crate::board::{Board, NoFaults, SerialSensor};
 use crate::config::{self, Kernel};
 use crate::ecu::Ecu;
@@ -28,23 +29,6 @@ impl Board for Mps2FlashBoard {
     type Port = Mps2PortDriver;
     type Watchdog = mps2::CmsdkWatchdog;
     type Faults = NoFaults;
-}
-
-/// A mode input the board ties on.
-pub struct TiedOn;
-
-impl embedded_hal::digital::ErrorType for TiedOn {
-    type Error = core::convert::Infallible;
-}
-
-impl embedded_hal::digital::InputPin for TiedOn {
-    fn is_high(&mut self) -> Result<bool, Self::Error> {
-        Ok(true)
-    }
-
-    fn is_low(&mut self) -> Result<bool, Self::Error> {
-        Ok(false)
-    }
 }
 
 /// The production image's entry points: the ECU and nothing else. No scenario, no task

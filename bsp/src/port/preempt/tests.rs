@@ -98,6 +98,8 @@ struct Model {
     all_in_lock: Cell<bool>,
     switch: Cell<bool>,
     guard: Cell<u32>,
+    /// The bottom of a stack whose guard the model reports written (no MPU enforces it).
+    broken_guard: Cell<Option<u32>>,
     quieted: Cell<u32>,
     reports: RefCell<Vec<PortFault>>,
     frames: RefCell<Vec<(u32, u8)>>,
@@ -138,6 +140,9 @@ impl Arch for Model {
     }
     fn move_guard(&self, bottom: u32) {
         self.guard.set(bottom);
+    }
+    fn guard_intact(&self, bottom: u32) -> bool {
+        self.broken_guard.get() != Some(bottom)
     }
     fn quiet_active_line(&self) {
         self.quieted.set(self.quieted.get() + 1);
@@ -332,6 +337,61 @@ fn a_stack_overflow_seen_at_a_switch_names_the_task() {
         *port.arch().reports.borrow(),
         [PortFault::StackOverflow(Some("Waiter"))]
     );
+}
+
+/// A CPU without an MPU (the S32K144) cannot stop an overflow at its first access: the
+/// switch asks it whether the outgoing stack's guard was written, and a written guard is
+/// the same stack fault as a stack pointer inside it, named by its task.
+#[test]
+fn a_guard_found_written_at_a_switch_is_a_stack_fault() {
+    let port = started();
+    port.kernel(|os| os.activate_task(WAITER))
+        .expect("activate");
+    take_switch(&port, SHARED.1 - 128);
+    port.kernel(|os| os.activate_task(HIGH)).expect("activate");
+    port.kernel(|os| os.wait_event(1)).expect("wait");
+    // The stack pointer is back above the guard, but the guard was written meanwhile.
+    port.arch().broken_guard.set(Some(WAITER_STACK.0));
+    let end = ends(|| {
+        take_switch(&port, WAITER_STACK.1 - 200);
+    });
+    assert_eq!(end, End::Stopped);
+    assert_eq!(
+        *port.arch().reports.borrow(),
+        [PortFault::StackOverflow(Some("Waiter"))]
+    );
+    let kernel = port.stopped_kernel().expect("the OS stopped");
+    assert_eq!(kernel.hooks().shutdown, Some(OsError::StackFault.status()));
+}
+
+/// A job that overflows and never yields is found by the OS tick's stack monitoring: the
+/// running context's guard, written, is a stack fault; an intact one changes nothing.
+#[test]
+fn the_ticks_stack_monitoring_finds_a_running_jobs_overflow() {
+    let port = started();
+    port.monitor_stack();
+    assert!(port.arch().reports.borrow().is_empty(), "intact: nothing");
+    // `Low` runs on the shared stack, whose guard is written.
+    port.arch().broken_guard.set(Some(SHARED.0));
+    let end = ends(|| port.monitor_stack());
+    assert_eq!(end, End::Stopped);
+    assert_eq!(
+        *port.arch().reports.borrow(),
+        [PortFault::StackOverflow(None)],
+        "the shared stack: no task of its own named"
+    );
+}
+
+/// An intact guard lets the switch go on: the check is of the outgoing stack alone.
+#[test]
+fn an_intact_guard_lets_the_switch_go_on() {
+    let port = started();
+    // Some other stack's guard is written; the outgoing context's is not.
+    port.arch().broken_guard.set(Some(WAITER_STACK.0));
+    port.kernel(|os| os.activate_task(HIGH)).expect("activate");
+    let sp = take_switch(&port, SHARED.1 - 64);
+    assert!(sp < SHARED.1 - 64, "the high task's first frame");
+    assert!(port.arch().reports.borrow().is_empty());
 }
 
 #[test]
