@@ -184,6 +184,8 @@ pub struct Layout {
     roles: [Role; MAX_MAILBOXES],
     /// The last buffer used (`MCR[MAXMB]`).
     last: usize,
+    /// The buffers the module has (`FlexcanConfig::mailboxes`, at most [`MAX_MAILBOXES`]).
+    mailboxes: usize,
 }
 
 impl Layout {
@@ -218,6 +220,7 @@ impl Layout {
         Ok(Self {
             roles,
             last: needed - 1,
+            mailboxes: available,
         })
     }
 
@@ -525,6 +528,16 @@ impl<A: Access> Flexcan<A> {
                 }
                 Role::Unused => {}
             }
+        }
+        // The buffers past the last one used, and their masks, are written too: the
+        // module's RAM has ECC, and the manual's initialisation writes all of it before
+        // anything reads it (a word never written can read as an uncorrectable error).
+        for mb in last + 1..self.layout.mailboxes {
+            self.regs.mb_cs(mb).set(0);
+            self.regs.mb_id(mb).set(0);
+            self.regs.mb_data(mb, 0).set(0);
+            self.regs.mb_data(mb, 1).set(0);
+            self.regs.rximr(mb).set(0);
         }
         self.regs.iflag1().set(u32::MAX);
         self.regs.esr1().write(

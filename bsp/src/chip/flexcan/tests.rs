@@ -362,6 +362,48 @@ fn init_configures_the_frozen_module_without_an_ignored_write() {
     );
 }
 
+/// The model with every written offset noted.
+struct Noted {
+    model: FlexcanModel,
+    written: core::cell::RefCell<std::collections::BTreeSet<usize>>,
+}
+
+impl Access for Noted {
+    fn read(&self, off: usize) -> u32 {
+        self.model.read(off)
+    }
+    fn write(&self, off: usize, value: u32) {
+        self.written.borrow_mut().insert(off);
+        self.model.write(off, value);
+    }
+}
+
+/// `Can_Init` writes every word of every buffer the module has, and every buffer's
+/// individual mask, the unused ones too (the RAM has ECC: a word never written can read
+/// as an uncorrectable error), all in freeze mode (no write ignored).
+#[test]
+fn init_writes_all_of_the_buffers_ram() {
+    let noted = Noted {
+        model: FlexcanModel::new(),
+        written: Default::default(),
+    };
+    let mut can = Flexcan::new(noted, &CONFIG).unwrap();
+    can.init(&BITRATE).unwrap();
+    let written = can.registers().access().written.borrow().clone();
+    let mailboxes = usize::from(CONFIG.mailboxes);
+    for mb in 0..mailboxes {
+        for word in 0..4 {
+            let off = super::regs::offset::MB0 + super::regs::offset::MB_STRIDE * mb + 4 * word;
+            assert!(written.contains(&off), "buffer {mb}, word {word}");
+        }
+        assert!(
+            written.contains(&(super::regs::offset::RXIMR0 + 4 * mb)),
+            "buffer {mb}'s mask"
+        );
+    }
+    assert_eq!(can.registers().access().model.stats().ignored_writes, 0);
+}
+
 /// Registers that are plain memory: nothing ever acknowledges.
 struct Dead([Cell<u32>; 1024]);
 
