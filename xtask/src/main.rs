@@ -24,6 +24,9 @@
 //! - `cargo xtask s32k144 [--flash] [--probe VID:PID]`: the ECU's image for NXP's
 //!   S32K144EVB built and checked (the flash configuration field at 0x400, the vector
 //!   table, flash and RAM), then written to the board through a debug probe (probe-rs);
+//! - `cargo xtask mpc5748g`: the DEVKIT-MPC5748G's board layer built for the Book E target
+//!   (pinned nightly, `-Z build-std=core`) into the bring-up image, its boot header and
+//!   memory checked from the ELF (it cannot run: the chip executes only VLE code);
 //! - `cargo xtask view`: `cw-can view` in headless Chromium on the ECU's Figure 7 log,
 //!   checked against the trace; the screenshots of the paper's Figure 8 in `docs/src/view/`;
 //! - `cargo xtask docs [--file PATH].. [--no-examples]`: the book (mdBook) and the API docs
@@ -48,6 +51,7 @@ mod decode_speed;
 mod differential;
 mod docs;
 mod log_formats;
+mod mpc5748g;
 mod mutants;
 mod mutation;
 mod process;
@@ -111,6 +115,10 @@ enum Command {
     /// vector table, flash and RAM); with --flash, write it to the board with probe-rs and
     /// show its log
     S32k144(s32k144::Options),
+    /// Build the DEVKIT-MPC5748G's bring-up image for the Book E target (nightly,
+    /// build-std) and check its boot header and memory (it cannot run: the chip executes
+    /// only VLE code)
+    Mpc5748g,
     /// Check `cw-can view` in headless Chromium on the ECU's Figure 7 log, and write the
     /// four screenshots of the paper's Figure 8 to docs/src/view/
     View,
@@ -158,6 +166,7 @@ fn run(command: Command) -> Result {
         Command::Mutation(options) => mutation::run(&options),
         Command::Qemu(options) => qemu::run(&options),
         Command::S32k144(options) => s32k144::run(&options),
+        Command::Mpc5748g => mpc5748g::run(),
         Command::View => view::run(),
         Command::Docs(options) => docs::run(&options),
         Command::Book(options) => docs::book(&options),

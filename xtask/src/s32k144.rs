@@ -64,7 +64,7 @@ pub fn build() -> Result<PathBuf> {
 }
 
 /// The address and size of each allocated section, from `llvm-size -A`.
-fn sections(image: &Path) -> Result<Vec<(String, u64, u64)>> {
+pub fn sections(image: &Path) -> Result<Vec<(String, u64, u64)>> {
     let out = Cmd::new("llvm-size").arg("-A").arg(image).read()?;
     Ok(out
         .lines()
@@ -80,8 +80,8 @@ fn sections(image: &Path) -> Result<Vec<(String, u64, u64)>> {
 }
 
 /// The bytes of section `name` of `image`.
-fn section_bytes(image: &Path, name: &str) -> Result<Vec<u8>> {
-    let out = target_dir().join("s32k144");
+pub fn section_bytes(image: &Path, name: &str) -> Result<Vec<u8>> {
+    let out = target_dir().join("elf-sections");
     std::fs::create_dir_all(&out).map_err(|e| format!("creating {}: {e}", out.display()))?;
     let file = out.join(format!("{}.bin", name.trim_start_matches('.')));
     Cmd::new("llvm-objcopy")

@@ -18,12 +18,13 @@
 //! - [`flexcan`]: NXP's FlexCAN (S32K1xx, MPC574x), with its register-level model;
 //! - [`fpgaio`]: the MPS2 FPGA images' FPGAIO block (the LEDs);
 //! - [`s32k144`]: NXP's S32K144: its watchdog, clocks, clock gates, pins, UARTs, echo
-//!   capture and flash configuration field.
-//!
-//! Next: the MPC5748G's modules.
+//!   capture and flash configuration field;
+//! - [`mpc5748g`]: NXP's MPC5748G (the paper's MCU): its watchdog, modes, clocks, pads
+//!   and timers.
 
 pub mod access;
 pub mod cmsdk;
 pub mod flexcan;
 pub mod fpgaio;
+pub mod mpc5748g;
 pub mod s32k144;
