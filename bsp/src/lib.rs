@@ -47,6 +47,7 @@ pub mod chip;
 pub mod host;
 pub mod mpc5748g;
 pub mod port;
+pub mod ring;
 pub mod slcan;
 
 #[cfg(all(target_arch = "arm", target_os = "none"))]

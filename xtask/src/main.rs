@@ -24,7 +24,7 @@
 //! - `cargo xtask s32k144 [--flash] [--probe VID:PID]`: the ECU's image for NXP's
 //!   S32K144EVB built and checked (the flash configuration field at 0x400, the vector
 //!   table, flash and RAM), then written to the board through a debug probe (probe-rs);
-//! - `cargo xtask mpc5748g`: the DEVKIT-MPC5748G's board layer built for the Book E target
+//! - `cargo xtask mpc5748g`: the MPC5748G board layer built for the Book E target
 //!   (pinned nightly, `-Z build-std=core`) into the bring-up image, its boot header and
 //!   memory checked from the ELF (it cannot run: the chip executes only VLE code);
 //! - `cargo xtask view`: `cw-can view` in headless Chromium on the ECU's Figure 7 log,
@@ -115,7 +115,7 @@ enum Command {
     /// vector table, flash and RAM); with --flash, write it to the board with probe-rs and
     /// show its log
     S32k144(s32k144::Options),
-    /// Build the DEVKIT-MPC5748G's bring-up image for the Book E target (nightly,
+    /// Build the MPC5748G board's bring-up image for the Book E target (nightly,
     /// build-std) and check its boot header and memory (it cannot run: the chip executes
     /// only VLE code)
     Mpc5748g,

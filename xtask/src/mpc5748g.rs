@@ -1,4 +1,4 @@
-//! `cargo xtask mpc5748g`: the DEVKIT-MPC5748G's board layer built for the paper's MCU
+//! `cargo xtask mpc5748g`: the paper's board's layer (MPC574XG-MB) built for its MCU
 //! with the pinned nightly (`-Z build-std=core` for the Book E target
 //! `targets/powerpc-e200-none-eabi.json`), linked into the bring-up image `cw-mpc5748g`,
 //! and checked from its ELF:

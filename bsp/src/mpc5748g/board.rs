@@ -1,4 +1,4 @@
-//! The DEVKIT-MPC5748G's bring-up, built for the Book E target (feature `mpc5748g`): the
+//! The MPC574XG-MB's bring-up, built for the Book E target (feature `mpc5748g`): the
 //! start-up code, the boot header, the clocks, the pads, FlexCAN_0, the PIT and the STM.
 //! It links for the chip's memory map (`mpc5748g.ld`) and never runs: see the module
 //! above.
@@ -7,7 +7,7 @@ use core::sync::atomic::{AtomicBool, Ordering};
 
 use super::{
     BootHeader, CAN_RX, CAN_RX_IMCR, CAN_TX, CAN_TX_SSS, CLOCK_PLAN, FLEXCAN0, LED_RED, LED_YELLOW,
-    PCTL_FLEXCAN0, PCTL_PIT, RUN_PC, TICK_CHANNEL,
+    PCTL_FLEXCAN0, PCTL_PIT, RUN_PC, SONAR_ECHO, SONAR_ECHO_IMCR, SONAR_TRIGGER, TICK_CHANNEL,
 };
 use crate::chip::access::Mmio;
 use crate::chip::flexcan::{Flexcan, FlexcanConfig, LayoutError};
@@ -40,8 +40,9 @@ pub enum BringUpError {
 
 /// Brings the board up: SWT_0 stopped, the dividers and the PLL prepared, DRUN
 /// reconfigured to run from the PLL with FlexCAN_0 and the PIT clocked (run
-/// configuration [`RUN_PC`]) and entered, the LED pads outputs (dark), FlexCAN_0's pads
-/// routed, STM_0 counting microseconds, the PIT's tick channel started.
+/// configuration [`RUN_PC`]) and entered, the LED pads outputs (dark), the sensor's trigger
+/// an output (low) and its echo routed to eMIOS_1 channel 6, FlexCAN_0's pads routed,
+/// STM_0 counting microseconds, the PIT's tick channel started.
 ///
 /// # Errors
 /// [`BringUpError`] names the step.
@@ -63,6 +64,9 @@ pub fn bring_up() -> Result<(), BringUpError> {
     siul2.configure(CAN_TX, OBE | SRC_FULL | CAN_TX_SSS);
     siul2.input(CAN_RX);
     siul2.route_input(CAN_RX_IMCR.0, CAN_RX_IMCR.1);
+    siul2.output(SONAR_TRIGGER, false);
+    siul2.input(SONAR_ECHO);
+    siul2.route_input(SONAR_ECHO_IMCR.0, SONAR_ECHO_IMCR.1);
     let _ = (led(LED_RED), led(LED_YELLOW));
     Stm::new(at(stm::BASE)).start(160);
     Pit::new(at(pit::BASE)).start_periodic(TICK_CHANNEL, 1000);

@@ -1,12 +1,14 @@
-//! NXP's DEVKIT-MPC5748G (the paper's MCU on NXP's development board), as the ECU would
-//! wire it: the board's facts, checked on the host, and its bring-up (module `board`, built for
-//! the Book E target `targets/powerpc-e200-none-eabi.json` with feature `mpc5748g`).
+//! The paper's board: NXP's MPC574XG-MB motherboard with the MPC574XG-324DS daughter card
+//! (an MPC5748G), as the ECU would wire it: the board's facts, checked on the host, and
+//! its bring-up (module `board`, built for the Book E target
+//! `targets/powerpc-e200-none-eabi.json` with feature `mpc5748g`).
 //!
 //! | part | here | chip |
 //! |---|---|---|
-//! | clocks | the 40 MHz crystal through the PLL: 160 MHz system clock, 80 MHz peripheral bus, 40 MHz F40 ([`CLOCK_PLAN`]) | MC_CGM, PLLDIG, MC_ME (DRUN) |
-//! | warning LEDs | DS4 (red) and DS5 (yellow), lit low | PA10, PA7 |
-//! | CAN | FlexCAN_0 on the board's transceiver, 500 kbit/s from the crystal | PB0 (TX, `SSS` 1), PB1 (RX, `IMCR188` = 2) |
+//! | clocks | a 40 MHz crystal through the PLL: 160 MHz system clock, 80 MHz peripheral bus, 40 MHz F40 ([`CLOCK_PLAN`]) | MC_CGM, PLLDIG, MC_ME (DRUN) |
+//! | warning LEDs | the motherboard's LED0 (red) and LED1 (yellow), lit low | PG2, PG3 |
+//! | HC-SR04 | trigger on a GPIO pad; echo on eMIOS_1 channel 6 (its input capture: not written yet) | PH5 (trigger), PH4 (echo, `IMCR42` = 2) |
+//! | CAN | FlexCAN_0 on the motherboard's transceiver, 500 kbit/s from the crystal | PB0 (TX, `SSS` 1), PB1 (RX, `IMCR188` = 2) |
 //! | OS tick | PIT channel 0, 1 ms from F40 | PIT |
 //! | time base | STM_0 at 1 count per us (system clock / 160) | STM_0 |
 //! | watchdog | SWT_0 disabled at start (it runs out of reset) | SWT_0 |
@@ -25,17 +27,24 @@ pub mod board;
 use crate::chip::mpc5748g::mc_cgm::ClockPlan;
 use crate::chip::mpc5748g::siul2::Pad;
 
-/// The DEVKIT's clock plan.
-pub const CLOCK_PLAN: ClockPlan = ClockPlan::DEVKIT_160_MHZ;
+/// The clock plan: NXP's for the MPC5748G from a 40 MHz crystal (the 324DS daughter card's
+/// crystal is to be checked on the board).
+pub const CLOCK_PLAN: ClockPlan = ClockPlan::XTAL40_160_MHZ;
 /// The system clock, Hz.
 pub const SYSTEM_HZ: u32 = CLOCK_PLAN.phi0_hz;
 /// FlexCAN_0's protocol clock, Hz (the crystal).
 pub const CAN_CLOCK_HZ: u32 = CLOCK_PLAN.can_hz();
 
-/// The red warning LED: DS4 (lit low).
-pub const LED_RED: Pad = Pad::new(b'A', 10);
-/// The yellow warning LED: DS5 (lit low).
-pub const LED_YELLOW: Pad = Pad::new(b'A', 7);
+/// The red warning LED: the motherboard's LED0 (lit low).
+pub const LED_RED: Pad = Pad::new(b'G', 2);
+/// The yellow warning LED: the motherboard's LED1 (lit low).
+pub const LED_YELLOW: Pad = Pad::new(b'G', 3);
+/// The HC-SR04's trigger (a GPIO output).
+pub const SONAR_TRIGGER: Pad = Pad::new(b'H', 5);
+/// The HC-SR04's echo: eMIOS_1 channel 6's input.
+pub const SONAR_ECHO: Pad = Pad::new(b'H', 4);
+/// eMIOS_1 channel 6's input selector (`IMCR42`) and its source for [`SONAR_ECHO`].
+pub const SONAR_ECHO_IMCR: (usize, u32) = (42, 2);
 /// FlexCAN_0's transmit pad.
 pub const CAN_TX: Pad = Pad::new(b'B', 0);
 /// FlexCAN_0's transmit function on [`CAN_TX`] (`MSCR[SSS]`).
@@ -97,9 +106,21 @@ mod tests {
         // The paper's 500 kbit/s from the crystal, exactly.
         let t = crate::chip::flexcan::driver::ctrl1_timing(CAN_CLOCK_HZ, 500_000, 875).unwrap();
         assert_eq!(t.timing().bitrate(CAN_CLOCK_HZ), Some(500_000));
-        assert_eq!(LED_RED.number(), 10);
-        assert_eq!(LED_YELLOW.number(), 7);
+        // The motherboard's LED0 and LED1: MSCR98 and MSCR99.
+        assert_eq!((LED_RED.number(), LED_YELLOW.number()), (98, 99));
+        assert_eq!((SONAR_TRIGGER.number(), SONAR_ECHO.number()), (117, 116));
         assert_eq!((CAN_TX.number(), CAN_RX.number()), (16, 17));
+        let pads = [
+            LED_RED,
+            LED_YELLOW,
+            SONAR_TRIGGER,
+            SONAR_ECHO,
+            CAN_TX,
+            CAN_RX,
+        ];
+        for (i, a) in pads.iter().enumerate() {
+            assert!(pads.iter().skip(i + 1).all(|b| a != b), "{a:?} twice");
+        }
         // The boot ID in the first word's upper half, core Z4A's enable bit.
         assert_eq!(BOOT_ID_Z4A >> 16, 0x5A);
         assert_eq!(BOOT_ID_Z4A & 0xF, 0x2);

@@ -9,31 +9,18 @@
 //! that finds the ring full is dropped and counted as an overrun, as a UART's own
 //! overrun would drop it.
 //!
-//! The ring is single-producer (the ISR), single-consumer (the sensor task): the ISR
-//! writes a slot and then publishes it with a release store of `TAIL`; the task reads
-//! slots up to the `TAIL` it acquired and hands them back with a release store of
-//! `HEAD`. Atomics alone, no lock: the ISR never waits for a task.
-
-use core::sync::atomic::{AtomicU32, AtomicU8, Ordering};
+//! The ring is [`crate::ring::ByteRing`]: the ISR pushes, the sensor task pops, with
+//! atomics alone.
 
 use super::{map, Irq, SYSCLK_HZ};
 use crate::chip::cmsdk::CmsdkUart;
+use crate::ring::ByteRing;
 
 /// CMSDK APB UART1.
 /// UART1's receive interrupt line.
 pub const SENSOR_RX_IRQ: u16 = 2;
-/// The ring's size, bytes (a power of two: the indices wrap with it).
-const RING: usize = 64;
-
-static RING_BYTES: [AtomicU8; RING] = [const { AtomicU8::new(0) }; RING];
-/// Bytes written since start (the ISR's).
-static TAIL: AtomicU32 = AtomicU32::new(0);
-/// Bytes read since start (the sensor task's).
-static HEAD: AtomicU32 = AtomicU32::new(0);
-/// Bytes dropped on a full ring.
-static OVERRUNS: AtomicU32 = AtomicU32::new(0);
-/// Bytes received.
-static RECEIVED: AtomicU32 = AtomicU32::new(0);
+/// The ring between the interrupt and the sensor task: 64 bytes.
+static RING: ByteRing<64> = ByteRing::new();
 
 /// The sensor's UART receiver, for the sensor task.
 pub struct SensorUart {
@@ -57,33 +44,16 @@ impl SensorUart {
 
     /// The oldest byte received and not yet read.
     pub fn read_byte(&mut self) -> Option<u8> {
-        let head = HEAD.load(Ordering::Relaxed);
-        if head == TAIL.load(Ordering::Acquire) {
-            return None;
-        }
-        let byte = RING_BYTES
-            .get(head as usize % RING)
-            .map(|slot| slot.load(Ordering::Relaxed));
-        HEAD.store(head.wrapping_add(1), Ordering::Release);
-        byte
+        RING.pop()
     }
 }
 
 /// What the sensor's UART counted since start-up.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub struct SensorUartStats {
-    /// Bytes received.
-    pub received: u32,
-    /// Bytes dropped because the ring was full.
-    pub overruns: u32,
-}
+pub type SensorUartStats = crate::ring::RingStats;
 
 /// What the sensor's UART counted since start-up.
 pub fn sensor_uart_stats() -> SensorUartStats {
-    SensorUartStats {
-        received: RECEIVED.load(Ordering::Relaxed),
-        overruns: OVERRUNS.load(Ordering::Relaxed),
-    }
+    RING.stats()
 }
 
 /// `SensorRxIsr`: every byte the UART holds into the ring.
@@ -91,15 +61,6 @@ pub(super) extern "C" fn uart1_rx() {
     let uart = CmsdkUart::new(map::uart(map::UART1));
     uart.clear_interrupts();
     while let Some(byte) = uart.read_byte() {
-        RECEIVED.fetch_add(1, Ordering::Relaxed);
-        let tail = TAIL.load(Ordering::Relaxed);
-        if tail.wrapping_sub(HEAD.load(Ordering::Acquire)) as usize >= RING {
-            OVERRUNS.fetch_add(1, Ordering::Relaxed);
-            continue;
-        }
-        if let Some(slot) = RING_BYTES.get(tail as usize % RING) {
-            slot.store(byte, Ordering::Relaxed);
-        }
-        TAIL.store(tail.wrapping_add(1), Ordering::Release);
+        RING.push(byte);
     }
 }

@@ -1,8 +1,9 @@
-//! The DEVKIT-MPC5748G's bring-up image: the board layer linked for the paper's MCU, with
-//! its boot header and start-up code. It brings the board up (SWT_0 off, the PLL at 160
-//! MHz, the pads), starts FlexCAN_0 at the paper's 500 kbit/s with the ECU's buffers
-//! (`config::flexcan`), and blinks DS4 at 1 Hz from the PIT's 1 ms tick while it empties
-//! the controller's buffers; a failed step leaves the LEDs dark and stops.
+//! The bring-up image of the paper's board (the MPC574XG-MB with the MPC574XG-324DS): the
+//! board layer linked for the paper's MCU, with its boot header and start-up code. It
+//! brings the board up (SWT_0 off, the PLL at 160 MHz, the pads), starts FlexCAN_0 at the
+//! paper's 500 kbit/s with the ECU's buffers (`config::flexcan`), and blinks LED0 (the red
+//! warning LED) at 1 Hz from the PIT's 1 ms tick while it empties the controller's
+//! buffers; a failed step leaves the LEDs dark and stops.
 //!
 //! **It cannot run on the MPC5748G**: its cores execute only VLE code, and this is Book E
 //! code (the book: `docs/src/nxp-boards.md`, "The MPC5748G"). It is built and checked by

@@ -2,13 +2,13 @@
 //! selectors (MC_CGM; MPC5748G RM, chapters "Clocking", "PLL Digital Interface", "Clock
 //! Generation Module").
 //!
-//! The DEVKIT-MPC5748G has a 40 MHz crystal. [`ClockPlan::DEVKIT_160_MHZ`] is the set-up
-//! of the DEVKIT's published sources: the PLL from the crystal (`PREDIV` 2, `MFD` 32: a
-//! 640 MHz VCO; NXP's example reaches the same VCO with 1 and 16), PHI0 at 160 MHz
-//! (`RFDPHI` 1, `RFDPHI1` 2), the system clock
-//! from PHI0 through MC_ME, and the dividers `SC_DC0` /1 (160 MHz), `SC_DC1` /2 (80 MHz,
-//! the peripheral bus), `SC_DC2` /4 (40 MHz), `SC_DC5` /2 (FS80, which must equal
-//! `SC_DC1`'s clock); FlexCAN_0's protocol clock from the crystal (`AC9` = FXOSC).
+//! [`ClockPlan::XTAL40_160_MHZ`] is the set-up for a 40 MHz crystal that NXP's MPC5748G
+//! examples and the DEVKIT-MPC5748G's published sources program: the PLL from the crystal
+//! (`PREDIV` 2, `MFD` 32: a 640 MHz VCO; NXP's example reaches the same VCO with 1 and
+//! 16), PHI0 at 160 MHz (`RFDPHI` 1, `RFDPHI1` 2), the system clock from PHI0 through
+//! MC_ME, and the dividers `SC_DC0` /1 (160 MHz), `SC_DC1` /2 (80 MHz, the peripheral
+//! bus), `SC_DC2` /4 (40 MHz), `SC_DC5` /2 (FS80, which must equal `SC_DC1`'s clock);
+//! FlexCAN_0's protocol clock from the crystal (`AC9` = FXOSC).
 //!
 //! **The PLL's limits and the formula from VCO to PHI0 are not checked here**: the plan is
 //! the sources' values, taken as they are; the reference manual's PLL chapter is what a
@@ -101,8 +101,8 @@ pub struct ClockPlan {
 }
 
 impl ClockPlan {
-    /// The DEVKIT-MPC5748G's plan (the module's documentation).
-    pub const DEVKIT_160_MHZ: Self = Self {
+    /// From a 40 MHz crystal to 160 MHz (the module's documentation).
+    pub const XTAL40_160_MHZ: Self = Self {
         fxosc_hz: 40_000_000,
         prediv: 2,
         mfd: 32,
@@ -235,7 +235,7 @@ mod tests {
 
     #[test]
     fn the_devkit_plan_gives_the_documented_clocks() {
-        let p = ClockPlan::DEVKIT_160_MHZ;
+        let p = ClockPlan::XTAL40_160_MHZ;
         assert_eq!(
             p.divided(),
             [160_000_000, 80_000_000, 40_000_000, 80_000_000]
@@ -248,7 +248,7 @@ mod tests {
     #[test]
     fn prepare_writes_the_dividers_then_the_inputs_then_the_pll() {
         let c: Cgm4 = Cgm::new(Recorder::new(), Recorder::new());
-        c.prepare(&ClockPlan::DEVKIT_160_MHZ).unwrap();
+        c.prepare(&ClockPlan::XTAL40_160_MHZ).unwrap();
         let cgm: Vec<_> = c.access().0.writes().collect();
         assert_eq!(
             cgm,
@@ -275,10 +275,10 @@ mod tests {
     #[test]
     fn a_plan_that_breaks_a_rule_writes_nothing() {
         let c: Cgm4 = Cgm::new(Recorder::new(), Recorder::new());
-        let mut p = ClockPlan::DEVKIT_160_MHZ;
+        let mut p = ClockPlan::XTAL40_160_MHZ;
         p.dividers[3] = 0;
         assert_eq!(c.prepare(&p), Err(CgmError::Fs80(0, 1)));
-        let mut p = ClockPlan::DEVKIT_160_MHZ;
+        let mut p = ClockPlan::XTAL40_160_MHZ;
         p.mfd = 0;
         assert_eq!(c.prepare(&p), Err(CgmError::Field("MFD")));
         assert_eq!(

@@ -114,14 +114,14 @@ impl Mode {
 pub struct ModeConfig {
     /// The crystal oscillator runs.
     pub fxosc: bool,
-    /// The PLL runs (it needs the crystal on the DEVKIT: its input is FXOSC).
+    /// The PLL runs (it needs the crystal: its input is FXOSC, `AC5`).
     pub pll: bool,
     /// The system clock: `MC::SYSCLK`'s codes (0 FIRC, 1 FXOSC, 2 PLL PHI0).
     pub sysclk: u8,
 }
 
 impl ModeConfig {
-    /// The DEVKIT's run configuration: FIRC, the 40 MHz crystal and the PLL on, the
+    /// The boards' run configuration: FIRC, the 40 MHz crystal and the PLL on, the
     /// system clock from PLL PHI0, the flash and main regulator on.
     pub const PLL: Self = Self {
         fxosc: true,

@@ -13,7 +13,8 @@
 //! FlexCAN, the same module as on the S32K144, is [`crate::chip::flexcan`]: the MPC5748G's
 //! FlexCAN_0 is at 0xFFEC_0000, clocked from the crystal.
 //!
-//! Registers, offsets and keys as NXP's MPC5748G header and the DEVKIT's published sources
+//! Registers, offsets and keys as NXP's MPC5748G header and NXP's and the DEVKIT-MPC5748G's
+//! published sources
 //! give them (the book lists which fact comes from where). **No code here can run on the
 //! MPC5748G**: its cores execute only the VLE instruction encoding, which LLVM cannot
 //! emit. The modules build for a Book E PowerPC target (`targets/`) and their tests run on

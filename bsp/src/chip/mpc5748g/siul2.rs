@@ -122,7 +122,7 @@ impl<A: Access> Siul2<A> {
 }
 
 /// One GPIO output pad as an embedded-hal pin; `active_low`: its logical high is a low
-/// level (the DEVKIT's LEDs, wired from the pad to the supply).
+/// level (LEDs wired from the pad to the supply, as on NXP's MPC5748G boards).
 pub struct Output<A> {
     siul2: Siul2<A>,
     pad: Pad,
