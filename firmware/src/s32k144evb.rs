@@ -1,7 +1,9 @@
 //! The ECU on NXP's S32K144EVB (`cw-s32k144`): the board's drivers named for the ECU's
-//! [`Board`] (FlexCAN0, the RGB LED as the two warning LEDs, the HC-SR04 on a GPIO and
-//! FTM0's input capture, WDOG), the Port driver, and the image's entry points: the ECU
-//! and nothing else (no scenario, trace or report), as on the mps2 production image.
+//! [`Board`] (FlexCAN0, the RGB LED as the two warning LEDs, WDOG, and the sensor: the
+//! HC-SR04 on a GPIO and FTM0's input capture ([`EvbBoard`]), or a UART ranging module on
+//! LPUART0 ([`EvbUartBoard`], feature `s32k144evb-uart`)), the Port driver, and the
+//! image's entry points: the ECU and nothing else (no scenario, trace or report), as on
+//! the mps2 production image.
 //!
 //! Build, check and flash: `cargo xtask s32k144` (the book: `docs/src/nxp-boards.md`).
 
@@ -10,6 +12,8 @@ use cw_bsp::chip::flexcan::ClockSource;
 use cw_bsp::chip::s32k144::port::Gpio;
 use cw_bsp::cortex_m::{App, CortexMPort};
 use cw_bsp::port::preempt::PortFault;
+#[cfg(feature = "s32k144evb-uart")]
+use cw_bsp::s32k144evb::SensorUart;
 use cw_bsp::s32k144evb::{self as evb, CoreDelay, EchoCapture, EvbCan, EvbWatchdog, Led};
 use cw_core::os::TaskId;
 
@@ -42,6 +46,36 @@ impl Board for EvbBoard {
     type Port = EvbPortDriver;
     type Watchdog = EvbWatchdog;
     type Faults = NoFaults;
+}
+
+/// The S32K144EVB with a UART ranging module (A02YYUW) on LPUART0 instead of the
+/// HC-SR04 (feature `s32k144evb-uart`); everything else as [`EvbBoard`].
+#[cfg(feature = "s32k144evb-uart")]
+pub struct EvbUartBoard;
+
+#[cfg(feature = "s32k144evb-uart")]
+impl Board for EvbUartBoard {
+    type Can = EvbCan;
+    type Led = Led;
+    type Sensor = crate::board::SerialSensor<SensorUart>;
+    type ModeInput = TiedOn;
+    type Port = EvbPortDriver;
+    type Watchdog = EvbWatchdog;
+    type Faults = NoFaults;
+}
+
+#[cfg(feature = "s32k144evb-uart")]
+impl crate::board::SerialRx for SensorUart {
+    fn read_byte(&mut self) -> Option<u8> {
+        SensorUart::read_byte(self)
+    }
+}
+
+/// The UART ranging module on LPUART0, silent after the configuration's samples without
+/// a good frame.
+#[cfg(feature = "s32k144evb-uart")]
+pub fn uart_sensor() -> crate::board::SerialSensor<SensorUart> {
+    crate::board::SerialSensor::new(SensorUart::lpuart0(), config::SENSOR_SILENT_AFTER_SAMPLES)
 }
 
 impl CanEvents for EvbCan {
@@ -77,12 +111,17 @@ pub fn sonar() -> EvbSonar {
 
 /// The image's entry points: the ECU and nothing else. It runs until the OS shuts down
 /// (a stack fault), logging its start and its faults over RTT.
-pub struct EvbApp {
+pub struct EvbApp<B: Board> {
     /// The ECU.
-    pub ecu: Ecu<CortexMPort<Kernel>, EvbBoard>,
+    pub ecu: Ecu<CortexMPort<Kernel>, B>,
+    /// Whether the sensor is the UART module (its receive interrupt is enabled at start).
+    pub uart_sensor: bool,
 }
 
-impl App for EvbApp {
+impl<B: Board + Sync> App for EvbApp<B>
+where
+    Ecu<CortexMPort<Kernel>, B>: Sync,
+{
     fn start_os(&self) {
         cortex_m::interrupt::disable();
         defmt::println!(
@@ -96,6 +135,10 @@ impl App for EvbApp {
         );
         evb::start_tick(isr_priority(config::SYSTICK_ISR));
         evb::enable_can_interrupts(isr_priority(config::CAN_ISR));
+        #[cfg(feature = "s32k144evb-uart")]
+        if self.uart_sensor {
+            SensorUart::enable_interrupt(isr_priority(config::SENSOR_RX_ISR));
+        }
         self.ecu.start_os();
     }
 

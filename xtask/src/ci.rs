@@ -262,8 +262,8 @@ fn run_stage(stage: &str) -> Result {
                 .run()?;
             // The Cortex-M port and the boards pass clippy as the host code does: mps2 with
             // the scenario images' trace and bus-fault model, and as the production image
-            // has them (without); the S32K144EVB's image.
-            for features in ["scenario", "mps2", "s32k144evb"] {
+            // has them (without); the S32K144EVB's image with either sensor.
+            for features in ["scenario", "mps2", "s32k144evb", "s32k144evb-uart"] {
                 Cmd::new("cargo")
                     .args([
                         "clippy",

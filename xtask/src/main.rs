@@ -21,7 +21,7 @@
 //!   [--flash] [--serial tcp:PORT]`:
 //!   the ECU's Cortex-M4 image on QEMU's mps2-an386, the emulator-in-the-loop tests against
 //!   the host simulation (`tests/`), and python-can against it live;
-//! - `cargo xtask s32k144 [--flash] [--probe VID:PID]`: the ECU's image for NXP's
+//! - `cargo xtask s32k144 [--uart-sensor] [--flash] [--probe VID:PID]`: the ECU's image for NXP's
 //!   S32K144EVB built and checked (the flash configuration field at 0x400, the vector
 //!   table, flash and RAM), then written to the board through a debug probe (probe-rs);
 //! - `cargo xtask mpc5748g`: the MPC5748G board layer built for the Book E target

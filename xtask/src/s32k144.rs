@@ -1,7 +1,8 @@
-//! `cargo xtask s32k144 [--flash] [--probe SELECTOR]`: the ECU's image for NXP's
-//! S32K144EVB (`cw-s32k144`, profile `flash`), built and checked as it will lie in the
-//! chip's flash, then, with `--flash`, written to a board through a debug probe with
-//! probe-rs, run, and its defmt log shown.
+//! `cargo xtask s32k144 [--uart-sensor] [--flash] [--probe SELECTOR]`: the ECU's image
+//! for NXP's S32K144EVB (`cw-s32k144`, profile `flash`; with the HC-SR04, or the UART
+//! ranging module on LPUART0), built and checked as it will lie in the chip's flash, then,
+//! with `--flash`, written to a board through a debug probe with probe-rs, run, and its
+//! defmt log shown.
 //!
 //! The checks read the linked ELF back (`llvm-size -A`, `llvm-objcopy --dump-section`):
 //!
@@ -42,6 +43,10 @@ pub struct Options {
     /// missing), reset it and show its defmt log until Ctrl-C
     #[arg(long)]
     flash: bool,
+    /// The image with a UART ranging module on LPUART0 (PTB0) as its sensor instead of
+    /// the HC-SR04
+    #[arg(long)]
+    uart_sensor: bool,
     /// The probe to use when several are attached (probe-rs's `VID:PID[:SERIAL]`)
     #[arg(long, value_name = "VID:PID[:SERIAL]")]
     probe: Option<String>,
@@ -49,16 +54,27 @@ pub struct Options {
 
 /// Runs `cargo xtask s32k144`.
 pub fn run(options: &Options) -> Result {
-    let image = build()?;
+    let image = build_variant(options.uart_sensor)?;
     if options.flash {
         flash(&image, options.probe.as_deref())?;
     }
     Ok(())
 }
 
-/// Builds `cw-s32k144` (profile `flash`) and checks it; returns its path.
+/// Builds `cw-s32k144` with the HC-SR04 (profile `flash`) and checks it; returns its path.
 pub fn build() -> Result<PathBuf> {
-    let image = build_bin("cw-s32k144", "s32k144evb", "flash")?;
+    build_variant(false)
+}
+
+/// Builds `cw-s32k144` with the HC-SR04 or, if `uart_sensor`, the UART ranging module
+/// (profile `flash`), and checks it; returns its path.
+fn build_variant(uart_sensor: bool) -> Result<PathBuf> {
+    let features = if uart_sensor {
+        "s32k144evb-uart"
+    } else {
+        "s32k144evb"
+    };
+    let image = build_bin("cw-s32k144", features, "flash")?;
     check(&image)?;
     Ok(image)
 }

@@ -100,6 +100,7 @@ pub fn start_up() {
     }
     let pcc = Pcc::new(map::at(crate::chip::s32k144::pcc::BASE));
     let gates = [
+        (Peripheral::PortB, None),
         (Peripheral::PortC, None),
         (Peripheral::PortD, None),
         (Peripheral::PortE, None),
@@ -227,6 +228,88 @@ impl DelayNs for CoreDelay {
     fn delay_ns(&mut self, ns: u32) {
         let cycles = u64::from(ns) * u64::from(CORE_HZ / 1_000_000) / 1000;
         cortex_m::asm::delay(u32::try_from(cycles).unwrap_or(u32::MAX).max(1));
+    }
+}
+
+// ---- the UART ranging module (the alternative sensor) ----------------------------------
+
+#[cfg(feature = "s32k144evb-uart")]
+pub use uart_sensor::{sensor_uart_stats, SensorUart};
+
+/// The UART ranging module on LPUART0 (feature `s32k144evb-uart`).
+#[cfg(feature = "s32k144evb-uart")]
+mod uart_sensor {
+    use core::sync::atomic::{AtomicU32, Ordering};
+
+    use super::super::{SENSOR_UART_ALT, SENSOR_UART_CLOCK_HZ, SENSOR_UART_IRQ, SENSOR_UART_RX};
+    use super::{fatal, map, mux};
+    use crate::chip::s32k144::lpuart::{self, Lpuart};
+    use crate::chip::s32k144::pcc::{Pcc, Peripheral, Source};
+    use crate::chip::s32k144::port::Mux;
+    use crate::cortex_m::Line;
+    use crate::ring::{ByteRing, RingStats};
+    use crate::slcan::ByteUart;
+
+    /// The ring between LPUART0's receive interrupt and the sensor task: at 9600 baud at most
+    /// 39 bytes arrive between two samples, 40 ms apart.
+    static SENSOR_RING: ByteRing<64> = ByteRing::new();
+    /// Bytes LPUART0 itself lost (its receiver overran before the interrupt read it).
+    static SENSOR_UART_OVERRUNS: AtomicU32 = AtomicU32::new(0);
+
+    /// The UART ranging module on LPUART0: receive only (the module's own RX pin selects its
+    /// output mode and needs no data).
+    pub struct SensorUart {
+        _private: (),
+    }
+
+    impl SensorUart {
+        /// LPUART0 on the oscillator clock at the module's 9600 baud, its receiver and receive
+        /// interrupt on, PTB0 its RX; the interrupt stays masked in the NVIC until
+        /// [`Self::enable_interrupt`]. A refused clock gate or baud rate is fatal.
+        pub fn lpuart0() -> Self {
+            let gated = Pcc::new(map::at(crate::chip::s32k144::pcc::BASE))
+                .enable(Peripheral::Lpuart0, Some(Source::SoscDiv2));
+            if gated.is_err() || !mux(SENSOR_UART_RX, Mux::Alt(SENSOR_UART_ALT)) {
+                fatal("LPUART0 cannot be set up (PCC, PORT)");
+            }
+            let uart = Lpuart::new(map::at(lpuart::base::LPUART0));
+            if uart
+                .configure(SENSOR_UART_CLOCK_HZ, cw_core::sonar::uart::BAUD)
+                .is_err()
+            {
+                fatal("LPUART0 cannot reach the sensor's baud rate");
+            }
+            Self { _private: () }
+        }
+
+        /// Enables the receive interrupt in the NVIC at OSEK ISR priority `osek_priority`.
+        pub fn enable_interrupt(osek_priority: u8) {
+            crate::cortex_m::enable_irq(Line(SENSOR_UART_IRQ), osek_priority);
+        }
+
+        /// The oldest byte received and not yet read.
+        pub fn read_byte(&mut self) -> Option<u8> {
+            SENSOR_RING.pop()
+        }
+    }
+
+    /// What the sensor's UART counted since start-up: bytes received and dropped by the ring,
+    /// and bytes LPUART0 lost before its interrupt read them.
+    pub fn sensor_uart_stats() -> (RingStats, u32) {
+        (
+            SENSOR_RING.stats(),
+            SENSOR_UART_OVERRUNS.load(Ordering::Relaxed),
+        )
+    }
+
+    /// `SensorRxIsr` (OSEK category 1): every byte LPUART0 holds into the ring.
+    pub(super) extern "C" fn lpuart0_rx() {
+        let mut uart = Lpuart::new(map::at(lpuart::base::LPUART0));
+        uart.clear_interrupts();
+        while let Some(byte) = uart.read_byte() {
+            SENSOR_RING.push(byte);
+        }
+        SENSOR_UART_OVERRUNS.fetch_add(uart.overruns(), Ordering::Relaxed);
     }
 }
 
@@ -359,7 +442,8 @@ extern "C" fn unused_irq() {
 }
 
 /// The external interrupt vector: FlexCAN0's lines ([`CAN_IRQS`]) are the ECU's
-/// `CanIsr`; no other line is enabled.
+/// `CanIsr`, LPUART0's the UART sensor's `SensorRxIsr` (enabled only when that sensor is
+/// used); no other line is enabled.
 #[link_section = ".vector_table.interrupts"]
 #[no_mangle]
 #[used]
@@ -368,5 +452,9 @@ static __INTERRUPTS: [extern "C" fn(); IRQ_LINES] = {
     v[CAN_IRQS[0] as usize] = can0::<{ CAN_IRQS[0] }>;
     v[CAN_IRQS[1] as usize] = can0::<{ CAN_IRQS[1] }>;
     v[CAN_IRQS[2] as usize] = can0::<{ CAN_IRQS[2] }>;
+    #[cfg(feature = "s32k144evb-uart")]
+    {
+        v[super::SENSOR_UART_IRQ as usize] = uart_sensor::lpuart0_rx;
+    }
     v
 };

@@ -7,6 +7,7 @@
 //! | warning LEDs | the board's one RGB LED, lit low: red for the red warning, red and green (yellow) for the yellow one ([`rgb`]) | PTD15 (red), PTD16 (green), PTD0 (blue, kept dark) |
 //! | CAN | FlexCAN0 on the board's UJA1169TK/F system basis chip and its CAN connector, 500 kbit/s from the 8 MHz oscillator clock | PTE4 (RX), PTE5 (TX), ALT5; IRQ 78 (bus-off), 81 (buffers 0-15), 82 (16-31) |
 //! | HC-SR04 | trigger on a GPIO, echo timed by a FlexTimer's input capture (both edges) | PTC1 (trigger), PTC0 = FTM0 channel 0 (echo), ALT2 |
+//! | or a UART ranging module | its TX into LPUART0's receiver, 9600 baud from the 8 MHz oscillator clock, each byte into a ring by the receive interrupt ([`crate::ring`]) | PTB0 = LPUART0 RX (ALT2, header J4-05); IRQ 31 |
 //! | OS tick | SysTick, 80,000 core clocks per ms | SCS |
 //! | watchdog | WDOG from the 128 kHz LPO: reconfigured first at start-up, then WdgM's | WDOG |
 //! | log | defmt frames over RTT (the debug probe reads them: `probe-rs run`) | |
@@ -131,6 +132,17 @@ const _: () = assert!(
     "the echo counter wraps within the HC-SR04's 38 ms no-echo pulse"
 );
 
+/// The UART ranging module's line (the alternative sensor): LPUART0's receiver, on the
+/// Arduino-style header J4 (pin 5), used by nothing else on the board.
+pub const SENSOR_UART_RX: Pin = Pin::new(b'B', 0);
+/// The mux alternative of LPUART0 RX on PTB0.
+pub const SENSOR_UART_ALT: u8 = 2;
+/// LPUART0's interrupt line (receive and transmit).
+pub const SENSOR_UART_IRQ: u16 = 31;
+/// LPUART0's functional clock, Hz: the oscillator clock (`SOSCDIV2_CLK`), from which
+/// 9600 baud is 0.04 % off.
+pub const SENSOR_UART_CLOCK_HZ: u32 = CLOCKS.sosc_div2_hz;
+
 /// The FlexCAN0 interrupt lines the ECU's `CanIsr` serves: the OR of bus-off and the
 /// warnings (78), buffers 0-15 (81), buffers 16-31 (82).
 pub const CAN_IRQS: [u16; 3] = [78, 81, 82];
@@ -191,12 +203,21 @@ mod tests {
             CAN_TX,
             SONAR_TRIGGER,
             SONAR_ECHO,
+            SENSOR_UART_RX,
         ];
         for (i, a) in pins.iter().enumerate() {
             assert!(pins.iter().skip(i + 1).all(|b| a != b), "{a:?} twice");
             assert!(a.pin <= 31 && (b'A'..=b'E').contains(&a.port));
         }
         assert!(CAN_IRQS.iter().all(|&l| usize::from(l) < IRQ_LINES));
+        assert!(!CAN_IRQS.contains(&SENSOR_UART_IRQ));
+        // The UART module's 9600 baud from the sensor UART's clock, within 3 %.
+        let d = crate::chip::s32k144::lpuart::Divisors::for_baud(
+            SENSOR_UART_CLOCK_HZ,
+            cw_core::sonar::uart::BAUD,
+        )
+        .unwrap();
+        assert_eq!(d.baud(SENSOR_UART_CLOCK_HZ), 9_603);
     }
 
     #[test]
