@@ -50,6 +50,7 @@ mod dbc_differential;
 mod decode_speed;
 mod differential;
 mod docs;
+mod image;
 mod log_formats;
 mod mpc5748g;
 mod mutants;

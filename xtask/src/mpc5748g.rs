@@ -16,6 +16,7 @@ use std::path::{Path, PathBuf};
 
 use cw_bsp::mpc5748g::{BOOT_HEADER_ADDRESS, BOOT_ID_Z4A};
 
+use crate::image::{section, section_bytes, sections};
 use crate::process::{root, target_dir, Cmd};
 use crate::setup::NIGHTLY;
 use crate::Result;
@@ -100,21 +101,15 @@ pub fn check(image: &Path) -> Result {
     }
     let entry = u64::from_str_radix(field("Entry point address:").trim_start_matches("0x"), 16)
         .map_err(|e| format!("the ELF's entry address: {e}"))?;
-    let sections = crate::s32k144::sections(image)?;
-    let find = |name: &str| {
-        sections
-            .iter()
-            .find(|(n, _, _)| n == name)
-            .map(|&(_, addr, size)| (addr, size))
-            .ok_or_else(|| format!("{}: no {name} section", image.display()))
-    };
+    let sections = sections(image)?;
+    let find = |name: &str| section(&sections, image, name);
     let (boot_addr, boot_size) = find(".boot_header")?;
     if (boot_addr, boot_size) != (u64::from(BOOT_HEADER_ADDRESS), 24) {
         return Err(format!(
             "the boot header is {boot_size} bytes at {boot_addr:#x}, not 24 at {BOOT_HEADER_ADDRESS:#x}"
         ));
     }
-    let boot = crate::s32k144::section_bytes(image, ".boot_header")?;
+    let boot = section_bytes(image, ".boot_header")?;
     let words = (0..6).map(|i| word(&boot, i)).collect::<Result<Vec<_>>>()?;
     let (text_addr, text_size) = find(".text")?;
     let start = u64::from(words.get(4).copied().unwrap_or(0));

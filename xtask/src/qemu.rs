@@ -34,10 +34,10 @@
 
 use std::path::{Path, PathBuf};
 
+use crate::image::{build_bin, footprint};
 use crate::process::{root, target_dir, Cmd};
 use crate::Result;
 
-const TARGET: &str = "thumbv7em-none-eabihf";
 const FIGURE7: &str = "scenarios/figure7.txt";
 
 /// Options of `cargo xtask qemu`.
@@ -100,48 +100,6 @@ impl Options {
 /// Builds the ECU's scenario image; returns its path.
 pub fn build() -> Result<PathBuf> {
     build_bin("cw-qemu", "scenario", "release")
-}
-
-/// Builds image `bin` of cw-firmware for the board with `features` and cargo `profile`;
-/// returns its path. (Each image is built on its own: its features are its own.)
-pub fn build_bin(bin: &str, features: &str, profile: &str) -> Result<PathBuf> {
-    Cmd::new("cargo")
-        .args([
-            "build",
-            "--profile",
-            profile,
-            "-p",
-            "cw-firmware",
-            "--no-default-features",
-            "--features",
-            features,
-            "--bin",
-            bin,
-            "--target",
-            TARGET,
-        ])
-        .run()?;
-    Ok(target_dir().join(TARGET).join(profile).join(bin))
-}
-
-/// Flash (vector table, code, read-only data, `.data`'s initial values) and RAM (`.data`,
-/// `.bss`, `.uninit`: the task stack) of `image`, in bytes, from `llvm-size -A`.
-pub fn footprint(image: &Path) -> Result<(u64, u64)> {
-    let out = Cmd::new("llvm-size").arg("-A").arg(image).read()?;
-    let size = |name: &str| {
-        out.lines()
-            .find_map(|l| {
-                let mut words = l.split_whitespace();
-                (words.next() == Some(name)).then(|| words.next()?.parse::<u64>().ok())?
-            })
-            .unwrap_or(0)
-    };
-    let flash = [".vector_table", ".text", ".rodata", ".data"]
-        .map(size)
-        .iter()
-        .sum();
-    let ram = [".data", ".bss", ".uninit"].map(size).iter().sum();
-    Ok((flash, ram))
 }
 
 /// The production image (`cw-mps2`, profile `flash`): its flash and RAM against the goals

@@ -19,8 +19,8 @@ use std::path::{Path, PathBuf};
 
 use cw_bsp::s32k144evb::{CAN_IRQS, FLASH_CONFIG, IRQ_LINES};
 
-use crate::process::{target_dir, Cmd};
-use crate::qemu::{build_bin, footprint};
+use crate::image::{build_bin, footprint, section, section_bytes, sections};
+use crate::process::Cmd;
 use crate::Result;
 
 /// The chip as probe-rs's target list names it: its S32K144 in the 100-pin LQFP, which
@@ -79,36 +79,6 @@ fn build_variant(uart_sensor: bool) -> Result<PathBuf> {
     Ok(image)
 }
 
-/// The address and size of each allocated section, from `llvm-size -A`.
-pub fn sections(image: &Path) -> Result<Vec<(String, u64, u64)>> {
-    let out = Cmd::new("llvm-size").arg("-A").arg(image).read()?;
-    Ok(out
-        .lines()
-        .filter_map(|line| {
-            let mut words = line.split_whitespace();
-            let name = words.next()?;
-            let size = words.next()?.parse().ok()?;
-            let addr = words.next()?.parse().ok()?;
-            name.starts_with('.')
-                .then(|| (name.to_string(), addr, size))
-        })
-        .collect())
-}
-
-/// The bytes of section `name` of `image`.
-pub fn section_bytes(image: &Path, name: &str) -> Result<Vec<u8>> {
-    let out = target_dir().join("elf-sections");
-    std::fs::create_dir_all(&out).map_err(|e| format!("creating {}: {e}", out.display()))?;
-    let file = out.join(format!("{}.bin", name.trim_start_matches('.')));
-    Cmd::new("llvm-objcopy")
-        .arg("--dump-section")
-        .arg(format!("{name}={}", file.display()))
-        .arg(image)
-        .arg(out.join("objcopy-scratch.elf"))
-        .run()?;
-    std::fs::read(&file).map_err(|e| format!("reading {}: {e}", file.display()))
-}
-
 fn word(bytes: &[u8], index: usize) -> Result<u32> {
     bytes
         .get(4 * index..4 * index + 4)
@@ -120,13 +90,7 @@ fn word(bytes: &[u8], index: usize) -> Result<u32> {
 /// The image's checks (the module's list); prints its flash and RAM.
 pub fn check(image: &Path) -> Result {
     let sections = sections(image)?;
-    let find = |name: &str| {
-        sections
-            .iter()
-            .find(|(n, _, _)| n == name)
-            .map(|&(_, addr, size)| (addr, size))
-            .ok_or_else(|| format!("{}: no {name} section", image.display()))
-    };
+    let find = |name: &str| section(&sections, image, name);
     let (fcf_addr, fcf_size) = find(".flash_config")?;
     if (fcf_addr, fcf_size) != (FLASH_CONFIG_ADDRESS, 16) {
         return Err(format!(

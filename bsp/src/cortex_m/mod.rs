@@ -294,6 +294,22 @@ unsafe impl cortex_m::interrupt::InterruptNumber for Line {
     }
 }
 
+/// Logs a fatal error's report the first time only: a fault or panic inside the log
+/// itself (defmt's logger refuses to be taken twice, by panicking) must not recurse. The
+/// boards' `fatal` and `halt` speak through it.
+pub fn last_words(log: impl FnOnce()) {
+    static SPOKEN: AtomicBool = AtomicBool::new(false);
+    if !SPOKEN.swap(true, Ordering::Relaxed) {
+        log();
+    }
+}
+
+/// Logs a port fault: `FATAL: WHAT ITEM` (the boards' `report`, after their safe state).
+pub fn log_fault(fault: &PortFault) {
+    let (what, item) = fault.parts();
+    defmt::println!("FATAL: {=str} {=str}", what, item);
+}
+
 /// No application to end the run: every interrupt off, the core waits for ever (a
 /// documented halt: a debugger finds it here).
 fn halt_here() -> ! {

@@ -418,7 +418,7 @@ pub fn halt() -> ! {
     if END_BY_EXIT.load(Ordering::Relaxed) {
         exit(false)
     }
-    last_words(|| defmt::println!("RESET"));
+    crate::cortex_m::last_words(|| defmt::println!("RESET"));
     cortex_m::peripheral::SCB::sys_reset()
 }
 
@@ -434,25 +434,15 @@ pub fn report(fault: &PortFault) {
         );
         return;
     }
-    let (what, item) = fault.parts();
-    defmt::println!("FATAL: {=str} {=str}", what, item);
+    crate::cortex_m::log_fault(fault);
 }
 
 /// A fatal error of the board or the application: LEDs to their safe state, the reason on
 /// the log, then [`halt`].
 pub fn fatal(what: &str) -> ! {
     leds_safe();
-    last_words(|| defmt::println!("FATAL: {=str}", what));
+    crate::cortex_m::last_words(|| defmt::println!("FATAL: {=str}", what));
     halt()
-}
-
-/// Logs a fatal error's report the first time only: a fault or panic inside the log
-/// itself (defmt's logger refuses to be taken twice, by panicking) must not recurse.
-fn last_words(log: impl FnOnce()) {
-    static SPOKEN: AtomicBool = AtomicBool::new(false);
-    if !SPOKEN.swap(true, Ordering::Relaxed) {
-        log();
-    }
 }
 
 extern "C" fn uart0_rx() {

@@ -6,7 +6,7 @@
 //! manual's memory map gives it; the drivers are `crate::chip`'s, tested on the host.
 
 use core::convert::Infallible;
-use core::sync::atomic::{AtomicBool, AtomicU8, Ordering};
+use core::sync::atomic::{AtomicU8, Ordering};
 
 use embedded_hal::delay::DelayNs;
 use embedded_hal::digital::{ErrorType, OutputPin};
@@ -400,32 +400,22 @@ use defmt_rtt as _;
 pub fn halt() -> ! {
     cortex_m::interrupt::disable();
     leds_safe();
-    last_words(|| defmt::println!("RESET"));
+    crate::cortex_m::last_words(|| defmt::println!("RESET"));
     cortex_m::peripheral::SCB::sys_reset()
 }
 
 /// Logs a port fault with the outputs in their safe state: `FATAL: WHAT ITEM`.
 pub fn report(fault: &PortFault) {
     leds_safe();
-    let (what, item) = fault.parts();
-    defmt::println!("FATAL: {=str} {=str}", what, item);
+    crate::cortex_m::log_fault(fault);
 }
 
 /// A fatal error of the board or the application: LEDs to their safe state, the reason on
 /// the log, then [`halt`].
 pub fn fatal(what: &str) -> ! {
     leds_safe();
-    last_words(|| defmt::println!("FATAL: {=str}", what));
+    crate::cortex_m::last_words(|| defmt::println!("FATAL: {=str}", what));
     halt()
-}
-
-/// Logs a fatal error's report the first time only (a fault inside the log itself must
-/// not recurse).
-fn last_words(log: impl FnOnce()) {
-    static SPOKEN: AtomicBool = AtomicBool::new(false);
-    if !SPOKEN.swap(true, Ordering::Relaxed) {
-        log();
-    }
 }
 
 // ---- the interrupt vector -----------------------------------------------------------
