@@ -713,6 +713,9 @@ pub fn start_systick(reload: u32, osek_priority: u8) {
 
 extern "C" {
     fn cw_port_enter_idle(top: u32) -> !;
+    /// Moves the main stack pointer to the main stack's top and goes on in
+    /// `cw_port_main_stack_fault` (every interrupt masked; never returns).
+    fn cw_port_main_overflow() -> !;
     /// The end of the linker's `.bss` and `.uninit` (cortex-m-rt's symbol): nothing of
     /// the image lives above it but the main stack.
     static _stack_end: u32;
@@ -805,7 +808,10 @@ const RBAR_VALID: u32 = 1 << 4;
 
 /// On a core without an MPU, the stack monitoring of every OS tick: the main stack's
 /// guard, then the running context's ([`Preemptive::monitor_stack`]); a written guard is
-/// that stack's overflow (`ShutdownOS(E_OS_STACKFAULT)`).
+/// that stack's overflow (`ShutdownOS(E_OS_STACKFAULT)`). A main stack overflow is
+/// reported from the main stack's top (`cw_port_main_overflow` moves the main stack
+/// pointer there first, as the guard faults' entries do: the interrupted contexts never
+/// resume), not from the depth that overflowed.
 fn monitor_stacks() {
     let Some(r) = registered() else {
         return;
@@ -813,11 +819,25 @@ fn monitor_stacks() {
     let guard_top = CW_PORT_MAIN_GUARD_TOP.load(Ordering::Relaxed);
     if guard_top != 0 && !guard_painted(guard_top - (GUARD_WORDS * 4) as u32) {
         cortex_m::interrupt::disable();
-        // SAFETY: registered by `start` for this port's kernel type.
-        unsafe { (r.fault)(r.port, StackFault::Main) };
+        // SAFETY: every interrupt is masked and nothing returns to the contexts below:
+        // the main stack is given up from here on.
+        unsafe { cw_port_main_overflow() };
     }
-    // SAFETY: as above; SysTick is masked by the kernel lock, as `monitor_stack` needs.
+    // SAFETY: registered by `start` for this port's kernel type; the OS tick is a
+    // category-2 ISR (the configuration's), which the kernel lock masks, as
+    // `monitor_stack` needs.
     unsafe { (r.monitor)(r.port) };
+}
+
+/// The main stack's overflow found by the OS tick, on a fresh main stack: the port's
+/// stack fault for the main stack.
+#[no_mangle]
+extern "C" fn cw_port_main_stack_fault() -> ! {
+    match registered() {
+        // SAFETY: registered by `start` for this port's kernel type.
+        Some(r) => unsafe { (r.fault)(r.port, StackFault::Main) },
+        None => fatal(PortFault::Board("stack overflow before start")),
+    }
 }
 
 /// A MemManage fault (or a HardFault escalated from one): a stack guard was hit.
@@ -826,6 +846,11 @@ fn monitor_stacks() {
 #[no_mangle]
 extern "C" fn cw_port_memory_fault(main_reset: u32) -> ! {
     cortex_m::interrupt::disable();
+    if !mpu_guards() {
+        // No MPU, no guard: the default memory map refused an access (an execution
+        // from a never-executable region, say), not a stack overflow.
+        fatal(PortFault::Board("MemManage"));
+    }
     // SAFETY: reads of the fault status and address registers.
     let (cfsr, mmfar) = unsafe { ((*SCB::PTR).cfsr.read(), (*SCB::PTR).mmfar.read()) };
     let guard_top = CW_PORT_MAIN_GUARD_TOP.load(Ordering::Relaxed);
@@ -936,6 +961,19 @@ core::arch::global_asm!(
     "HardFault:",
     "    bl cw_port_fix_msp",
     "    b cw_port_hard_fault",
+    // The tick's stack monitoring found the main stack's guard written: msp := the main
+    // stack's top, then the stack fault (the interrupted contexts never resume).
+    ".section .text.cw_port_main_overflow,\"ax\",%progbits",
+    ".global cw_port_main_overflow",
+    ".type cw_port_main_overflow,%function",
+    ".thumb_func",
+    "cw_port_main_overflow:",
+    "    ldr r2, ={main_top}",
+    "    ldr r2, [r2]",
+    "    msr msp, r2",
+    "    isb",
+    "    b cw_port_main_stack_fault",
+    ".ltorg",
     // r0 := 1 and msp := the main stack's top if msp lies below the main guard's top
     // (0 if the guard is not set yet); r0 := 0 otherwise. Uses r0-r2 only, no stack.
     ".section .text.cw_port_fix_msp,\"ax\",%progbits",

@@ -119,56 +119,40 @@ static BOOT_HEADER: BootHeader = BootHeader {
     z4b: None,
 };
 
-// The start-up code, in the Book E encoding: the SRAM's ECC initialised with 128-byte
-// stores of all 32 registers (`stmw`: a store narrower than the ECC's 64 bits would read
-// the never-written word first), then the stack, `.data` copied from flash (`.bss` is in
-// the SRAM just zeroed), then `cw_mpc5748g_main`.
+// The start-up code, in the Book E encoding. First SWT_0, which runs out of reset, is
+// stopped (its unlock keys, then `CR` with `WEN` clear, as NXP's start-up does), before
+// the long RAM loop could outlast its time-out. Then the SRAM's ECC: a store narrower
+// than the ECC's 64 bits would read the never-written word first, so the whole RAM region
+// is written with `stmw 30`, two zeroed registers (8 bytes) a store; the address register
+// is not among them, so the RAM, `.bss` with it, is all zeros. Then the stack, `.data`
+// copied from flash, and `cw_mpc5748g_main`.
 core::arch::global_asm!(
     ".section .text._start,\"ax\",@progbits",
     ".globl _start",
     ".type _start,@function",
     "_start:",
+    "    lis 3, 0xFC05",
+    "    li 4, 0",
+    "    ori 4, 4, 0xC520",
+    "    stw 4, 0x10(3)",
+    "    li 4, 0",
+    "    ori 4, 4, 0xD928",
+    "    stw 4, 0x10(3)",
+    "    lis 4, 0xFF00",
+    "    ori 4, 4, 0x010A",
+    "    stw 4, 0(3)",
     "    lis 3, __ram_start@ha",
     "    addi 3, 3, __ram_start@l",
     "    lis 4, __ram_end@ha",
     "    addi 4, 4, __ram_end@l",
     "    subf 4, 3, 4",
-    "    srwi 4, 4, 7",
+    "    srwi 4, 4, 3",
     "    mtctr 4",
-    "    li 0, 0",
-    "    li 1, 0",
-    "    li 2, 0",
-    "    li 4, 0",
-    "    li 5, 0",
-    "    li 6, 0",
-    "    li 7, 0",
-    "    li 8, 0",
-    "    li 9, 0",
-    "    li 10, 0",
-    "    li 11, 0",
-    "    li 12, 0",
-    "    li 13, 0",
-    "    li 14, 0",
-    "    li 15, 0",
-    "    li 16, 0",
-    "    li 17, 0",
-    "    li 18, 0",
-    "    li 19, 0",
-    "    li 20, 0",
-    "    li 21, 0",
-    "    li 22, 0",
-    "    li 23, 0",
-    "    li 24, 0",
-    "    li 25, 0",
-    "    li 26, 0",
-    "    li 27, 0",
-    "    li 28, 0",
-    "    li 29, 0",
     "    li 30, 0",
     "    li 31, 0",
     "1:",
-    "    stmw 0, 0(3)",
-    "    addi 3, 3, 128",
+    "    stmw 30, 0(3)",
+    "    addi 3, 3, 8",
     "    bdnz 1b",
     "    lis 1, __stack_top@ha",
     "    addi 1, 1, __stack_top@l",

@@ -14,7 +14,8 @@
 //! the sources' values, taken as they are; the reference manual's PLL chapter is what a
 //! first run on a board must be checked against.
 //!
-//! Order ([`Cgm::prepare`]): the dividers first (disabled, set, enabled), the PLL's input
+//! Order ([`Cgm::prepare`]): the dividers first (each in one store that keeps it running:
+//! the core is clocked through them), the PLL's input
 //! and dividers, then MC_ME's mode transition switches the system clock
 //! ([`super::mc_me`]); [`Cgm::pll_locked`] reads the lock afterwards.
 
@@ -184,7 +185,7 @@ impl<A: Access> Cgm<A> {
     }
 
     /// Writes `plan` up to the switch of the system clock, which MC_ME's mode transition
-    /// makes: the dividers (each disabled, set, enabled), FlexCAN_0's and the PLL's
+    /// makes: the dividers (each in one store, kept running), FlexCAN_0's and the PLL's
     /// inputs, the PLL's dividers in integer mode.
     ///
     /// # Errors
@@ -198,9 +199,9 @@ impl<A: Access> Cgm<A> {
             offset::SC_DC5,
         ];
         for (&at, &div) in offsets.iter().zip(plan.dividers.iter()) {
-            let dc: Reg<'_, A, DC::Register> = Reg::new(&self.cgm, at);
-            dc.write(DC::DE::CLEAR);
-            dc.write(DC::DE::SET + DC::DIV.val(u32::from(div)));
+            // One store, the divider kept running: the core is clocked through them.
+            Reg::<A, DC::Register>::new(&self.cgm, at)
+                .write(DC::DE::SET + DC::DIV.val(u32::from(div)));
         }
         self.cgm.write(
             offset::AC9_SC,
@@ -246,20 +247,16 @@ mod tests {
     }
 
     #[test]
-    fn prepare_writes_the_dividers_then_the_inputs_then_the_pll() {
+    fn prepare_writes_each_divider_in_one_store_then_the_inputs_then_the_pll() {
         let c: Cgm4 = Cgm::new(Recorder::new(), Recorder::new());
         c.prepare(&ClockPlan::XTAL40_160_MHZ).unwrap();
         let cgm: Vec<_> = c.access().0.writes().collect();
         assert_eq!(
             cgm,
             [
-                (0x7E8, 0),
                 (0x7E8, 1 << 31),
-                (0x7EC, 0),
                 (0x7EC, 1 << 31 | 1 << 16),
-                (0x7F0, 0),
                 (0x7F0, 1 << 31 | 3 << 16),
-                (0x7FC, 0),
                 (0x7FC, 1 << 31 | 1 << 16),
                 (0x2C0, 1 << 24),
                 (0x1C0, 1 << 24),
