@@ -121,6 +121,15 @@ pub mod span {
         ),
         (FLEXCAN_RX, "FlexCAN driver: a receive flag to its frame"),
     ];
+    /// `GetResource` and `ReleaseResource` of `RES_RTE` in `OsLEDTask`, with the read of
+    /// the LED request between them (a few loads): the lock pair as the application
+    /// takes it (`Resource::lock`).
+    pub const LOCK_PAIR: usize = 11;
+    /// The spans named apart from [`NAMES`] (numbered after the board's).
+    pub const MORE_NAMES: [(usize, &str); 1] = [(
+        LOCK_PAIR,
+        "a lock pair (RES_RTE in OsLEDTask, the read inside)",
+    )];
     /// The spans that are ISRs (bit per span): the trace takes their time off the spans
     /// and jobs they interrupt.
     pub const ISR_SPANS: u32 = 1 << CAN_ISR | 1 << TICK_NOTHING_DUE | 1 << TICK_ALARMS_DUE;
@@ -599,6 +608,11 @@ impl<P: Port<Kernel = Kernel>, B: Board> Ecu<P, B> {
     /// kernel is told of its return (a rescheduling point).
     fn isr(&self, isr: IsrId, span: usize, body: impl FnOnce(&Self)) {
         self.port.span(span, true);
+        self.isr_spanned(isr, span, body);
+    }
+
+    /// [`Ecu::isr`] with its span already started; ends it.
+    fn isr_spanned(&self, isr: IsrId, span: usize, body: impl FnOnce(&Self)) {
         let count = |os: &mut Kernel, result: Result<(), OsError>| {
             if result.is_err() {
                 os.hooks_mut().port_errors = os.hooks_mut().port_errors.saturating_add(1);
@@ -649,7 +663,17 @@ impl<P: Port<Kernel = Kernel>, B: Board> Ecu<P, B> {
         } else {
             span::TICK_NOTHING_DUE
         };
-        self.isr(config::SYSTICK_ISR, span, |ecu| {
+        self.port.span(span, true);
+        // Where nothing is due, the kernel takes the whole ISR in one step.
+        if self
+            .port
+            .fast_tick(config::SYSTICK_ISR, config::SYSTEM_COUNTER)
+        {
+            self.port.isr_entered(config::SYSTICK_ISR);
+            self.port.span(span, false);
+            return;
+        }
+        self.isr_spanned(config::SYSTICK_ISR, span, |ecu| {
             let _ = ecu
                 .port
                 .kernel(|os| os.increment_counter(config::SYSTEM_COUNTER));
@@ -690,7 +714,10 @@ impl<P: Port<Kernel = Kernel>, B: Board> Ecu<P, B> {
 
     /// `OsLEDTask`: LEDActuator, prototypes RedLED and YellowLED.
     fn led_task(&self) {
-        let Ok(level) = self.rte.lock(&self.port, |rte| rte.led_request.read()) else {
+        self.port.span(span::LOCK_PAIR, true);
+        let level = self.rte.lock(&self.port, |rte| rte.led_request.read());
+        self.port.span(span::LOCK_PAIR, false);
+        let Ok(level) = level else {
             return;
         };
         let now_ms = self.port.now_ms();

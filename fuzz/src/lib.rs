@@ -32,6 +32,10 @@ pub fn decode_service(op: u8, a: u8, b: u8, c: u8) -> Service {
         4 => ServiceCall::SetEvent(task, mask),
         5 => ServiceCall::ClearEvent(mask),
         6 => ServiceCall::WaitEvent(mask),
+        // The port's lock (the kernel's fast path, the service where it declines) or the
+        // service itself.
+        7 if c % 2 == 1 => return Service::FastGet(res),
+        8 if c % 2 == 1 => return Service::FastRelease(res),
         7 => ServiceCall::GetResource(res),
         8 => ServiceCall::ReleaseResource(res),
         9 => ServiceCall::SetRelAlarm {

@@ -260,6 +260,16 @@ fn lock_steps<
     ]);
 }
 
+/// A call an ISR's body makes, as the port makes it: a lock of a user resource by the
+/// kernel's fast paths (the service where they decline), anything else as the service.
+fn as_port_calls(call: ServiceCall) -> Service {
+    match call {
+        ServiceCall::GetResource(r) if r != RES_SCHEDULER => Service::FastGet(r),
+        ServiceCall::ReleaseResource(r) if r != RES_SCHEDULER => Service::FastRelease(r),
+        c => Service::Call(c),
+    }
+}
+
 impl<
         const T: usize,
         const R: usize,
@@ -279,13 +289,30 @@ impl<
             .chain(std::iter::once(RES_SCHEDULER))
     }
 
+    /// What the running task may do next. The resources it declares it takes as the
+    /// port's lock does (the kernel's fast paths, the full service where they decline);
+    /// `RES_SCHEDULER`, and (adversarial sets) the resources it does not declare, by the full
+    /// services.
+    fn task_steps(&self, os: &Kernel<T, R, C, A, I, Q>, running: TaskId) -> Vec<Service> {
+        let me = &self.cfg.tasks()[running.0 as usize];
+        let mut steps = Vec::new();
+        for r in self.resources() {
+            if r != RES_SCHEDULER && (me.resources >> r.0) & 1 == 1 {
+                steps.push(Service::FastGet(r));
+                steps.push(Service::FastRelease(r));
+            }
+        }
+        steps.extend(self.task_calls(os, running).into_iter().map(Service::Call));
+        steps
+    }
+
     fn task_calls(&self, os: &Kernel<T, R, C, A, I, Q>, running: TaskId) -> Vec<ServiceCall> {
         let me = &self.cfg.tasks()[running.0 as usize];
         let mut calls = vec![ServiceCall::TerminateTask];
-        // The resources the task declares, taken and released; all of them when adversarial.
+        // The services on resources: `RES_SCHEDULER`, and every resource when adversarial.
         for r in self.resources() {
-            let declared = r == RES_SCHEDULER || (me.resources >> r.0) & 1 == 1;
-            if declared || self.adversarial {
+            let declared = r != RES_SCHEDULER && (me.resources >> r.0) & 1 == 1;
+            if r == RES_SCHEDULER || (self.adversarial && !declared) {
                 calls.push(ServiceCall::GetResource(r));
                 calls.push(ServiceCall::ReleaseResource(r));
             }
@@ -413,7 +440,15 @@ impl<
                     if os.active_isr().is_none()
                         && priority.is_some_and(|p| os.interrupt_mask().admits(p))
                     {
-                        actions.extend(calls.iter().map(|c| Step::Do(Service::Isr(i, *c))));
+                        // A tick as a port runs it: the kernel's fast path, else whole.
+                        actions.extend(calls.iter().map(|c| {
+                            Step::Do(match *c {
+                                ServiceCall::IncrementCounter(counter) => {
+                                    Service::FastTick(i, counter)
+                                }
+                                c => Service::Isr(i, c),
+                            })
+                        }));
                     }
                 }
                 _ if !state.irq.is_pending(i) => actions.push(Step::Raise(i)),
@@ -425,11 +460,11 @@ impl<
             let pc = state.isr_pc.get(isr.0 as usize).copied().unwrap_or(0);
             match self.body(isr) {
                 IsrBody::Script(calls) => match calls.get(usize::from(pc)) {
-                    Some(call) => actions.push(Step::Do(Service::Call(*call))),
+                    Some(call) => actions.push(Step::Do(as_port_calls(*call))),
                     None => actions.push(Step::Do(Service::ExitIsr)),
                 },
                 IsrBody::Any(calls) => {
-                    actions.extend(calls.iter().map(|c| Step::Do(Service::Call(*c))));
+                    actions.extend(calls.iter().map(|c| Step::Do(as_port_calls(*c))));
                     actions.push(Step::Do(Service::ExitIsr));
                 }
                 IsrBody::Whole(_) => actions.push(Step::Do(Service::ExitIsr)),
@@ -439,11 +474,7 @@ impl<
         let Some(running) = os.running() else {
             return;
         };
-        actions.extend(
-            self.task_calls(os, running)
-                .into_iter()
-                .map(|c| Step::Do(Service::Call(c))),
-        );
+        actions.extend(self.task_steps(os, running).into_iter().map(Step::Do));
         if self.missing_ends {
             actions.push(Step::Do(Service::TaskReturn));
         }
@@ -458,7 +489,9 @@ impl<
             Step::Do(service) => {
                 let isr = last.os.active_isr();
                 let result = spec::call(&mut next.os, service);
-                next.violation = spec::transition_rules(&last.os, &next.os, service, result).err();
+                next.violation = spec::fast_path_agrees(&last.os, service)
+                    .and_then(|()| spec::transition_rules(&last.os, &next.os, service, result))
+                    .err();
                 // The ISR's script moves on (and starts again at its next entry).
                 if let Some(pc) = isr.and_then(|i| next.isr_pc.get_mut(i.0 as usize)) {
                     *pc = match service {

@@ -116,6 +116,18 @@ fn basepri_for(mask: InterruptMask) -> u8 {
     }
 }
 
+/// The BASEPRI value for the mask of processor priority `level`: [`basepri_for`] of
+/// [`InterruptMask::at_level`], with the task levels (the common case) decided by one
+/// compare.
+#[inline(always)]
+fn basepri_at_level(level: u8) -> u8 {
+    if level < cw_core::os::ISR_LEVEL_BASE {
+        0
+    } else {
+        basepri_for(InterruptMask::at_level(level))
+    }
+}
+
 /// The kernel lock's BASEPRI: the highest category-2 ISR's NVIC priority, set at start
 /// (until then the lowest level that still holds PendSV).
 #[no_mangle]
@@ -149,6 +161,12 @@ impl Arch for CortexM {
     fn set_mask(&self, mask: InterruptMask) {
         // SAFETY: BASEPRI only holds interrupts back; the value is the kernel's mask.
         unsafe { basepri::write(basepri_for(mask)) };
+    }
+
+    #[inline(always)]
+    fn set_level(&self, level: u8) {
+        // SAFETY: BASEPRI only holds interrupts back; the value is the kernel's mask.
+        unsafe { basepri::write(basepri_at_level(level)) };
     }
 
     #[inline(always)]

@@ -60,7 +60,7 @@ pub enum EventKind {
 }
 
 /// Spans the application can mark.
-pub const SPANS: usize = 11;
+pub const SPANS: usize = 12;
 
 /// One event and its time.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

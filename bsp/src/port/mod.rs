@@ -20,8 +20,8 @@ use core::cell::UnsafeCell;
 use core::sync::atomic::{AtomicBool, Ordering};
 
 use cw_core::os::{
-    Hooks, InterruptMask, IsrConfig, IsrId, Os, OsConfig, OsError, ResourceId, TaskConfig, TaskId,
-    TaskState,
+    CounterId, Hooks, InterruptMask, IsrConfig, IsrId, Os, OsConfig, OsError, ResourceId,
+    TaskConfig, TaskId, TaskState,
 };
 use cw_core::tables::Tables;
 
@@ -42,6 +42,10 @@ pub unsafe trait OsKernel {
     fn task_state(&self, task: TaskId) -> Option<TaskState>;
     /// The interrupts the kernel holds masked now.
     fn interrupt_mask(&self) -> InterruptMask;
+    /// The processor priority at or below which the kernel holds interrupts now
+    /// (`u8::MAX`: all); [`OsKernel::interrupt_mask`] is its
+    /// [`InterruptMask::at_level`].
+    fn masked_level(&self) -> u8;
     /// Whether `ShutdownOS` has run.
     fn is_shut_down(&self) -> bool;
     /// `GetResource`.
@@ -54,6 +58,17 @@ pub unsafe trait OsKernel {
     /// # Errors
     /// As the kernel's service.
     fn release_resource(&mut self, res: ResourceId) -> Result<(), OsError>;
+    /// `GetResource`'s fast path ([`Os::try_get_resource`]): the processor priority the
+    /// caller runs at now, or `None` with nothing changed (the caller then makes the full
+    /// service call).
+    fn try_get_resource(&mut self, res: ResourceId) -> Option<u8>;
+    /// `ReleaseResource`'s fast path ([`Os::try_release_resource`]), as
+    /// [`OsKernel::try_get_resource`].
+    fn try_release_resource(&mut self, res: ResourceId) -> Option<u8>;
+    /// The OS tick's fast path ([`Os::try_tick`]): the whole category-2 ISR `isr` whose
+    /// body is `IncrementCounter(counter)` in one step where nothing is due; `None`, with
+    /// nothing changed, where the port must run the ISR whole.
+    fn try_tick(&mut self, isr: IsrId, counter: CounterId) -> Option<u8>;
     /// The port tells the kernel an ISR was entered.
     ///
     /// # Errors
@@ -108,6 +123,10 @@ where
     fn interrupt_mask(&self) -> InterruptMask {
         Os::interrupt_mask(self)
     }
+    #[inline(always)]
+    fn masked_level(&self) -> u8 {
+        Os::masked_level(self)
+    }
     #[inline]
     fn is_shut_down(&self) -> bool {
         Os::is_shut_down(self)
@@ -119,6 +138,18 @@ where
     #[inline]
     fn release_resource(&mut self, res: ResourceId) -> Result<(), OsError> {
         Os::release_resource(self, res)
+    }
+    #[inline(always)]
+    fn try_get_resource(&mut self, res: ResourceId) -> Option<u8> {
+        Os::try_get_resource(self, res)
+    }
+    #[inline(always)]
+    fn try_release_resource(&mut self, res: ResourceId) -> Option<u8> {
+        Os::try_release_resource(self, res)
+    }
+    #[inline(always)]
+    fn try_tick(&mut self, isr: IsrId, counter: CounterId) -> Option<u8> {
+        Os::try_tick(self, isr, counter)
     }
     #[inline]
     fn enter_isr(&mut self, isr: IsrId) -> Result<(), OsError> {
@@ -171,6 +202,41 @@ pub trait Port {
         &self,
         f: impl FnOnce(&mut Self::Kernel) -> Result<(), OsError>,
     ) -> Result<(), OsError>;
+
+    /// Takes a resource for the running task or ISR (`GetResource`): the kernel's fast
+    /// path where it applies, else the full service. A port where the lock costs less than
+    /// a kernel call overrides it.
+    ///
+    /// # Errors
+    /// As the kernel's service.
+    #[inline]
+    fn get_resource(&self, res: ResourceId) -> Result<(), OsError> {
+        self.kernel(|os| match os.try_get_resource(res) {
+            Some(_) => Ok(()),
+            None => os.get_resource(res),
+        })
+    }
+
+    /// Releases a resource (`ReleaseResource`), as [`Port::get_resource`] takes it.
+    ///
+    /// # Errors
+    /// As the kernel's service.
+    #[inline]
+    fn release_resource(&self, res: ResourceId) -> Result<(), OsError> {
+        self.kernel(|os| match os.try_release_resource(res) {
+            Some(_) => Ok(()),
+            None => os.release_resource(res),
+        })
+    }
+
+    /// The OS tick (category-2 ISR `isr`, whose whole body is `IncrementCounter(counter)`)
+    /// by the kernel's fast path, which takes the ticks where no alarm is due: `true` when
+    /// it did (the ISR's entry, the service and its return, done), `false` when the caller
+    /// must run the ISR whole.
+    #[inline]
+    fn fast_tick(&self, isr: IsrId, counter: CounterId) -> bool {
+        self.kernel(|os| os.try_tick(isr, counter).is_some())
+    }
 
     /// Milliseconds since start (the OS tick).
     fn now_ms(&self) -> u64;
@@ -248,14 +314,14 @@ impl<T> Resource<T> {
     /// take it, `E_OS_CALLEVEL`, `E_OS_DISABLEDINT`.
     #[inline]
     pub fn lock<P: Port, R>(&self, port: &P, f: impl FnOnce(&mut T) -> R) -> Result<R, OsError> {
-        port.kernel(|os| os.get_resource(self.id))?;
+        port.get_resource(self.id)?;
         // SAFETY: GetResource succeeded, so the kernel records this task or ISR as the
         // owner and refuses the resource to every other one until the release below
         // (`OsKernel`'s contract); `f` cannot keep the reference past its return.
         let result = f(unsafe { &mut *self.data.get() });
         // The release cannot fail: the caller owns the resource and took none after it
         // that it still holds (`f` returned, so every lock inside it was released).
-        let _ = port.kernel(|os| os.release_resource(self.id));
+        let _ = port.release_resource(self.id);
         Ok(result)
     }
 

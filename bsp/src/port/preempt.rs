@@ -38,7 +38,8 @@ use core::cell::UnsafeCell;
 use core::sync::atomic::{compiler_fence, AtomicBool, Ordering};
 
 use cw_core::os::{
-    InterruptMask, IsrConfig, IsrId, OsError, TaskConfig, TaskId, TaskKind, TaskState,
+    CounterId, InterruptMask, IsrConfig, IsrId, OsError, ResourceId, TaskConfig, TaskId, TaskKind,
+    TaskState,
 };
 
 use super::{OsKernel, Port};
@@ -72,6 +73,13 @@ pub trait Arch {
     /// Sets the OS-level mask to the kernel's interrupt mask, ending the kernel lock
     /// (`All`: the OS level; every other interrupt is [`Arch::disable_all`]'s).
     fn set_mask(&self, mask: InterruptMask);
+    /// [`Arch::set_mask`] for the mask of processor priority `level`
+    /// ([`InterruptMask::at_level`]; `u8::MAX` is `All`), as the port ends every kernel
+    /// call; a CPU may map the level to its mask register more directly.
+    #[inline(always)]
+    fn set_level(&self, level: u8) {
+        self.set_mask(InterruptMask::at_level(level));
+    }
     /// Whether every interrupt is masked now ([`Arch::disable_all`], or the caller's own
     /// critical section).
     fn all_masked(&self) -> bool;
@@ -511,6 +519,14 @@ impl<K: OsKernel, A: Arch> Preemptive<K, A> {
         self.with_sched(|s| s.guard_slot_start());
     }
 
+    /// A kernel call found another under way: a fatal port fault. Out of line and without
+    /// arguments, so that the kernel lock's callers keep small frames.
+    #[cold]
+    #[inline(never)]
+    fn reentered(&self) -> ! {
+        self.fatal(PortFault::KernelReentered)
+    }
+
     /// A fatal port fault: reported, then the board's end.
     pub fn fatal(&self, fault: PortFault) -> ! {
         self.arch.disable_all();
@@ -538,7 +554,7 @@ impl<K: OsKernel, A: Arch> Preemptive<K, A> {
         // A plain load and store (one core; the lock holds every ISR that may call the OS):
         // a category-1 ISR calling the OS during a kernel call finds the flag set.
         if self.in_kernel.load(Ordering::Relaxed) {
-            self.fatal(PortFault::KernelReentered);
+            self.reentered();
         }
         self.in_kernel.store(true, Ordering::Relaxed);
         compiler_fence(Ordering::SeqCst);
@@ -562,15 +578,69 @@ impl<K: OsKernel, A: Arch> Preemptive<K, A> {
         if next != sched.current || sched.ended {
             self.arch.request_switch();
         }
-        let mask = kernel.interrupt_mask();
+        // The kernel's mask as a level (`InterruptMask::at_level`; `u8::MAX` is `All`).
+        let level = kernel.masked_level();
         compiler_fence(Ordering::SeqCst);
         self.in_kernel.store(false, Ordering::Relaxed);
-        if (mask == InterruptMask::All) == sched.all_for_kernel {
-            self.arch.set_mask(mask);
+        if (level == u8::MAX) == sched.all_for_kernel {
+            self.arch.set_level(level);
         } else {
             // DisableAllInterrupts or SuspendAllInterrupts began or ended.
-            self.all_changed(sched, mask);
+            self.all_changed(sched, InterruptMask::at_level(level));
         }
+    }
+
+    /// A lock's kernel call (`take`: `GetResource`, else `ReleaseResource`): the kernel's
+    /// fast path under the kernel lock, then the level's mask; where it declines, the full
+    /// service and the port's whole carrying-out.
+    #[inline(always)]
+    fn lock_step(&self, res: ResourceId, take: bool) -> Result<(), OsError> {
+        let (kernel, sched) = self.enter();
+        let fast = if take {
+            kernel.try_get_resource(res)
+        } else {
+            kernel.try_release_resource(res)
+        };
+        match fast {
+            Some(level) => {
+                self.leave_at(level);
+                Ok(())
+            }
+            None => self.lock_service(kernel, sched, res, take),
+        }
+    }
+
+    /// The rest of a lock's kernel call whose fast path declined, with the kernel lock
+    /// taken: the full `GetResource` (`take`) or `ReleaseResource`, then the port's whole
+    /// carrying-out. Out of line, so that the fast path's frame stays small, and one
+    /// function for both, so that the image holds the carrying-out once.
+    #[cold]
+    #[inline(never)]
+    fn lock_service(
+        &self,
+        kernel: &mut K,
+        sched: &mut Sched,
+        res: ResourceId,
+        take: bool,
+    ) -> Result<(), OsError> {
+        let result = if take {
+            kernel.get_resource(res)
+        } else {
+            kernel.release_resource(res)
+        };
+        self.leave(kernel, sched);
+        result
+    }
+
+    /// Ends the kernel lock after a fast path: the running task, its switch state and the
+    /// every-interrupt masking are as they were (the fast paths run only at task level
+    /// with no interrupt lock in force), and the kernel's mask is that of processor
+    /// priority `level`.
+    #[inline(always)]
+    fn leave_at(&self, level: u8) {
+        compiler_fence(Ordering::SeqCst);
+        self.in_kernel.store(false, Ordering::Relaxed);
+        self.arch.set_level(level);
     }
 
     /// The kernel's `All` mask began (every interrupt masked before the OS-level mask
@@ -720,6 +790,43 @@ impl<K: OsKernel, A: Arch> Port for Preemptive<K, A> {
     #[inline]
     fn inspect<R>(&self, f: impl FnOnce(&K) -> R) -> R {
         self.locked(|kernel, _| f(kernel))
+    }
+
+    /// The OS tick in one kernel call where nothing is due: under the kernel lock the
+    /// kernel's fast path advances the counter, and the port restores the interrupted
+    /// context's mask. Otherwise nothing changed, and the caller runs the ISR whole.
+    #[inline]
+    fn fast_tick(&self, isr: IsrId, counter: CounterId) -> bool {
+        let (kernel, sched) = self.enter();
+        match kernel.try_tick(isr, counter) {
+            Some(level) => {
+                self.leave_at(level);
+                true
+            }
+            None => {
+                self.leave(kernel, sched);
+                false
+            }
+        }
+    }
+
+    /// The lock by the stack resource policy: under the kernel lock the kernel's fast path
+    /// pushes the resource and raises the task's priority and preemption threshold to the
+    /// ceiling; the port then sets the OS-level mask to that level, with no task switch to
+    /// look for (taking a resource never lets another task in). Where the fast path
+    /// declines, the full service and the port's whole carrying-out, in the same kernel
+    /// lock.
+    #[inline(never)]
+    fn get_resource(&self, res: ResourceId) -> Result<(), OsError> {
+        self.lock_step(res, true)
+    }
+
+    /// The release, as [`Preemptive::get_resource`] takes the lock: the fast path applies
+    /// only where no task above the restored priority is ready (else the full service
+    /// switches to it).
+    #[inline(never)]
+    fn release_resource(&self, res: ResourceId) -> Result<(), OsError> {
+        self.lock_step(res, false)
     }
 
     fn end_job(&self, f: impl FnOnce(&mut K) -> Result<(), OsError>) -> Result<(), OsError> {

@@ -27,6 +27,19 @@ pub enum InterruptMask {
 }
 
 impl InterruptMask {
+    /// The mask of processor priority `level` (no interrupt lock in force): every ISR at or
+    /// below it held, all of them at `u8::MAX`, none at task priorities.
+    #[inline(always)]
+    pub const fn at_level(level: u8) -> Self {
+        if level == u8::MAX {
+            Self::All
+        } else if level >= super::config::ISR_LEVEL_BASE {
+            Self::UpTo(level - super::config::ISR_LEVEL_BASE)
+        } else {
+            Self::None
+        }
+    }
+
     /// Whether an ISR of priority `isr_priority` may be taken under this mask.
     #[inline]
     pub const fn admits(self, isr_priority: u8) -> bool {

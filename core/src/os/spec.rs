@@ -7,7 +7,8 @@ use super::call::{perform, Returned, ServiceCall};
 use super::callevel::Context;
 use super::config::{IsrCategory, Status};
 use super::{
-    Hooks, IsrId, Os, OsConfig, OsError, Phase, ResourceId, TaskId, TaskKind, RES_SCHEDULER,
+    CounterId, Hooks, InterruptMask, IsrId, Os, OsConfig, OsError, Phase, ResourceId, TaskId,
+    TaskKind, RES_SCHEDULER,
 };
 use crate::tables::Tables;
 
@@ -262,6 +263,28 @@ pub enum Service {
     Isr(IsrId, ServiceCall),
     /// The running task's body returns without `TerminateTask` (AUTOSAR: missing end).
     TaskReturn,
+    /// `GetResource` as a port takes a lock: the kernel's fast path
+    /// ([`Os::try_get_resource`]), and the full service where that declines.
+    FastGet(ResourceId),
+    /// `ReleaseResource` as a port ends a lock: [`Os::try_release_resource`], and the full
+    /// service where that declines.
+    FastRelease(ResourceId),
+    /// A whole ISR whose body is `IncrementCounter` (the OS tick), as a port runs it: the
+    /// kernel's fast path ([`Os::try_tick`]), and the whole ISR where that declines.
+    FastTick(IsrId, CounterId),
+}
+
+impl Service {
+    /// The OSEK service this step carries out (the fast lock steps are `GetResource` and
+    /// `ReleaseResource`).
+    pub const fn as_osek(self) -> Self {
+        match self {
+            Self::FastGet(r) => Self::Call(ServiceCall::GetResource(r)),
+            Self::FastRelease(r) => Self::Call(ServiceCall::ReleaseResource(r)),
+            Self::FastTick(isr, c) => Self::Isr(isr, ServiceCall::IncrementCounter(c)),
+            s => s,
+        }
+    }
 }
 
 /// Performs one [`Service`] on the kernel.
@@ -297,6 +320,67 @@ where
             result
         }
         Service::TaskReturn => os.task_returned().map(|()| Returned::Nothing),
+        Service::FastGet(r) => match os.try_get_resource(r) {
+            Some(_) => Ok(Returned::Nothing),
+            None => os.get_resource(r).map(|()| Returned::Nothing),
+        },
+        Service::FastRelease(r) => match os.try_release_resource(r) {
+            Some(_) => Ok(Returned::Nothing),
+            None => os.release_resource(r).map(|()| Returned::Nothing),
+        },
+        Service::FastTick(isr, c) => match os.try_tick(isr, c) {
+            Some(_) => Ok(Returned::Nothing),
+            None => call(os, service.as_osek()),
+        },
+    }
+}
+
+/// The contract of the kernel's fast paths ([`Os::try_get_resource`],
+/// [`Os::try_release_resource`], [`Os::try_tick`]), for a [`Service::FastGet`],
+/// [`Service::FastRelease`] or [`Service::FastTick`] step from `before` (any other step
+/// agrees trivially): where the fast path takes the step, it leaves exactly the state the
+/// full service (or whole ISR) leaves, that succeeds, and the level the fast path returns
+/// gives the kernel's interrupt mask; where it declines, it changed nothing. (So every rule
+/// and invariant proved of the services holds of the fast paths.)
+///
+/// # Errors
+/// Which part of the contract is broken.
+pub fn fast_path_agrees<
+    const T: usize,
+    const R: usize,
+    const C: usize,
+    const A: usize,
+    const I: usize,
+    const Q: usize,
+    K,
+    H,
+>(
+    before: &Os<T, R, C, A, I, Q, K, H>,
+    service: Service,
+) -> Result<(), &'static str>
+where
+    K: Tables<OsConfig<T, R, C, A, I>>,
+    H: Hooks<Os<T, R, C, A, I, Q, K, H>>,
+{
+    let (mut fast, mut full) = (*before, *before);
+    let (taken, served) = match service {
+        Service::FastGet(r) => (fast.try_get_resource(r), full.get_resource(r)),
+        Service::FastRelease(r) => (fast.try_release_resource(r), full.release_resource(r)),
+        Service::FastTick(isr, c) => (
+            fast.try_tick(isr, c),
+            call(&mut full, service.as_osek()).map(|_| ()),
+        ),
+        _ => return Ok(()),
+    };
+    match taken {
+        None if fast != *before => Err("a declined fast path changed the state"),
+        None => Ok(()),
+        Some(_) if served.is_err() => Err("the fast path took a step the service refuses"),
+        Some(_) if fast != full => Err("the fast path left another state than the service"),
+        Some(level) if InterruptMask::at_level(level) != full.interrupt_mask() => {
+            Err("the fast path's level is not the kernel's interrupt mask")
+        }
+        Some(_) => Ok(()),
     }
 }
 
@@ -435,6 +519,7 @@ where
     K: Tables<OsConfig<T, R, C, A, I>>,
     H: Hooks<Os<T, R, C, A, I, Q, K, H>>,
 {
+    let service = service.as_osek();
     let caller = (before.context() == Context::Task)
         .then(|| before.running())
         .flatten();
@@ -544,6 +629,7 @@ where
     H: Hooks<Os<T, R, C, A, I, Q, K, H>>,
 {
     let before = *os;
+    fast_path_agrees(&before, service)?;
     let result = call(os, service);
     transition_rules(&before, os, service, result)?;
     if !kernel_invariants(os) {

@@ -53,6 +53,8 @@ pub enum Step {
     WaitEvent(u8),
     GetResource(u8),
     ReleaseResource(u8),
+    FastGet(u8),
+    FastRelease(u8),
     SetRel(u8, u8, u8),
     SetAbs(u8, u8, u8),
     Cancel(u8),
@@ -61,6 +63,7 @@ pub enum Step {
     EnterIsr(u8),
     ExitIsr,
     IsrTick(u8),
+    FastTick(u8),
     IsrActivate(u8, u8),
     TaskReturn,
     Query(u8),
@@ -89,6 +92,8 @@ impl Step {
             Step::WaitEvent(m) => S::Call(Call::WaitEvent(EventMask::from(m % 4))),
             Step::GetResource(r) => S::Call(Call::GetResource(res(r))),
             Step::ReleaseResource(r) => S::Call(Call::ReleaseResource(res(r))),
+            Step::FastGet(r) => S::FastGet(res(r)),
+            Step::FastRelease(r) => S::FastRelease(res(r)),
             Step::SetRel(a, inc, cyc) => S::Call(Call::SetRelAlarm {
                 alarm: AlarmId(a % 4),
                 increment: TickType::from(inc % 8),
@@ -112,6 +117,7 @@ impl Step {
             Step::EnterIsr(i) => S::EnterIsr(isr(i)),
             Step::ExitIsr => S::ExitIsr,
             Step::IsrTick(i) => S::Isr(isr(i), Call::IncrementCounter(CounterId(0))),
+            Step::FastTick(i) => S::FastTick(isr(i), CounterId(0)),
             Step::IsrActivate(i, t) => S::Isr(isr(i), Call::ActivateTask(TaskId(t % 6))),
             Step::TaskReturn => S::TaskReturn,
             Step::Query(q) => S::Call(match q % 5 {

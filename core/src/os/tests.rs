@@ -1641,6 +1641,12 @@ fn every_step_stands_for_the_services_it_names() {
         RES_SCHEDULER
     ))));
     assert_eq!(distinct(&Step::ReleaseResource).len(), 5);
+    assert_eq!(distinct(&Step::FastGet).len(), 5);
+    assert_eq!(distinct(&Step::FastRelease).len(), 5);
+    assert_eq!(
+        Step::FastGet(1).service().as_osek(),
+        spec::Service::Call(ServiceCall::GetResource(ResourceId(1)))
+    );
     assert_eq!(distinct(&|a| Step::SetRel(a, a, a)).len(), 8);
     for start in 0..=u8::MAX {
         assert_eq!(
@@ -1656,6 +1662,11 @@ fn every_step_stands_for_the_services_it_names() {
     assert_eq!(distinct(&Step::Lock).len(), 6);
     assert_eq!(distinct(&Step::EnterIsr).len(), 4);
     assert_eq!(distinct(&Step::IsrTick).len(), 4);
+    assert_eq!(distinct(&Step::FastTick).len(), 4);
+    assert_eq!(
+        Step::FastTick(0).service().as_osek(),
+        spec::Service::Isr(IsrId(0), ServiceCall::IncrementCounter(CounterId(0)))
+    );
     assert_eq!(distinct(&|i| Step::IsrActivate(i, i)).len(), 12);
     // GetTaskId, GetIsrId, GetActiveApplicationMode, GetTaskState of 6 ids, GetAlarm of 4.
     assert_eq!(distinct(&Step::Query).len(), 13);
@@ -1673,7 +1684,7 @@ fn every_step_stands_for_the_services_it_names() {
 /// Random sequences of up to 64 steps keep the invariants and transition rules (a bolero
 /// test and fuzz target). Not a Kani proof: one symbolic step of any kind does not finish
 /// under Kani in 300 s (the book: `docs/src/kani.md`). Every sequence of up to 5 of these steps (each of
-/// the 4,338 services they stand for) on the small configuration is explored exhaustively
+/// the 4,352 services they stand for) on the small configuration is explored exhaustively
 /// by `cw-proofs steps` instead, and the model checker's configurations to the end.
 #[test]
 fn random_step_sequences_keep_the_invariants() {
@@ -1921,20 +1932,217 @@ fn after_an_isr_any_event_service_keeps_the_invariants() {
         });
 }
 
-/// Resources: GetResource, ReleaseResource (`RES_SCHEDULER` and invalid ids too).
+/// Resources: GetResource, ReleaseResource, and the port's lock by the fast paths
+/// (`RES_SCHEDULER` and invalid ids too).
 #[test]
 fn after_an_isr_any_resource_service_keeps_the_invariants() {
     bolero::check!()
-        .with_type::<(u8, u8, bool, u8)>()
+        .with_type::<(u8, u8, u8, u8)>()
         .cloned()
-        .for_each(|(isr, task, get, r)| {
-            let s = if get {
-                Step::GetResource(r)
-            } else {
-                Step::ReleaseResource(r)
+        .for_each(|(isr, task, kind, r)| {
+            let s = match kind % 4 {
+                0 => Step::GetResource(r),
+                1 => Step::ReleaseResource(r),
+                2 => Step::FastGet(r),
+                _ => Step::FastRelease(r),
             };
             second_step_keeps_the_invariants(isr, task, s);
         });
+}
+
+/// The port's lock by the fast paths: after an ISR started A or B, a lock of any resource
+/// id, then the release of any: each step checked against the full service
+/// (`spec::fast_path_agrees`: the same state, the same result, the kernel's mask), the
+/// transition rules and every invariant. (A bolero test and fuzz target; the two Kani
+/// proofs below take one fast step each, with the contract alone.)
+#[test]
+fn after_an_isr_any_fast_lock_pair_keeps_the_invariants() {
+    bolero::check!()
+        .with_type::<(bool, u8, u8)>()
+        .cloned()
+        .for_each(|(b, get, release)| {
+            let mut os = small_after_an_isr(0, u8::from(b));
+            for s in [Step::FastGet(get), Step::FastRelease(release)] {
+                let verdict = spec::call_and_check(&mut os, s.service());
+                assert!(verdict.is_ok(), "{s:?}: {verdict:?}");
+            }
+        });
+}
+
+/// `GetResource`'s fast path agrees with the service (`spec::fast_path_agrees`) for any
+/// resource id (the task's own, `RES_SCHEDULER`, invalid ones), taken by A or by B: so
+/// every rule and invariant the harnesses above prove of `GetResource` holds of it.
+#[test]
+#[cfg_attr(kani, kani::proof, kani::unwind(10))]
+fn any_fast_get_agrees_with_get_resource() {
+    bolero::check!()
+        .with_type::<(bool, u8)>()
+        .cloned()
+        .for_each(|(b, r)| {
+            let os = small_after_an_isr(0, u8::from(b));
+            let verdict = spec::fast_path_agrees(&os, Step::FastGet(r).service());
+            assert!(verdict.is_ok(), "{r}: {verdict:?}");
+        });
+}
+
+/// `ReleaseResource`'s fast path agrees with the service for any resource id, after A took
+/// resource 0, with B (above the priority A returns to) activated meanwhile or not: the
+/// fast path must decline the release that switches to B.
+#[test]
+#[cfg_attr(kani, kani::proof, kani::unwind(10))]
+fn any_fast_release_agrees_with_release_resource() {
+    bolero::check!()
+        .with_type::<(bool, u8)>()
+        .cloned()
+        .for_each(|(b_ready, r)| {
+            let mut os = small_after_an_isr(0, 0);
+            assert_eq!(os.get_resource(ResourceId(0)), Ok(()));
+            if b_ready {
+                assert_eq!(os.activate_task(TaskId(1)), Ok(()));
+            }
+            let verdict = spec::fast_path_agrees(&os, Step::FastRelease(r).service());
+            assert!(verdict.is_ok(), "{r}: {verdict:?}");
+        });
+}
+
+/// The OS tick's fast path agrees with the whole ISR (entry, `IncrementCounter`, return)
+/// for any ISR id (the configured one, invalid ones), from the idle loop after `StartOS`
+/// or from task A or B running: so every rule and invariant proved of the whole ISR holds
+/// of it.
+#[test]
+#[cfg_attr(kani, kani::proof, kani::unwind(10))]
+fn any_fast_tick_agrees_with_the_whole_isr() {
+    bolero::check!()
+        .with_type::<(u8, u8)>()
+        .cloned()
+        .for_each(|(from, i)| {
+            let os = match from % 3 {
+                0 => {
+                    let Ok(mut os) = SmallOs::new(&SMALL) else {
+                        panic!("the small configuration is valid")
+                    };
+                    assert_eq!(os.start_os(OSDEFAULTAPPMODE), Ok(()));
+                    os
+                }
+                task => small_after_an_isr(0, task - 1),
+            };
+            let verdict = spec::fast_path_agrees(&os, Step::FastTick(i).service());
+            assert!(verdict.is_ok(), "{i}: {verdict:?}");
+        });
+}
+
+/// The tick's fast path takes the ticks where nothing is due, from a task or the idle
+/// loop, and declines the rest, which the whole ISR then runs: a tick an alarm is due at,
+/// a tick nested in another ISR, a tick the mask holds, an unknown ISR or counter.
+#[test]
+fn the_fast_tick_takes_the_ticks_where_nothing_is_due() {
+    let (tick, counter) = (IsrId(0), CounterId(0));
+    let Ok(mut idle) = SmallOs::new(&SMALL) else {
+        panic!("the small configuration is valid")
+    };
+    assert_eq!(idle.start_os(OSDEFAULTAPPMODE), Ok(()));
+    assert_eq!(idle.try_tick(tick, counter), Some(0));
+    assert_eq!(idle.counter_value(counter), Some(1));
+    assert_eq!(idle.try_tick(IsrId(1), counter), None);
+    assert_eq!(idle.try_tick(tick, CounterId(1)), None);
+    // B runs and arms its alarm two ticks away: the first tick is fast, the second, where
+    // the alarm expires and sets B's event, is the whole ISR's.
+    let mut os = small_after_an_isr(0, 1);
+    assert_eq!(os.set_rel_alarm(AlarmId(0), 2, 0), Ok(()));
+    assert_eq!(os.try_tick(tick, counter), Some(2));
+    assert_eq!(os.get_alarm(AlarmId(0)), Ok(1));
+    let due = os;
+    assert_eq!(os.try_tick(tick, counter), None);
+    assert_eq!(os, due);
+    assert_eq!(
+        spec::call(&mut os, Step::FastTick(0).service()),
+        Ok(Returned::Nothing)
+    );
+    assert_eq!(os.events(TaskId(1)), 1);
+    // Under SuspendOSInterrupts the tick is held: declined.
+    assert_eq!(os.suspend_os_interrupts(), Ok(()));
+    assert_eq!(os.try_tick(tick, counter), None);
+    assert_eq!(os.resume_os_interrupts(), Ok(()));
+    // Nested in another ISR: declined.
+    assert_eq!(os.enter_isr(tick), Ok(()));
+    assert_eq!(os.try_tick(tick, counter), None);
+}
+
+/// A category-2 ISR takes and releases the resource it declares by the fast paths: its
+/// level rises to the ceiling and back, the same state as the services leave; a nested
+/// lock and a release out of order are declined, and the services refuse them.
+#[test]
+fn an_isr_locks_its_resource_by_the_fast_paths() {
+    let mut os = os();
+    let res = ResourceId(1);
+    assert_eq!(os.enter_isr(CAN), Ok(()));
+    let before = os;
+    let level = os.config().isr_level(usize::from(CAN.0));
+    // Mid (3) and Can use R1: its ceiling is Can's own level, so the level stays.
+    assert_eq!(os.try_get_resource(res), level);
+    assert_eq!(os.isr_held_resources(CAN).next(), Some(res));
+    let mut full = before;
+    assert_eq!(full.get_resource(res), Ok(()));
+    assert_eq!(os, full);
+    assert_eq!(os.try_get_resource(res), None);
+    assert_eq!(os.try_release_resource(ResourceId(0)), None);
+    assert_eq!(os.try_release_resource(res), level);
+    assert_eq!(os, before);
+    assert_eq!(os.try_release_resource(res), None);
+    // A resource the ISR does not declare, whose ceiling is below its level: in extended
+    // status the fast path declines and the service refuses (E_OS_ACCESS).
+    assert_eq!(os.try_get_resource(ResourceId(0)), None);
+    assert_eq!(os.get_resource(ResourceId(0)), Err(OsError::Access));
+}
+
+/// The fast paths take the common case and decline the rest, which the full services
+/// then refuse or carry out: a nested lock of the same resource (E_OS_ACCESS), a release
+/// of a resource not held (E_OS_NOFUNC), a release that lets a higher task in (the
+/// switch), a lock with an interrupt lock in force (E_OS_DISABLEDINT), a lock from an ISR.
+#[test]
+fn fast_lock_paths_take_the_common_case_and_decline_the_rest() {
+    let mut os = small_after_an_isr(0, 0);
+    let res = ResourceId(0);
+    assert_eq!(os.running(), Some(TaskId(0)));
+    // A second activation of A waits, at the priority A returns to: no reason to switch.
+    assert_eq!(os.activate_task(TaskId(0)), Ok(()));
+    // A (priority 1) and B (2) use resource 0: its ceiling is 2.
+    assert_eq!(os.try_get_resource(res), Some(2));
+    assert_eq!(os.running_priority(), Some(2));
+    assert_eq!(os.held_resources(TaskId(0)).next(), Some(res));
+    let held = os;
+    assert_eq!(os.try_get_resource(res), None);
+    assert_eq!(os, held);
+    assert_eq!(os.get_resource(res), Err(OsError::Access));
+    assert_eq!(os.try_release_resource(ResourceId(1)), None);
+    assert_eq!(os.try_release_resource(RES_SCHEDULER), None);
+    assert_eq!(os.try_release_resource(res), Some(1));
+    assert_eq!(os.running_priority(), Some(1));
+    assert_eq!(os.try_release_resource(res), None);
+    assert_eq!(os.release_resource(res), Err(OsError::NoFunc));
+    // B becomes ready while A holds the resource: the release must switch to B.
+    assert_eq!(os.try_get_resource(res), Some(2));
+    assert_eq!(os.activate_task(TaskId(1)), Ok(()));
+    assert_eq!(os.running(), Some(TaskId(0)));
+    let before = os;
+    assert_eq!(os.try_release_resource(res), None);
+    assert_eq!(os, before);
+    assert_eq!(os.release_resource(res), Ok(()));
+    assert_eq!(os.running(), Some(TaskId(1)));
+    // B under SuspendOSInterrupts: declined, and the service refuses.
+    assert_eq!(os.suspend_os_interrupts(), Ok(()));
+    assert_eq!(os.try_get_resource(res), None);
+    assert_eq!(os.get_resource(res), Err(OsError::DisabledInt));
+    assert_eq!(os.resume_os_interrupts(), Ok(()));
+    // B, whose priority is the ceiling itself, takes and releases it by the fast paths,
+    // and its priority stays.
+    assert_eq!(os.try_get_resource(res), Some(2));
+    assert_eq!(os.held_resources(TaskId(1)).next(), Some(res));
+    assert_eq!(os.try_release_resource(res), Some(2));
+    assert_eq!(os.held_resources(TaskId(1)).next(), None);
+    // From an ISR: the full service's holder is the ISR's frame.
+    assert_eq!(os.enter_isr(IsrId(0)), Ok(()));
+    assert_eq!(os.try_get_resource(res), None);
 }
 
 /// Alarms and counters: SetRelAlarm, SetAbsAlarm, CancelAlarm, IncrementCounter from a

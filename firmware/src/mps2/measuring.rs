@@ -574,6 +574,7 @@ fn report_trace() -> bool {
         }
         let flexcan = span::FLEXCAN_NAMES
             .iter()
+            .chain(&span::MORE_NAMES)
             .filter_map(|&(id, name)| t.spans.get(id).map(|r| (name, r)));
         for (name, r) in span::NAMES.iter().copied().zip(&t.spans).chain(flexcan) {
             let (mean, min, max) = instructions(r, &span_cal);

@@ -9,7 +9,8 @@ use std::vec::Vec;
 
 use cw_core::os::{
     ConformanceClass, CounterConfig, Dialect, HookSet, Hooks, IsrConfig, Os, OsConfig,
-    OsDescription, OsError, ServiceCall, Status, StatusType, TaskConfig, TaskId, OSDEFAULTAPPMODE,
+    OsDescription, OsError, ResourceId, ServiceCall, Status, StatusType, TaskConfig, TaskId,
+    OSDEFAULTAPPMODE,
 };
 
 use super::spec;
@@ -20,11 +21,11 @@ const LOW: TaskId = TaskId(0);
 const HIGH: TaskId = TaskId(1);
 const WAITER: TaskId = TaskId(2);
 
-static OS: OsConfig<3, 0, 1, 0, 2> = match OsConfig::new(
+static OS: OsConfig<3, 2, 1, 0, 2> = match OsConfig::new(
     OsDescription::new(
         [
-            TaskConfig::basic("Low", 1).autostart(),
-            TaskConfig::basic("High", 2),
+            TaskConfig::basic("Low", 1).autostart().uses(0b11),
+            TaskConfig::basic("High", 2).uses(0b10),
             TaskConfig::extended("Waiter", 3),
         ],
         [CounterConfig {
@@ -33,7 +34,10 @@ static OS: OsConfig<3, 0, 1, 0, 2> = match OsConfig::new(
             min_cycle: 1,
         }],
         [],
-        [IsrConfig::cat2("Tick", 1), IsrConfig::cat1("Fast", 3)],
+        [
+            IsrConfig::cat2("Tick", 1).uses(0b01),
+            IsrConfig::cat1("Fast", 3),
+        ],
     )
     .class(ConformanceClass::Ecc1)
     .status(Status::Extended)
@@ -48,7 +52,7 @@ static OS: OsConfig<3, 0, 1, 0, 2> = match OsConfig::new(
     Err(_) => panic!("the test configuration is inconsistent"),
 };
 
-cw_core::static_tables!(TestTables: OsConfig<3, 0, 1, 0, 2> = OS);
+cw_core::static_tables!(TestTables: OsConfig<3, 2, 1, 0, 2> = OS);
 
 /// What the hooks saw: the first errors, in order.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Hash)]
@@ -63,7 +67,7 @@ impl Seen {
     }
 }
 
-type Kernel = Os<3, 0, 1, 0, 2, 3, TestTables, Seen>;
+type Kernel = Os<3, 2, 1, 0, 2, 3, TestTables, Seen>;
 
 impl Hooks<Kernel> for Seen {
     fn error_hook(os: &mut Kernel, error: OsError) {
@@ -425,6 +429,34 @@ fn the_kernel_lock_is_the_os_level_and_never_masks_category_1() {
         !port.arch().all_in_lock.get(),
         "no kernel call masked every interrupt"
     );
+}
+
+#[test]
+fn the_fast_lock_applies_the_ceilings_mask_and_the_service_decides_the_rest() {
+    let port = started();
+    let (shared_with_tick, tasks_only) = (ResourceId(0), ResourceId(1));
+    // Shared with the category-2 ISR: the lock masks it, and switches nothing.
+    assert_eq!(port.get_resource(shared_with_tick), Ok(()));
+    assert_eq!(port.arch().level.get(), Some(InterruptMask::UpTo(1)));
+    assert!(!port.arch().switch.get());
+    // A nested lock of the same resource: the fast path declines, the service refuses
+    // and reports, and the lock stays as it was.
+    assert_eq!(port.get_resource(shared_with_tick), Err(OsError::Access));
+    assert_eq!(port.arch().level.get(), Some(InterruptMask::UpTo(1)));
+    assert_eq!(port.inspect(|os| os.hooks().errors()), [OsError::Access]);
+    assert_eq!(port.release_resource(shared_with_tick), Ok(()));
+    assert_eq!(port.arch().level.get(), Some(InterruptMask::None));
+    // Out of order: refused.
+    assert_eq!(port.release_resource(tasks_only), Err(OsError::NoFunc));
+    // A task-level ceiling: High, activated under it, waits for the release, which
+    // switches to it.
+    assert_eq!(port.get_resource(tasks_only), Ok(()));
+    assert_eq!(port.arch().level.get(), Some(InterruptMask::None));
+    port.kernel(|os| os.activate_task(HIGH)).expect("activate");
+    assert!(!port.arch().switch.get(), "High waits for the release");
+    assert_eq!(port.release_resource(tasks_only), Ok(()));
+    assert!(port.arch().switch.get(), "the release lets High in");
+    assert_eq!(port.inspect(|os| os.running()), Some(HIGH));
 }
 
 #[test]

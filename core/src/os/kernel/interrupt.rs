@@ -7,7 +7,7 @@ use crate::os::call::ServiceCall;
 use crate::os::callevel::Context;
 use crate::os::config::{IsrCategory, ISR_LEVEL_BASE};
 use crate::os::error::ServiceId;
-use crate::os::{Hooks, InterruptMask, IsrId, OsConfig, OsError};
+use crate::os::{CounterId, Hooks, InterruptMask, IsrId, OsConfig, OsError};
 use crate::tables::Tables;
 
 impl<
@@ -32,19 +32,14 @@ where
     /// while a hook or an alarm callback runs.
     #[inline]
     pub fn interrupt_mask(&self) -> InterruptMask {
-        let level = self.masked_level();
-        if level == u8::MAX {
-            InterruptMask::All
-        } else if level >= ISR_LEVEL_BASE {
-            InterruptMask::UpTo(level - ISR_LEVEL_BASE)
-        } else {
-            InterruptMask::None
-        }
+        InterruptMask::at_level(self.masked_level())
     }
 
-    /// The processor priority at or below which interrupts are held (`u8::MAX`: all).
+    /// The processor priority at or below which interrupts are held (`u8::MAX`: all):
+    /// [`Os::interrupt_mask`] is its [`InterruptMask::at_level`]. A port whose controller
+    /// masks by level applies it without the conversion.
     #[inline(always)]
-    fn masked_level(&self) -> u8 {
+    pub fn masked_level(&self) -> u8 {
         self.gate.max(self.current_level())
     }
 
@@ -104,13 +99,7 @@ where
                 OsError::State
             });
         }
-        let frame = IsrFrame {
-            isr: isr.0,
-            level,
-            res_top: NO_RES,
-            locks: self.locks,
-            interrupted: self.context,
-        };
+        let frame = self.frame_of(isr, level);
         let depth = self.isr_depth as usize;
         let Some(slot) = self.isr_stack.get_mut(depth) else {
             return Err(OsError::Access);
@@ -125,6 +114,64 @@ where
         self.preempt_at = u8::MAX;
         self.sync_denied();
         Ok(())
+    }
+
+    /// The OS tick for the common case: category-2 ISR `isr`, whose whole body is
+    /// `IncrementCounter(counter)`, interrupts a task or the idle loop at task level, its
+    /// priority is above the processor priority, and no alarm of the counter is due at this
+    /// tick. Then the ISR's entry, the service and its return together only advance the
+    /// counter and the delta of the alarm at the head of its list (and leave the ISR's
+    /// frame in the free slot, as the return does): this does that, in one step.
+    ///
+    /// Returns the processor priority at or below which the kernel's mask holds interrupts
+    /// now (its [`InterruptMask::at_level`] is `interrupt_mask()`); `None`, with nothing
+    /// changed, in every other case, where the port runs the ISR whole (`enter_isr`, the
+    /// service, `exit_isr`). The contract is `spec::fast_path_agrees`, as for the lock's
+    /// fast paths.
+    #[inline(always)]
+    pub fn try_tick(&mut self, isr: IsrId, counter: CounterId) -> Option<u8> {
+        if self.isr_depth != 0 || !matches!(self.context, Context::Task | Context::Idle) {
+            return None;
+        }
+        let cfg = self.cfg();
+        let config = cfg.isrs.get(isr.0 as usize)?;
+        let level = ISR_LEVEL_BASE + config.priority;
+        let refused = cfg.denied[Context::Isr2 as usize] & ServiceId::IncrementCounter.bit();
+        if !matches!(config.category, IsrCategory::Two) || refused != 0 {
+            return None;
+        }
+        let masked = self.masked_level();
+        if level <= masked {
+            return None;
+        }
+        let c = counter.0 as usize;
+        let max = cfg.counters.get(c)?.max_allowed_value;
+        let head = usize::from(*self.counter_head.get(c)?);
+        // The head's delta is at least 1 between ticks; at 1 the alarm is due now.
+        if self.alarm_delta.get(head).is_some_and(|delta| *delta <= 1) {
+            return None;
+        }
+        *self.isr_stack.first_mut()? = self.frame_of(isr, level);
+        if let Some(value) = self.counter_value.get_mut(c) {
+            *value = if *value >= max { 0 } else { *value + 1 };
+        }
+        if let Some(delta) = self.alarm_delta.get_mut(head) {
+            *delta -= 1;
+        }
+        Some(masked)
+    }
+
+    /// The frame of ISR `isr` entered now at processor priority `level`: no resources
+    /// held, the locks in force and the context it interrupts.
+    #[inline(always)]
+    fn frame_of(&self, isr: IsrId, level: u8) -> IsrFrame {
+        IsrFrame {
+            isr: isr.0,
+            level,
+            res_top: NO_RES,
+            locks: self.locks,
+            interrupted: self.context,
+        }
     }
 
     /// The innermost ISR returns. An ISR that leaves interrupt locks or resources behind

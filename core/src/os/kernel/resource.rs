@@ -236,6 +236,151 @@ where
         )
     }
 
+    /// `GetResource` for the common case, by the stack resource policy: the running task at
+    /// task level, or the innermost category-2 ISR, with no interrupt lock in force, a user
+    /// resource that is free and (extended status) whose ceiling is at or above the caller's
+    /// priority. The resource is pushed on the caller's stack and its priority raised to the
+    /// ceiling (a task's preemption threshold with it): the state `GetResource` leaves,
+    /// without its call-level table, its holder lookup or its reschedule (taking a resource
+    /// never lets a task in).
+    ///
+    /// Returns the processor priority the caller runs at now, whose
+    /// [`InterruptMask::at_level`](crate::os::InterruptMask::at_level) is the kernel's mask;
+    /// `None`, with nothing changed, in every other case, where the caller makes the full
+    /// service call, which decides, refuses and reports to `ErrorHook`. With a constant
+    /// `res` and build-time tables (`static_tables!`) the ceiling is a constant, so the
+    /// access check is one load and one compare. `spec::fast_path_agrees` states the
+    /// contract (the same state as `GetResource`, the same mask); the harnesses and the
+    /// models check it on every step that takes this path.
+    #[inline(always)]
+    pub fn try_get_resource(&mut self, res: ResourceId) -> Option<u8> {
+        if self.denied & ServiceId::GetResource.bit() != 0 {
+            return None;
+        }
+        match self.context {
+            Context::Task => self.try_get_for_task(res),
+            Context::Isr2 => self.try_get_for_isr(res),
+            _ => None,
+        }
+    }
+
+    #[inline(always)]
+    fn try_get_for_task(&mut self, res: ResourceId) -> Option<u8> {
+        let t = self.running as usize;
+        let ceiling = self.cfg().resource_ceiling(res.0 as usize)?;
+        let own = *self.cfg().priority.get(t)?;
+        if own > ceiling && self.extended() {
+            return None;
+        }
+        let top = *self.res_top.get(t)?;
+        let current = self.running_prio;
+        let state = self.res.get_mut(res.0 as usize)?;
+        if state.owner != NONE {
+            return None;
+        }
+        *state = ResState {
+            owner: t as u8,
+            prev_prio: current,
+            next: top,
+        };
+        if let Some(slot) = self.res_top.get_mut(t) {
+            *slot = res.0;
+        }
+        // At task level in the running phase the threshold is the priority + 1.
+        let level = ceiling.max(current);
+        self.running_prio = level;
+        self.preempt_at = level.saturating_add(1);
+        Some(level)
+    }
+
+    #[inline(always)]
+    fn try_get_for_isr(&mut self, res: ResourceId) -> Option<u8> {
+        let depth = (self.isr_depth as usize).checked_sub(1)?;
+        let frame = *self.isr_stack.get(depth)?;
+        let ceiling = self.cfg().resource_ceiling(res.0 as usize)?;
+        let own = *self.cfg().isr_level.get(frame.isr as usize)?;
+        if own > ceiling && self.extended() {
+            return None;
+        }
+        let state = self.res.get_mut(res.0 as usize)?;
+        if state.owner != NONE {
+            return None;
+        }
+        *state = ResState {
+            owner: (T + frame.isr as usize) as u8,
+            prev_prio: frame.level,
+            next: frame.res_top,
+        };
+        let level = ceiling.max(frame.level);
+        if let Some(slot) = self.isr_stack.get_mut(depth) {
+            slot.res_top = res.0;
+            slot.level = level;
+        }
+        Some(level)
+    }
+
+    /// `ReleaseResource` for the common case: the running task at task level, or the
+    /// innermost category-2 ISR, with no interrupt lock in force, `res` the user resource
+    /// it took last, and (a task) no ready task above the priority it returns to. The
+    /// resource is popped and the priority (a task's threshold with it) restored: the state
+    /// `ReleaseResource` leaves when it does not switch tasks.
+    ///
+    /// Returns the processor priority the caller runs at now; `None`, with nothing
+    /// changed, in every other case (a task switch among them), where the caller makes the
+    /// full service call. The contract is `spec::fast_path_agrees`, as for
+    /// [`Os::try_get_resource`].
+    #[inline(always)]
+    pub fn try_release_resource(&mut self, res: ResourceId) -> Option<u8> {
+        if self.denied & ServiceId::ReleaseResource.bit() != 0 {
+            return None;
+        }
+        match self.context {
+            Context::Task => self.try_release_for_task(res),
+            Context::Isr2 => self.try_release_for_isr(res),
+            _ => None,
+        }
+    }
+
+    #[inline(always)]
+    fn try_release_for_task(&mut self, res: ResourceId) -> Option<u8> {
+        let t = self.running as usize;
+        if *self.res_top.get(t)? != res.0 {
+            return None;
+        }
+        // (Taken by this task, so in extended status its priority is at or below the
+        // ceiling: `GetResource` checked the same constants.)
+        let state = self.res.get_mut(res.0 as usize)?;
+        let prev = state.prev_prio;
+        if self.ready.highest().is_some_and(|top| top > prev) {
+            return None;
+        }
+        let next = state.next;
+        *state = FREE_RES;
+        if let Some(slot) = self.res_top.get_mut(t) {
+            *slot = next;
+        }
+        self.running_prio = prev;
+        self.preempt_at = prev.saturating_add(1);
+        Some(prev)
+    }
+
+    #[inline(always)]
+    fn try_release_for_isr(&mut self, res: ResourceId) -> Option<u8> {
+        let depth = (self.isr_depth as usize).checked_sub(1)?;
+        if self.isr_stack.get(depth)?.res_top != res.0 {
+            return None;
+        }
+        // An ISR's release never switches tasks (that waits for the last ISR's return).
+        let state = self.res.get_mut(res.0 as usize)?;
+        let released = *state;
+        *state = FREE_RES;
+        if let Some(slot) = self.isr_stack.get_mut(depth) {
+            slot.res_top = released.next;
+            slot.level = released.prev_prio;
+        }
+        Some(released.prev_prio)
+    }
+
     /// Pops `res`, the top of `holder`'s stack, and restores the holder's priority.
     fn release_top(&mut self, holder: Holder, res: ResourceId) -> Result<(), OsError> {
         let state = self.res_state_mut(res)?;
