@@ -680,6 +680,23 @@ impl<P: Port<Kernel = Kernel>, B: Board> Ecu<P, B> {
         });
     }
 
+    /// `ticks` OS ticks at once where the kernel's tick fast path would take each one by
+    /// one (nothing due at any of them): `true` when taken, `false` (nothing changed) when
+    /// the caller must run them one by one. For a simulation in virtual time.
+    pub fn quiet_ticks(&self, ticks: u64) -> bool {
+        self.port.kernel(|os| {
+            os.try_ticks(config::SYSTICK_ISR, config::SYSTEM_COUNTER, ticks)
+                .is_some()
+        })
+    }
+
+    /// The OS ticks until the next alarm of the system counter is due (`u64::MAX`: none
+    /// armed).
+    pub fn ticks_to_expiry(&self) -> u64 {
+        self.port
+            .inspect(|os| os.ticks_to_expiry(config::SYSTEM_COUNTER).unwrap_or(0))
+    }
+
     /// `CanIsr`: the CAN controller's pending events, in order, into CanIf and upwards.
     /// Out of line, as an ISR's body is (`ISR(CanIsr)`).
     #[inline(never)]

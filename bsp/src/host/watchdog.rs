@@ -43,6 +43,12 @@ impl SimWatchdog {
             .filter(|&t| t <= self.clock.now_us())
     }
 
+    /// When the reset comes unless the watchdog is triggered again, µs (`None`: not
+    /// started).
+    pub fn deadline_us(&self) -> Option<u64> {
+        self.state.get().deadline_us
+    }
+
     /// The last trigger, µs.
     pub fn last_trigger_us(&self) -> Option<u64> {
         self.state.get().last_trigger_us

@@ -384,6 +384,54 @@ where
     }
 }
 
+/// The contract of [`Os::try_ticks`]: `ticks` ticks at once are taken exactly when each
+/// of `ticks` successive [`Os::try_tick`] calls would be, and leave the state those leave,
+/// with the same level; declined, they change nothing.
+///
+/// # Errors
+/// Which part of the contract is broken.
+pub fn ticks_agree<
+    const T: usize,
+    const R: usize,
+    const C: usize,
+    const A: usize,
+    const I: usize,
+    const Q: usize,
+    K,
+    H,
+>(
+    before: &Os<T, R, C, A, I, Q, K, H>,
+    isr: IsrId,
+    counter: CounterId,
+    ticks: u64,
+) -> Result<(), &'static str>
+where
+    K: Tables<OsConfig<T, R, C, A, I>>,
+    H: Hooks<Os<T, R, C, A, I, Q, K, H>>,
+{
+    let mut at_once = *before;
+    let taken = at_once.try_ticks(isr, counter, ticks);
+    let mut one_by_one = *before;
+    let mut level = None;
+    let mut each = ticks > 0;
+    for _ in 0..ticks {
+        level = one_by_one.try_tick(isr, counter);
+        if level.is_none() {
+            each = false;
+            break;
+        }
+    }
+    match taken {
+        None if at_once != *before => Err("declined ticks changed the state"),
+        None if each => Err("ticks the fast path takes one by one were declined at once"),
+        None => Ok(()),
+        Some(_) if !each => Err("ticks were taken at once that one by one are not"),
+        Some(_) if at_once != one_by_one => Err("ticks at once left another state"),
+        Some(l) if Some(l) != level => Err("ticks at once gave another level"),
+        Some(_) => Ok(()),
+    }
+}
+
 /// Whether two kernels are in the same state apart from the hooks' data.
 pub fn same_kernel_state<
     const T: usize,

@@ -2095,6 +2095,50 @@ fn an_isr_locks_its_resource_by_the_fast_paths() {
     assert_eq!(os.get_resource(ResourceId(0)), Err(OsError::Access));
 }
 
+/// Any number of ticks at once (`try_ticks`, the tickless simulation's step) agrees with
+/// as many fast ticks one by one (`spec::ticks_agree`), from the idle loop or with A or B
+/// running, with B's alarm armed any number of ticks away or not.
+#[test]
+fn any_ticks_at_once_agree_with_the_ticks_one_by_one() {
+    bolero::check!()
+        .with_type::<(u8, u8, u8, u8)>()
+        .cloned()
+        .for_each(|(from, alarm, i, n)| {
+            let mut os = match from % 3 {
+                0 => {
+                    let Ok(mut os) = SmallOs::new(&SMALL) else {
+                        panic!("the small configuration is valid")
+                    };
+                    assert_eq!(os.start_os(OSDEFAULTAPPMODE), Ok(()));
+                    os
+                }
+                task => small_after_an_isr(0, task - 1),
+            };
+            if from % 3 != 0 && alarm % 4 != 0 {
+                let _ = os.set_rel_alarm(AlarmId(0), TickType::from(alarm % 4), 0);
+            }
+            let verdict = spec::ticks_agree(&os, IsrId(i % 3), CounterId(0), u64::from(n % 9));
+            assert!(verdict.is_ok(), "{i} x{n}: {verdict:?}");
+        });
+}
+
+#[test]
+fn ticks_at_once_stop_before_the_alarm_and_wrap_the_counter() {
+    let (tick, counter) = (IsrId(0), CounterId(0));
+    let mut os = small_after_an_isr(0, 1);
+    assert_eq!(os.ticks_to_expiry(counter), Some(u64::MAX));
+    // The counter counts 0..=3: five ticks from 0 wrap it to 1.
+    assert_eq!(os.try_ticks(tick, counter, 5), Some(2));
+    assert_eq!(os.counter_value(counter), Some(1));
+    assert_eq!(os.set_rel_alarm(AlarmId(0), 3, 0), Ok(()));
+    assert_eq!(os.ticks_to_expiry(counter), Some(3));
+    assert_eq!(os.try_ticks(tick, counter, 3), None);
+    assert_eq!(os.try_ticks(tick, counter, 0), None);
+    assert_eq!(os.try_ticks(tick, counter, 2), Some(2));
+    assert_eq!(os.ticks_to_expiry(counter), Some(1));
+    assert_eq!(os.ticks_to_expiry(CounterId(1)), None);
+}
+
 /// The fast paths take the common case and decline the rest, which the full services
 /// then refuse or carry out: a nested lock of the same resource (E_OS_ACCESS), a release
 /// of a resource not held (E_OS_NOFUNC), a release that lets a higher task in (the

@@ -1,4 +1,5 @@
-//! The simulation loop: board, ECU and scenario in 1 ms steps of virtual time.
+//! The simulation loop: board, ECU and scenario in 1 ms steps of virtual time, the
+//! milliseconds where nothing happens but the OS tick passed over at once.
 
 use std::cell::{Cell, RefCell};
 use std::rc::Rc;
@@ -380,10 +381,48 @@ impl Simulation {
     }
 
     /// Runs until virtual time `end_ms`.
+    ///
+    /// Tickless: the milliseconds in which nothing would happen but the OS tick with
+    /// nothing due (`Simulation::quiet_ms`) are passed over in one kernel step
+    /// (`Os::try_ticks`, which takes them only where each tick's fast path would), and the
+    /// next millisecond is stepped whole. The CAN log and the trace are those of a run
+    /// stepped every millisecond.
     pub fn run_until_ms(&mut self, end_ms: u64) {
         while self.now_ms < end_ms && self.reset_at_us.is_none() {
+            let quiet = self.quiet_ms(end_ms);
+            if quiet > 0 && self.ecu.quiet_ticks(quiet) {
+                self.now_ms += quiet;
+            }
             self.step();
         }
+    }
+
+    /// How many of the milliseconds after now have nothing to step but the OS tick with
+    /// nothing due: they end before the next millisecond that has a trace row, a CAN
+    /// event (a frame's end on the bus), a scenario event (injected errors, the PC's
+    /// frames), the watchdog's deadline, or an alarm due, and before the run's last
+    /// millisecond. (The inputs the scenario sets every millisecond, the distance, the
+    /// mode inputs and the sensor's dropouts, are read only by the tasks, which run only
+    /// in stepped milliseconds.)
+    fn quiet_ms(&self, end_ms: u64) -> u64 {
+        let now = self.now_ms;
+        let trace_row = (now / 10 + 1) * 10;
+        let bus = self.bus.next_event_us().map(|t| t.div_ceil(1000));
+        let watchdog = self.watchdog.deadline_us().map(|t| t.div_ceil(1000));
+        let scenario = self
+            .scenario
+            .can_errors
+            .iter()
+            .map(|(at, _)| u64::from(*at))
+            .chain(self.scenario.frames.iter().map(|(at, _)| u64::from(*at)))
+            .filter(|&at| at > now)
+            .min();
+        let alarm = now.saturating_add(self.ecu.ticks_to_expiry());
+        let next = [bus, watchdog, scenario]
+            .into_iter()
+            .flatten()
+            .fold(end_ms.min(trace_row).min(alarm), u64::min);
+        next.saturating_sub(now + 1)
     }
 
     /// When the watchdog reset the ECU, µs (the run ended there), if it did.

@@ -337,6 +337,14 @@ where
         )
     }
 
+    /// The ticks of `counter` until its next alarm is due (the tick that many ticks from
+    /// now expires it), or `u64::MAX` when none is armed; `None` for an unknown counter.
+    /// The ticks before that one have nothing to do but count.
+    pub fn ticks_to_expiry(&self, counter: CounterId) -> Option<u64> {
+        let head = usize::from(*self.counter_head.get(counter.0 as usize)?);
+        Some(self.alarm_delta.get(head).copied().unwrap_or(u64::MAX))
+    }
+
     /// `IncrementCounter`: advances a counter by one tick and runs the actions of the alarms
     /// that expire. At task level this is a rescheduling point. An action that fails is
     /// reported to `ErrorHook` with its own service and parameters; `IncrementCounter`

@@ -7,7 +7,7 @@ use crate::os::call::ServiceCall;
 use crate::os::callevel::Context;
 use crate::os::config::{IsrCategory, ISR_LEVEL_BASE};
 use crate::os::error::ServiceId;
-use crate::os::{CounterId, Hooks, InterruptMask, IsrId, OsConfig, OsError};
+use crate::os::{CounterId, Hooks, InterruptMask, IsrId, OsConfig, OsError, TickType};
 use crate::tables::Tables;
 
 impl<
@@ -130,7 +130,20 @@ where
     /// fast paths.
     #[inline(always)]
     pub fn try_tick(&mut self, isr: IsrId, counter: CounterId) -> Option<u8> {
-        if self.isr_depth != 0 || !matches!(self.context, Context::Task | Context::Idle) {
+        self.try_ticks(isr, counter, 1)
+    }
+
+    /// `ticks` (at least 1) OS ticks of [`Os::try_tick`] at once, all or none: the state
+    /// `ticks` successive fast ticks leave, where each of them would be taken (no alarm
+    /// due at any of them: `ticks` is below [`Os::ticks_to_expiry`]); `None`, with nothing
+    /// changed, otherwise. For a simulation in virtual time, which need not run the ticks
+    /// where nothing happens one by one (`spec::ticks_agree` is the contract).
+    #[inline(always)]
+    pub fn try_ticks(&mut self, isr: IsrId, counter: CounterId, ticks: u64) -> Option<u8> {
+        // At task level only: nested in another ISR, the ticks' frames would go above it.
+        // (Of the contexts at task level, only a task and the idle loop admit a category-2
+        // ISR: the mask test below declines the hooks, and before and after the run.)
+        if ticks == 0 || self.isr_depth != 0 {
             return None;
         }
         let cfg = self.cfg();
@@ -147,16 +160,30 @@ where
         let c = counter.0 as usize;
         let max = cfg.counters.get(c)?.max_allowed_value;
         let head = usize::from(*self.counter_head.get(c)?);
-        // The head's delta is at least 1 between ticks; at 1 the alarm is due now.
-        if self.alarm_delta.get(head).is_some_and(|delta| *delta <= 1) {
+        // The head's delta is at least 1 between ticks; the tick that brings it to 0 is
+        // the one its alarm is due at.
+        if self
+            .alarm_delta
+            .get(head)
+            .is_some_and(|delta| *delta <= ticks)
+        {
             return None;
         }
         *self.isr_stack.first_mut()? = self.frame_of(isr, level);
         if let Some(value) = self.counter_value.get_mut(c) {
-            *value = if *value >= max { 0 } else { *value + 1 };
+            *value = if ticks == 1 {
+                if *value >= max {
+                    0
+                } else {
+                    *value + 1
+                }
+            } else {
+                // (`value <= max`, so the sum does not overflow and the remainder fits.)
+                ((u64::from(*value) + ticks) % (u64::from(max) + 1)) as TickType
+            };
         }
         if let Some(delta) = self.alarm_delta.get_mut(head) {
-            *delta -= 1;
+            *delta -= ticks;
         }
         Some(masked)
     }
