@@ -969,10 +969,7 @@ fn a_second_shutdown_changes_nothing() {
 /// Without a `ShutdownHook` configured, `ShutdownOS` stops the OS all the same.
 #[test]
 fn shutdown_without_a_shutdown_hook() {
-    let Ok(mut os) = SmallOs::new(&SMALL) else {
-        panic!("the small configuration is valid")
-    };
-    assert_eq!(os.start_os(OSDEFAULTAPPMODE), Ok(()));
+    let mut os = small_started();
     assert_eq!(os.enter_isr(IsrId(0)), Ok(()));
     assert_eq!(os.activate_task(TaskId(0)), Ok(()));
     assert_eq!(os.exit_isr(), Ok(()));
@@ -1755,14 +1752,20 @@ fn transition_rules_can_fail() {
     assert!(spec::isr_nesting_consistent(&forced));
 }
 
-/// The small configuration started, then one ISR (either id, or an invalid one) that
-/// activates any task (either one, or an invalid id) and returns, checked against the
-/// rules and invariants like every step.
-fn small_after_an_isr(isr: u8, task: u8) -> SmallOs {
+/// The small configuration right after `StartOS`: nothing runs yet (the idle loop).
+fn small_started() -> SmallOs {
     let Ok(mut os) = SmallOs::new(&SMALL) else {
         panic!("the small configuration is valid")
     };
     assert_eq!(os.start_os(OSDEFAULTAPPMODE), Ok(()));
+    os
+}
+
+/// The small configuration started, then one ISR (either id, or an invalid one) that
+/// activates any task (either one, or an invalid id) and returns, checked against the
+/// rules and invariants like every step.
+fn small_after_an_isr(isr: u8, task: u8) -> SmallOs {
+    let mut os = small_started();
     let first = spec::Service::Isr(IsrId(isr % 2), ServiceCall::ActivateTask(TaskId(task % 3)));
     let verdict = spec::call_and_check(&mut os, first);
     assert!(verdict.is_ok(), "{first:?}: {verdict:?}");
@@ -1780,10 +1783,7 @@ fn second_step_keeps_the_invariants(isr: u8, task: u8, s: Step) {
 /// The small configuration right after `StartOS` (no task runs yet), then step `s`, checked
 /// against the transition rules and every kernel invariant.
 fn first_step_keeps_the_invariants(s: Step) {
-    let Ok(mut os) = SmallOs::new(&SMALL) else {
-        panic!("the small configuration is valid")
-    };
-    assert_eq!(os.start_os(OSDEFAULTAPPMODE), Ok(()));
+    let mut os = small_started();
     let verdict = spec::call_and_check(&mut os, s.service());
     assert!(verdict.is_ok(), "{s:?}: {verdict:?}");
 }
@@ -2017,13 +2017,7 @@ fn any_fast_tick_agrees_with_the_whole_isr() {
         .cloned()
         .for_each(|(from, i)| {
             let os = match from % 3 {
-                0 => {
-                    let Ok(mut os) = SmallOs::new(&SMALL) else {
-                        panic!("the small configuration is valid")
-                    };
-                    assert_eq!(os.start_os(OSDEFAULTAPPMODE), Ok(()));
-                    os
-                }
+                0 => small_started(),
                 task => small_after_an_isr(0, task - 1),
             };
             let verdict = spec::fast_path_agrees(&os, Step::FastTick(i).service());
@@ -2037,10 +2031,7 @@ fn any_fast_tick_agrees_with_the_whole_isr() {
 #[test]
 fn the_fast_tick_takes_the_ticks_where_nothing_is_due() {
     let (tick, counter) = (IsrId(0), CounterId(0));
-    let Ok(mut idle) = SmallOs::new(&SMALL) else {
-        panic!("the small configuration is valid")
-    };
-    assert_eq!(idle.start_os(OSDEFAULTAPPMODE), Ok(()));
+    let mut idle = small_started();
     assert_eq!(idle.try_tick(tick, counter), Some(0));
     assert_eq!(idle.counter_value(counter), Some(1));
     assert_eq!(idle.try_tick(IsrId(1), counter), None);
@@ -2105,13 +2096,7 @@ fn any_ticks_at_once_agree_with_the_ticks_one_by_one() {
         .cloned()
         .for_each(|(from, alarm, i, n)| {
             let mut os = match from % 3 {
-                0 => {
-                    let Ok(mut os) = SmallOs::new(&SMALL) else {
-                        panic!("the small configuration is valid")
-                    };
-                    assert_eq!(os.start_os(OSDEFAULTAPPMODE), Ok(()));
-                    os
-                }
+                0 => small_started(),
                 task => small_after_an_isr(0, task - 1),
             };
             if from % 3 != 0 && alarm % 4 != 0 {
