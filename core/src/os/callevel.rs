@@ -184,6 +184,10 @@ const ISR2: u64 = TASK
         S::WaitEvent,
     ]);
 
+// The OS tick's fast path (`Os::try_ticks`) takes a category-2 ISR's `IncrementCounter`
+// without the call-level table: it must stay allowed there.
+const _: () = assert!(ISR2 & S::IncrementCounter.bit() != 0);
+
 /// The services `context` may call in `dialect`, one bit per [`ServiceId`].
 pub const fn allowed(dialect: Dialect, context: Context) -> u64 {
     let autosar = matches!(dialect, Dialect::Autosar);

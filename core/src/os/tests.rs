@@ -1331,7 +1331,7 @@ fn dialects_differ_where_the_standards_do() {
 
 #[test]
 fn standard_status_leaves_out_only_harmless_checks() {
-    fn config(status: Status) -> OsConfig<2, 1, 1, 1, 0> {
+    fn config(status: Status) -> OsConfig<2, 1, 1, 1, 1> {
         match OsConfig::new(
             OsDescription::new(
                 [
@@ -1344,7 +1344,7 @@ fn standard_status_leaves_out_only_harmless_checks() {
                     CounterId(0),
                     AlarmAction::ActivateTask(TaskId(0)),
                 )],
-                [],
+                [IsrConfig::cat2("I", 1)],
             )
             .status(status),
         ) {
@@ -1352,12 +1352,12 @@ fn standard_status_leaves_out_only_harmless_checks() {
             Err(e) => panic!("{}", e.describe()),
         }
     }
-    static STANDARD: std::sync::LazyLock<OsConfig<2, 1, 1, 1, 0>> =
+    static STANDARD: std::sync::LazyLock<OsConfig<2, 1, 1, 1, 1>> =
         std::sync::LazyLock::new(|| config(Status::Standard));
-    static EXTENDED: std::sync::LazyLock<OsConfig<2, 1, 1, 1, 0>> =
+    static EXTENDED: std::sync::LazyLock<OsConfig<2, 1, 1, 1, 1>> =
         std::sync::LazyLock::new(|| config(Status::Extended));
-    let start = |cfg: &'static OsConfig<2, 1, 1, 1, 0>| {
-        let Ok(mut os) = Os::<2, 1, 1, 1, 0, 2>::new(cfg) else {
+    let start = |cfg: &'static OsConfig<2, 1, 1, 1, 1>| {
+        let Ok(mut os) = Os::<2, 1, 1, 1, 1, 2>::new(cfg) else {
             panic!("refused");
         };
         assert_eq!(os.start_os(OSDEFAULTAPPMODE), Ok(()));
@@ -1380,6 +1380,18 @@ fn standard_status_leaves_out_only_harmless_checks() {
     // the ceiling first).
     assert_eq!(std_os.release_resource(ResourceId(0)), Err(OsError::NoFunc));
     assert_eq!(ext_os.release_resource(ResourceId(0)), Err(OsError::Access));
+    // The lock's fast paths follow the status as the services do: in standard status they
+    // take a lock above the ceiling, from a task and from an ISR; in extended status they
+    // decline it (and the service refuses it, above).
+    for (os, taken) in [(&mut std_os, true), (&mut ext_os, false)] {
+        assert_eq!(os.try_get_resource(ResourceId(0)), taken.then_some(4));
+        assert_eq!(os.try_release_resource(ResourceId(0)), taken.then_some(4));
+        assert_eq!(os.enter_isr(IsrId(0)), Ok(()));
+        let level = os.config().isr_level(0).filter(|_| taken);
+        assert_eq!(os.try_get_resource(ResourceId(0)), level);
+        assert_eq!(os.try_release_resource(ResourceId(0)), level);
+        assert_eq!(os.exit_isr(), Ok(()));
+    }
     for os in [&mut std_os, &mut ext_os] {
         assert_eq!(os.activate_task(TaskId(2)), Err(OsError::Id));
         assert_eq!(os.wait_event(1), Err(OsError::Access));

@@ -149,8 +149,9 @@ where
         let cfg = self.cfg();
         let config = cfg.isrs.get(isr.0 as usize)?;
         let level = ISR_LEVEL_BASE + config.priority;
-        let refused = cfg.denied[Context::Isr2 as usize] & ServiceId::IncrementCounter.bit();
-        if !matches!(config.category, IsrCategory::Two) || refused != 0 {
+        // (A category-2 ISR may call `IncrementCounter` in both dialects: `callevel`
+        // asserts it when it builds its table.)
+        if !matches!(config.category, IsrCategory::Two) {
             return None;
         }
         let masked = self.masked_level();
@@ -169,19 +170,20 @@ where
         {
             return None;
         }
-        *self.isr_stack.first_mut()? = self.frame_of(isr, level);
-        if let Some(value) = self.counter_value.get_mut(c) {
-            *value = if ticks == 1 {
-                if *value >= max {
-                    0
-                } else {
-                    *value + 1
-                }
+        let frame = self.frame_of(isr, level);
+        let slot = self.isr_stack.first_mut()?;
+        let value = self.counter_value.get_mut(c)?;
+        *slot = frame;
+        *value = if ticks == 1 {
+            if *value >= max {
+                0
             } else {
-                // (`value <= max`, so the sum does not overflow and the remainder fits.)
-                ((u64::from(*value) + ticks) % (u64::from(max) + 1)) as TickType
-            };
-        }
+                *value + 1
+            }
+        } else {
+            // (`value <= max`, so the sum does not overflow and the remainder fits.)
+            ((u64::from(*value) + ticks) % (u64::from(max) + 1)) as TickType
+        };
         if let Some(delta) = self.alarm_delta.get_mut(head) {
             *delta -= ticks;
         }

@@ -272,8 +272,8 @@ where
         if own > ceiling && self.extended() {
             return None;
         }
-        let top = *self.res_top.get(t)?;
         let current = self.running_prio;
+        let top = self.res_top.get_mut(t)?;
         let state = self.res.get_mut(res.0 as usize)?;
         if state.owner != NONE {
             return None;
@@ -281,11 +281,9 @@ where
         *state = ResState {
             owner: t as u8,
             prev_prio: current,
-            next: top,
+            next: *top,
         };
-        if let Some(slot) = self.res_top.get_mut(t) {
-            *slot = res.0;
-        }
+        *top = res.0;
         // At task level in the running phase the threshold is the priority + 1.
         let level = ceiling.max(current);
         self.running_prio = level;
@@ -296,26 +294,25 @@ where
     #[inline(always)]
     fn try_get_for_isr(&mut self, res: ResourceId) -> Option<u8> {
         let depth = (self.isr_depth as usize).checked_sub(1)?;
-        let frame = *self.isr_stack.get(depth)?;
+        let isr = self.isr_stack.get(depth)?.isr;
         let ceiling = self.cfg().resource_ceiling(res.0 as usize)?;
-        let own = *self.cfg().isr_level.get(frame.isr as usize)?;
+        let own = *self.cfg().isr_level.get(isr as usize)?;
         if own > ceiling && self.extended() {
             return None;
         }
+        let frame = self.isr_stack.get_mut(depth)?;
         let state = self.res.get_mut(res.0 as usize)?;
         if state.owner != NONE {
             return None;
         }
         *state = ResState {
-            owner: (T + frame.isr as usize) as u8,
+            owner: (T + isr as usize) as u8,
             prev_prio: frame.level,
             next: frame.res_top,
         };
         let level = ceiling.max(frame.level);
-        if let Some(slot) = self.isr_stack.get_mut(depth) {
-            slot.res_top = res.0;
-            slot.level = level;
-        }
+        frame.res_top = res.0;
+        frame.level = level;
         Some(level)
     }
 
@@ -344,21 +341,19 @@ where
     #[inline(always)]
     fn try_release_for_task(&mut self, res: ResourceId) -> Option<u8> {
         let t = self.running as usize;
-        if *self.res_top.get(t)? != res.0 {
+        let top = self.res_top.get_mut(t)?;
+        if *top != res.0 {
             return None;
         }
         // (Taken by this task, so in extended status its priority is at or below the
         // ceiling: `GetResource` checked the same constants.)
         let state = self.res.get_mut(res.0 as usize)?;
         let prev = state.prev_prio;
-        if self.ready.highest().is_some_and(|top| top > prev) {
+        if self.ready.highest().is_some_and(|ready| ready > prev) {
             return None;
         }
-        let next = state.next;
+        *top = state.next;
         *state = FREE_RES;
-        if let Some(slot) = self.res_top.get_mut(t) {
-            *slot = next;
-        }
         self.running_prio = prev;
         self.preempt_at = prev.saturating_add(1);
         Some(prev)
@@ -367,18 +362,16 @@ where
     #[inline(always)]
     fn try_release_for_isr(&mut self, res: ResourceId) -> Option<u8> {
         let depth = (self.isr_depth as usize).checked_sub(1)?;
-        if self.isr_stack.get(depth)?.res_top != res.0 {
+        let frame = self.isr_stack.get_mut(depth)?;
+        if frame.res_top != res.0 {
             return None;
         }
         // An ISR's release never switches tasks (that waits for the last ISR's return).
         let state = self.res.get_mut(res.0 as usize)?;
-        let released = *state;
+        frame.res_top = state.next;
+        frame.level = state.prev_prio;
         *state = FREE_RES;
-        if let Some(slot) = self.isr_stack.get_mut(depth) {
-            slot.res_top = released.next;
-            slot.level = released.prev_prio;
-        }
-        Some(released.prev_prio)
+        Some(frame.level)
     }
 
     /// Pops `res`, the top of `holder`'s stack, and restores the holder's priority.
