@@ -30,7 +30,6 @@ use cw_core::com::signal::SignalValue;
 use cw_core::ecum::{bswm_execute, BswMRequest, EcuM};
 use cw_core::os::{Hooks, IsrId, OsError, ServiceId, StatusType, TaskId, E_OK, OSDEFAULTAPPMODE};
 use cw_core::sonar::SonarConfig;
-use cw_core::time::rem_u64;
 use cw_core::warning::{Measurement, WarningLevel};
 
 use crate::board::{
@@ -89,9 +88,10 @@ pub mod span {
     /// (a TX confirmation, or a reception up to the signal in Com), to the ISR's return
     /// to the kernel.
     pub const CAN_ISR: usize = 2;
-    /// `SysTickIsr` on a tick at which no alarm expires.
+    /// `SysTickIsr` on a tick the kernel's fast path takes: no alarm expires.
     pub const TICK_NOTHING_DUE: usize = 3;
-    /// `SysTickIsr` on a tick at which alarms expire and activate tasks.
+    /// `SysTickIsr` on a tick the kernel runs whole: alarms expire and activate tasks
+    /// (or, rarely, a tick the fast path declines for another reason: nested in an ISR).
     pub const TICK_ALARMS_DUE: usize = 4;
     /// Span 5 is the board's (the CAN driver's write, inside [`COM_SEND`]).
     pub const DRIVER_WRITE: usize = 5;
@@ -613,20 +613,7 @@ impl<P: Port<Kernel = Kernel>, B: Board> Ecu<P, B> {
 
     /// [`Ecu::isr`] with its span already started; ends it.
     fn isr_spanned(&self, isr: IsrId, span: usize, body: impl FnOnce(&Self)) {
-        let count = |os: &mut Kernel, result: Result<(), OsError>| {
-            if result.is_err() {
-                os.hooks_mut().port_errors = os.hooks_mut().port_errors.saturating_add(1);
-            }
-            result
-        };
-        let entered = self.port.kernel(|os| {
-            if os.is_shut_down() {
-                return Err(OsError::State);
-            }
-            let entered = os.enter_isr(isr);
-            count(os, entered)
-        });
-        if entered.is_err() {
+        if self.port.kernel(|os| Self::isr_entry(os, isr)).is_err() {
             // The body does not run, so nothing clears the source: the port quiets the
             // line (a level-triggered one would be taken again at once).
             self.port.isr_refused(isr);
@@ -635,49 +622,75 @@ impl<P: Port<Kernel = Kernel>, B: Board> Ecu<P, B> {
         }
         self.port.isr_entered(isr);
         body(self);
-        let left = self.port.kernel(|os| {
-            if os.is_shut_down() {
-                return Err(OsError::State);
-            }
-            let left = os.exit_isr();
-            count(os, left)
-        });
+        let left = self.port.kernel(Self::isr_return);
         self.port.span(span, false);
         if left.is_ok() {
             self.dispatch();
         }
     }
 
+    /// The kernel is told of ISR `isr`'s entry (refused once the OS is shut down); a
+    /// refusal is counted as the port's error.
+    fn isr_entry(os: &mut Kernel, isr: IsrId) -> Result<(), OsError> {
+        if os.is_shut_down() {
+            return Err(OsError::State);
+        }
+        let entered = os.enter_isr(isr);
+        Self::count_port_error(os, entered)
+    }
+
+    /// The kernel is told the innermost ISR returns, as [`Ecu::isr_entry`] its entry.
+    fn isr_return(os: &mut Kernel) -> Result<(), OsError> {
+        if os.is_shut_down() {
+            return Err(OsError::State);
+        }
+        let left = os.exit_isr();
+        Self::count_port_error(os, left)
+    }
+
+    fn count_port_error(os: &mut Kernel, result: Result<(), OsError>) -> Result<(), OsError> {
+        if result.is_err() {
+            os.hooks_mut().port_errors = os.hooks_mut().port_errors.saturating_add(1);
+        }
+        result
+    }
+
     /// `SysTickIsr`, every 1 ms: the system counter advances and due alarms activate tasks.
     /// An alarm that cannot activate its task (a period overrun, which the paper's Table 1
-    /// would show as a missed period) reaches `ErrorHook`.
+    /// would show as a missed period) reaches `ErrorHook`. One kernel call: the kernel's
+    /// fast path where nothing is due, else the ISR's entry, `IncrementCounter` and its
+    /// return under the same kernel lock.
     pub fn tick(&self) {
-        // The alarms are cyclic from StartOS on: they expire at multiples of their periods
-        // (a 32-bit remainder of the 64-bit time: no library division on the core).
-        let now = self.port.now_ms();
-        let due = config::PERIOD_MS
-            .iter()
-            .any(|&p| u16::try_from(p).is_ok_and(|p| p > 0 && rem_u64(now, p) == 0));
-        let span = if due {
-            span::TICK_ALARMS_DUE
-        } else {
-            span::TICK_NOTHING_DUE
-        };
-        self.port.span(span, true);
-        // Where nothing is due, the kernel takes the whole ISR in one step.
-        if self
+        // One span from the ISR's first line, filed by the path the kernel took (so that
+        // telling the two apart costs the tick nothing).
+        self.port.span(span::TICK_NOTHING_DUE, true);
+        let whole = self
             .port
-            .fast_tick(config::SYSTICK_ISR, config::SYSTEM_COUNTER)
-        {
-            self.port.isr_entered(config::SYSTICK_ISR);
-            self.port.span(span, false);
-            return;
+            .tick_isr(config::SYSTICK_ISR, config::SYSTEM_COUNTER, |os| {
+                // (The outer result: the entry; the inner one: the return.)
+                Self::isr_entry(os, config::SYSTICK_ISR)?;
+                let _ = os.increment_counter(config::SYSTEM_COUNTER);
+                Ok::<_, OsError>(Self::isr_return(os))
+            });
+        match whole {
+            None => {
+                self.port.isr_entered(config::SYSTICK_ISR);
+                self.port.span(span::TICK_NOTHING_DUE, false);
+            }
+            Some(Err(_)) => {
+                self.port.isr_refused(config::SYSTICK_ISR);
+                self.port
+                    .span_end_as(span::TICK_NOTHING_DUE, span::TICK_ALARMS_DUE);
+            }
+            Some(Ok(left)) => {
+                self.port.isr_entered(config::SYSTICK_ISR);
+                self.port
+                    .span_end_as(span::TICK_NOTHING_DUE, span::TICK_ALARMS_DUE);
+                if left.is_ok() {
+                    self.dispatch();
+                }
+            }
         }
-        self.isr_spanned(config::SYSTICK_ISR, span, |ecu| {
-            let _ = ecu
-                .port
-                .kernel(|os| os.increment_counter(config::SYSTEM_COUNTER));
-        });
     }
 
     /// `ticks` OS ticks at once where the kernel's tick fast path would take each one by

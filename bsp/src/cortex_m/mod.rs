@@ -296,6 +296,7 @@ impl Arch for CortexM {
             Mark::IsrEntered(i) => trace::isr_entered(i.0, at),
             Mark::SpanStart(id) => trace::span_start(id, at),
             Mark::SpanEnd(id) => trace::span_end(id, at),
+            Mark::SpanEndAs { started, id } => trace::span_end_as(started, id, at),
         }
     }
 }

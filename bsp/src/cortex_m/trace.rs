@@ -237,8 +237,9 @@ impl Trace {
         gross.saturating_sub(self.isr_counts.wrapping_sub(isr_before))
     }
 
-    fn span_end(&mut self, id: usize, at: u32) {
-        let Some((start, isr_before)) = self.open.get_mut(id).and_then(Option::take) else {
+    /// Span `started` ends at `at`; its length is filed under span `id`.
+    fn span_end_as(&mut self, started: usize, id: usize, at: u32) {
+        let Some((start, isr_before)) = self.open.get_mut(started).and_then(Option::take) else {
             return;
         };
         let length = self.net(start, isr_before, at);
@@ -339,7 +340,13 @@ pub fn span_start(id: usize, at: u32) {
 /// Span `id` ends at `at` (nothing if it was not started), net of the ISRs that
 /// interrupted it.
 pub fn span_end(id: usize, at: u32) {
-    with(|t| t.span_end(id, at));
+    with(|t| t.span_end_as(id, id, at));
+}
+
+/// Span `started` ends at `at` (nothing if it was not started) and its length, net of
+/// the ISRs that interrupted it, is filed under span `id`.
+pub fn span_end_as(started: usize, id: usize, at: u32) {
+    with(|t| t.span_end_as(started, id, at));
 }
 
 /// A job of `task` starts, at `at` (counts).

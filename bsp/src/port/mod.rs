@@ -229,13 +229,22 @@ pub trait Port {
         })
     }
 
-    /// The OS tick (category-2 ISR `isr`, whose whole body is `IncrementCounter(counter)`)
-    /// by the kernel's fast path, which takes the ticks where no alarm is due: `true` when
-    /// it did (the ISR's entry, the service and its return, done), `false` when the caller
-    /// must run the ISR whole.
+    /// The OS tick, category-2 ISR `isr` whose whole body is `IncrementCounter(counter)`,
+    /// in one kernel call: the kernel's fast path where no alarm is due (`None`: the ISR's
+    /// entry, the service and its return are done), else `whole` on the kernel (the ISR's
+    /// entry, its body and its return, in order), whose result this returns. Either way
+    /// the port then carries out what the kernel decided, as after any kernel call.
     #[inline]
-    fn fast_tick(&self, isr: IsrId, counter: CounterId) -> bool {
-        self.kernel(|os| os.try_tick(isr, counter).is_some())
+    fn tick_isr<R>(
+        &self,
+        isr: IsrId,
+        counter: CounterId,
+        whole: impl FnOnce(&mut Self::Kernel) -> R,
+    ) -> Option<R> {
+        self.kernel(|os| match os.try_tick(isr, counter) {
+            Some(_) => None,
+            None => Some(whole(os)),
+        })
     }
 
     /// Milliseconds since start (the OS tick).
@@ -264,6 +273,11 @@ pub trait Port {
     /// A measured span `id` (the application numbers them) starts or ends here; for the
     /// instruction counts of the application's own paths.
     fn span(&self, _id: usize, _start: bool) {}
+
+    /// Span `started` ends here and its length is filed under span `id`: for a span whose
+    /// name only the path it took tells (the OS tick: the kernel's fast path or the whole
+    /// ISR), so that choosing the name costs nothing before the span.
+    fn span_end_as(&self, _started: usize, _id: usize) {}
 
     /// The running job hangs (a fault a test board injects: a task stuck in a loop).
     /// Where the port switches stacks this never returns: the job spins at its priority

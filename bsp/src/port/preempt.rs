@@ -134,6 +134,13 @@ pub enum Mark {
     SpanStart(usize),
     /// A measured span of the application ends.
     SpanEnd(usize),
+    /// Measured span `started` ends and its length is filed under span `id`.
+    SpanEndAs {
+        /// The span that started.
+        started: usize,
+        /// The span its length is filed under.
+        id: usize,
+    },
 }
 
 /// A fault of the port (every one names what it is about).
@@ -792,22 +799,26 @@ impl<K: OsKernel, A: Arch> Port for Preemptive<K, A> {
         self.locked(|kernel, _| f(kernel))
     }
 
-    /// The OS tick in one kernel call where nothing is due: under the kernel lock the
-    /// kernel's fast path advances the counter, and the port restores the interrupted
-    /// context's mask. Otherwise nothing changed, and the caller runs the ISR whole.
+    /// The OS tick in one kernel call: under the kernel lock the kernel's fast path
+    /// advances the counter where nothing is due, and the port restores the interrupted
+    /// context's mask; where it declines, `whole` runs the ISR's entry, body and return in
+    /// the same kernel lock, and the port carries out what the kernel decided (the switch
+    /// to a task an alarm activated, once the ISR returns).
     #[inline]
-    fn fast_tick(&self, isr: IsrId, counter: CounterId) -> bool {
+    fn tick_isr<R>(
+        &self,
+        isr: IsrId,
+        counter: CounterId,
+        whole: impl FnOnce(&mut K) -> R,
+    ) -> Option<R> {
         let (kernel, sched) = self.enter();
-        match kernel.try_tick(isr, counter) {
-            Some(level) => {
-                self.leave_at(level);
-                true
-            }
-            None => {
-                self.leave(kernel, sched);
-                false
-            }
+        if let Some(level) = kernel.try_tick(isr, counter) {
+            self.leave_at(level);
+            return None;
         }
+        let result = whole(kernel);
+        self.leave(kernel, sched);
+        Some(result)
     }
 
     /// The lock by the stack resource policy: under the kernel lock the kernel's fast path
@@ -891,5 +902,10 @@ impl<K: OsKernel, A: Arch> Port for Preemptive<K, A> {
         } else {
             Mark::SpanEnd(id)
         });
+    }
+
+    #[inline]
+    fn span_end_as(&self, started: usize, id: usize) {
+        self.arch.trace(Mark::SpanEndAs { started, id });
     }
 }

@@ -8,9 +8,9 @@ use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::vec::Vec;
 
 use cw_core::os::{
-    ConformanceClass, CounterConfig, Dialect, HookSet, Hooks, IsrConfig, Os, OsConfig,
-    OsDescription, OsError, ResourceId, ServiceCall, Status, StatusType, TaskConfig, TaskId,
-    OSDEFAULTAPPMODE,
+    AlarmAction, AlarmConfig, AlarmId, ConformanceClass, CounterConfig, CounterId, Dialect,
+    HookSet, Hooks, IsrConfig, IsrId, Os, OsConfig, OsDescription, OsError, ResourceId,
+    ServiceCall, Status, StatusType, TaskConfig, TaskId, OSDEFAULTAPPMODE,
 };
 
 use super::spec;
@@ -21,7 +21,7 @@ const LOW: TaskId = TaskId(0);
 const HIGH: TaskId = TaskId(1);
 const WAITER: TaskId = TaskId(2);
 
-static OS: OsConfig<3, 2, 1, 0, 2> = match OsConfig::new(
+static OS: OsConfig<3, 2, 1, 1, 2> = match OsConfig::new(
     OsDescription::new(
         [
             TaskConfig::basic("Low", 1).autostart().uses(0b11),
@@ -33,7 +33,11 @@ static OS: OsConfig<3, 2, 1, 0, 2> = match OsConfig::new(
             ticks_per_base: 1,
             min_cycle: 1,
         }],
-        [],
+        [AlarmConfig::new(
+            "WakeHigh",
+            CounterId(0),
+            AlarmAction::ActivateTask(HIGH),
+        )],
         [
             IsrConfig::cat2("Tick", 1).uses(0b01),
             IsrConfig::cat1("Fast", 3),
@@ -52,7 +56,7 @@ static OS: OsConfig<3, 2, 1, 0, 2> = match OsConfig::new(
     Err(_) => panic!("the test configuration is inconsistent"),
 };
 
-cw_core::static_tables!(TestTables: OsConfig<3, 2, 1, 0, 2> = OS);
+cw_core::static_tables!(TestTables: OsConfig<3, 2, 1, 1, 2> = OS);
 
 /// What the hooks saw: the first errors, in order.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Hash)]
@@ -67,7 +71,7 @@ impl Seen {
     }
 }
 
-type Kernel = Os<3, 2, 1, 0, 2, 3, TestTables, Seen>;
+type Kernel = Os<3, 2, 1, 1, 2, 3, TestTables, Seen>;
 
 impl Hooks<Kernel> for Seen {
     fn error_hook(os: &mut Kernel, error: OsError) {
@@ -457,6 +461,32 @@ fn the_fast_lock_applies_the_ceilings_mask_and_the_service_decides_the_rest() {
     assert_eq!(port.release_resource(tasks_only), Ok(()));
     assert!(port.arch().switch.get(), "the release lets High in");
     assert_eq!(port.inspect(|os| os.running()), Some(HIGH));
+}
+
+#[test]
+fn the_tick_is_one_kernel_call_by_the_fast_path_or_whole() {
+    let port = started();
+    let (tick, counter) = (IsrId(0), CounterId(0));
+    let whole = |os: &mut Kernel| {
+        os.enter_isr(tick)?;
+        let _ = os.increment_counter(counter);
+        os.exit_isr()
+    };
+    // Nothing due: the kernel's fast path, the task's mask restored, no switch.
+    assert_eq!(port.tick_isr(tick, counter, whole), None);
+    assert_eq!(port.arch().level.get(), Some(InterruptMask::None));
+    assert!(!port.arch().switch.get());
+    assert_eq!(port.kernel(|os| os.get_counter_value(counter)), Ok(1));
+    // An alarm due: the ISR whole in the same kernel call; the task the alarm activated
+    // is switched to once the ISR has returned.
+    port.kernel(|os| os.set_rel_alarm(AlarmId(0), 1, 0))
+        .expect("SetRelAlarm");
+    assert_eq!(port.tick_isr(tick, counter, whole), Some(Ok(())));
+    assert_eq!(port.kernel(|os| os.get_counter_value(counter)), Ok(2));
+    assert_eq!(port.inspect(|os| os.running()), Some(HIGH));
+    assert!(port.arch().switch.get());
+    assert_eq!(port.arch().level.get(), Some(InterruptMask::None));
+    assert_eq!(port.inspect(|os| os.hooks().errors()), []);
 }
 
 #[test]
