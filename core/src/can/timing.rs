@@ -49,27 +49,142 @@ pub enum Stuffing {
 /// CAN CRC-15 generator polynomial (x^15 + x^14 + x^10 + x^8 + x^7 + x^4 + x^3 + 1).
 const CRC15_POLY: u16 = 0x4599;
 
-/// Bits of a frame from SOF to the end of the CRC, before stuffing (at most 54 + 64 = 118).
+/// One bit into the CRC-15 register (the shift register of ISO 11898-1, 10.4.2.6).
+const fn crc15_step(crc: u16, bit: bool) -> u16 {
+    let feedback = bit != ((crc >> 14) & 1 == 1);
+    let crc = (crc << 1) & 0x7FFF;
+    if feedback {
+        crc ^ CRC15_POLY
+    } else {
+        crc
+    }
+}
+
+/// The register after eight zero bits from `i` in its top eight bits: with it, eight
+/// bits at once (`crc' = (crc << 8) ^ T[(crc >> 7) ^ byte]`, the CRC being linear).
+const CRC15_BYTE: [u16; 256] = {
+    let mut table = [0; 256];
+    let mut i = 0;
+    while i < 256 {
+        let mut crc = (i as u16) << 7;
+        let mut k = 0;
+        while k < 8 {
+            crc = crc15_step(crc, false);
+            k += 1;
+        }
+        table[i] = crc;
+        i += 1;
+    }
+    table
+};
+
+/// The stuffing state on the wire: the last bit's value (bit 2) and how many equal bits
+/// end there, less one (bits 0 and 1: a run of 1 to 4; a fifth gets its stuff bit at
+/// once). Before SOF (dominant) it is a recessive run of one, so that SOF starts a run.
+const STUFF_START: u8 = 0b100;
+
+/// One bit through the stuffing state: the new state, and whether a stuff bit (the
+/// complement, which starts the next run) follows it.
+const fn stuff_step(state: u8, bit: bool) -> (u8, bool) {
+    let last = state & 0b100 != 0;
+    if bit != last {
+        return ((bit as u8) << 2, false);
+    }
+    let run = (state & 0b11) + 2;
+    if run == 5 {
+        (((!bit) as u8) << 2, true)
+    } else {
+        (state & 0b100 | (run - 1), false)
+    }
+}
+
+/// Eight bits at once: for state `s` and byte `b`, at `s * 256 + b`, the new state (bits
+/// 0 to 2) and the stuff bits inserted (bits 3 and 4: at most two in eight bits).
+const STUFF_BYTE: [u8; 8 * 256] = {
+    let mut table = [0; 8 * 256];
+    let mut i = 0;
+    while i < 8 * 256 {
+        let mut state = (i / 256) as u8;
+        let mut stuffed = 0;
+        let mut k = 0;
+        while k < 8 {
+            let (next, stuff) = stuff_step(state, (i >> (7 - k)) & 1 == 1);
+            state = next;
+            stuffed += stuff as u8;
+            k += 1;
+        }
+        table[i] = state | stuffed << 3;
+        i += 1;
+    }
+    table
+};
+
+/// A frame's bits from SOF to the end of the CRC before stuffing (at most 54 + 64 = 118),
+/// the first in the highest of the `len` low bits of `bits`.
+#[derive(Clone, Copy)]
 struct StuffableBits {
-    bits: [bool; 118],
-    len: usize,
+    bits: u128,
+    len: u32,
 }
 
 impl StuffableBits {
     fn push(&mut self, value: u32, width: u32) {
-        for i in (0..width).rev() {
-            if let Some(slot) = self.bits.get_mut(self.len) {
-                *slot = (value >> i) & 1 == 1;
-                self.len += 1;
-            }
+        let mask = (1u128 << width) - 1;
+        self.bits = (self.bits << width) | (u128::from(value) & mask);
+        self.len += width;
+    }
+
+    /// The `count` (at most 8) bits after the first `from`, as a number.
+    fn field(&self, from: u32, count: u32) -> u32 {
+        let shift = self.len - from - count;
+        ((self.bits >> shift) & ((1u128 << count) - 1)) as u32
+    }
+
+    /// Each bit, its register or state: first bit by bit up to a multiple of eight
+    /// from the end, then eight bits at once by `byte`.
+    fn fold<S: Copy>(&self, start: S, bit: impl Fn(S, bool) -> S, byte: impl Fn(S, u32) -> S) -> S {
+        let head = self.len % 8;
+        let mut acc = start;
+        for i in 0..head {
+            acc = bit(acc, self.field(i, 1) == 1);
         }
+        let mut at = head;
+        while at < self.len {
+            acc = byte(acc, self.field(at, 8));
+            at += 8;
+        }
+        acc
+    }
+
+    /// The CRC-15 of the bits so far.
+    fn crc15(&self) -> u16 {
+        self.fold(0u16, crc15_step, |crc, byte| {
+            let index = ((u32::from(crc) >> 7) ^ byte) & 0xFF;
+            let entry = CRC15_BYTE.get(index as usize).copied().unwrap_or(0);
+            ((crc << 8) & 0x7FFF) ^ entry
+        })
+    }
+
+    /// The stuff bits the transmitter inserts (after every run of five equal bits, a
+    /// complement bit, which itself starts the next run).
+    fn stuff_bits(&self) -> u32 {
+        let (_, stuffed) = self.fold(
+            (STUFF_START, 0u32),
+            |(state, n), bit| {
+                let (next, stuff) = stuff_step(state, bit);
+                (next, n + u32::from(stuff))
+            },
+            |(state, n), byte| {
+                let index = usize::from(state) * 256 + byte as usize;
+                let entry = STUFF_BYTE.get(index).copied().unwrap_or(0);
+                (entry & 0b111, n + u32::from(entry >> 3))
+            },
+        );
+        stuffed
     }
 
     fn of(frame: &CanFrame) -> Self {
-        let mut s = Self {
-            bits: [false; 118],
-            len: 0,
-        };
+        let mut s = Self { bits: 0, len: 0 };
         let id = frame.can_id();
         let dlc = u32::from(frame.len());
         s.push(0, 1); // SOF, dominant
@@ -86,7 +201,7 @@ impl StuffableBits {
         for &byte in frame.bytes() {
             s.push(u32::from(byte), 8);
         }
-        let crc = crc15(&s.bits[..s.len]);
+        let crc = s.crc15();
         s.push(u32::from(crc), 15);
         s
     }
@@ -94,37 +209,7 @@ impl StuffableBits {
 
 /// The CAN CRC-15 over a bit sequence (most significant bit first, initial value 0).
 pub fn crc15(bits: &[bool]) -> u16 {
-    let mut crc: u16 = 0;
-    for &bit in bits {
-        let feedback = bit ^ ((crc >> 14) & 1 == 1);
-        crc = (crc << 1) & 0x7FFF;
-        if feedback {
-            crc ^= CRC15_POLY;
-        }
-    }
-    crc
-}
-
-/// Number of stuff bits the transmitter inserts into `bits` (after every run of five
-/// equal bits, a complement bit, which itself starts the next run).
-fn count_stuff_bits(bits: &[bool]) -> u32 {
-    let mut stuffed = 0;
-    let mut last = None;
-    let mut run = 0;
-    for &bit in bits {
-        if Some(bit) == last {
-            run += 1;
-        } else {
-            last = Some(bit);
-            run = 1;
-        }
-        if run == 5 {
-            stuffed += 1;
-            last = Some(!bit);
-            run = 1;
-        }
-    }
-    stuffed
+    bits.iter().fold(0, |crc, &bit| crc15_step(crc, bit))
 }
 
 /// Stuffable bits before stuffing (SOF through CRC).
@@ -136,10 +221,7 @@ fn stuffable_len(frame: &CanFrame) -> u32 {
 /// The stuff bits `frame` gets under `stuffing`.
 pub fn stuff_bits(frame: &CanFrame, stuffing: Stuffing) -> u32 {
     match stuffing {
-        Stuffing::Exact => {
-            let s = StuffableBits::of(frame);
-            count_stuff_bits(&s.bits[..s.len])
-        }
+        Stuffing::Exact => StuffableBits::of(frame).stuff_bits(),
         Stuffing::WorstCase => (stuffable_len(frame) - 1) / 4,
     }
 }
@@ -176,6 +258,108 @@ mod tests {
 
     fn ext_id(raw: u32) -> CanId {
         CanId::extended(raw).unwrap_or_else(|| panic!("bad id"))
+    }
+
+    /// The oracle: the frame's bits from SOF to the end of the CRC one by one, the CRC
+    /// bit by bit over them.
+    fn bits_one_by_one(frame: &CanFrame) -> std::vec::Vec<bool> {
+        let mut bits = std::vec::Vec::new();
+        let mut push = |value: u32, width: u32| {
+            for i in (0..width).rev() {
+                bits.push((value >> i) & 1 == 1);
+            }
+        };
+        let id = frame.can_id();
+        push(0, 1);
+        if id.is_extended() {
+            push(id.raw() >> 18, 11);
+            push(0b11, 2);
+            push(id.raw() & 0x3_FFFF, 18);
+            push(0, 3);
+        } else {
+            push(id.raw(), 11);
+            push(0, 3);
+        }
+        push(u32::from(frame.len()), 4);
+        for &byte in frame.bytes() {
+            push(u32::from(byte), 8);
+        }
+        let crc = crc15(&bits);
+        for i in (0..15).rev() {
+            bits.push((crc >> i) & 1 == 1);
+        }
+        bits
+    }
+
+    /// The oracle's stuff bits: after every run of five equal bits, a complement bit,
+    /// which itself starts the next run.
+    fn count_stuff_bits(bits: &[bool]) -> u32 {
+        let mut stuffed = 0;
+        let mut last = None;
+        let mut run = 0;
+        for &bit in bits {
+            if Some(bit) == last {
+                run += 1;
+            } else {
+                last = Some(bit);
+                run = 1;
+            }
+            if run == 5 {
+                stuffed += 1;
+                last = Some(!bit);
+                run = 1;
+            }
+        }
+        stuffed
+    }
+
+    fn agrees_with_the_oracle(f: &CanFrame) {
+        let bits = bits_one_by_one(f);
+        assert_eq!(bits.len() as u32, stuffable_len(f), "{f:?}");
+        let s = StuffableBits::of(f);
+        let fast: std::vec::Vec<bool> = (0..s.len).map(|i| s.field(i, 1) == 1).collect();
+        assert_eq!(fast, bits, "{f:?}");
+        assert_eq!(
+            stuff_bits(f, Stuffing::Exact),
+            count_stuff_bits(&bits),
+            "{f:?}"
+        );
+    }
+
+    /// Any frame: the stuff bits counted eight bits at a time (the tables) are those the
+    /// bits one by one get, the CRC computed eight bits at a time included.
+    #[test]
+    fn any_frame_is_stuffed_as_its_bits_one_by_one() {
+        bolero::check!()
+            .with_type::<(bool, u32, u8, [u8; 8])>()
+            .cloned()
+            .for_each(|(extended, raw, len, data)| {
+                agrees_with_the_oracle(&CanFrame::masked(CanId::masked(raw, extended), len, data));
+            });
+    }
+
+    /// Every standard identifier with every length, over payloads of runs, alternations
+    /// and the identifier's own bits: the same (under Miri, a stride through them).
+    #[test]
+    fn every_standard_id_and_length_is_stuffed_as_its_bits_one_by_one() {
+        let stride = if cfg!(miri) { 1023 } else { 1 };
+        for raw in (0..0x800u16).step_by(stride) {
+            let [hi, lo] = raw.to_be_bytes();
+            for data in [
+                [0; 8],
+                [0xFF; 8],
+                [0x55; 8],
+                [hi, lo, !hi, !lo, 0x0F, 0xF0, lo, hi],
+            ] {
+                for len in 0..=8 {
+                    agrees_with_the_oracle(&CanFrame::masked(
+                        CanId::masked(raw.into(), false),
+                        len,
+                        data,
+                    ));
+                }
+            }
+        }
     }
 
     #[test]

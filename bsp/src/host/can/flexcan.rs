@@ -13,9 +13,10 @@
 //!
 //! Every access of the driver goes through [`HostFlexcanAccess`]: it time-stamps the
 //! frames the driver hands to the module (the bus starts a frame no earlier than its
-//! write) and, after each write and each read of `MCR` (the only read that moves the
-//! module: an acknowledge), lets the bus see the module's new state (the next
-//! transmission is planned again).
+//! write) and, after each write that can change what the module offers (to a module
+//! register, or to a buffer that waits to send or is made to) and each read of `MCR`
+//! (the only read that moves the module: an acknowledge), lets the bus see the module's
+//! new state (the next transmission is planned again).
 
 use std::rc::Rc;
 
@@ -155,9 +156,12 @@ impl HostFlexcanAccess {
     }
 }
 
+/// A transmit buffer's `CODE` while its frame waits to be sent.
+const CODE_DATA: u32 = 0b1100;
+
 /// `CODE` = `DATA` in a control word.
 const fn is_data_code(value: u32) -> bool {
-    (value >> 24) & 0xF == 0b1100
+    (value >> 24) & 0xF == CODE_DATA
 }
 
 impl Access for HostFlexcanAccess {
@@ -172,11 +176,24 @@ impl Access for HostFlexcanAccess {
     }
 
     fn write(&self, offset: usize, value: u32) {
+        let buffer = mb_of(offset);
+        // What the module offers the bus, and its recovery, change only with a buffer
+        // that waits to send or is made to (its frame is the offer's candidate) and with
+        // the module's own registers; a write to any other buffer's words (the rest of a
+        // transmit buffer being filled, a receive buffer) leaves the bus's plan as it is.
+        let moves = match buffer {
+            None => true,
+            Some((mb, word)) => {
+                self.model.code(mb) == Some(CODE_DATA) || (word == 0 && is_data_code(value))
+            }
+        };
         self.model.write(offset, value);
-        let data = mb_of(offset)
-            .filter(|&(_, word)| word == 0 && is_data_code(value))
-            .map(|(mb, _)| mb);
-        self.after_access(data);
+        if moves {
+            let data = buffer
+                .filter(|&(_, word)| word == 0 && is_data_code(value))
+                .map(|(mb, _)| mb);
+            self.after_access(data);
+        }
     }
 }
 
