@@ -672,20 +672,22 @@ impl<P: Port<Kernel = Kernel>, B: Board> Ecu<P, B> {
                 let _ = os.increment_counter(config::SYSTEM_COUNTER);
                 Ok::<_, OsError>(Self::isr_return(os))
             });
+        // (The trace's mark of the ISR's entry comes after the span: it is the measuring's,
+        // not the tick's.)
         match whole {
             None => {
-                self.port.isr_entered(config::SYSTICK_ISR);
                 self.port.span(span::TICK_NOTHING_DUE, false);
+                self.port.isr_entered(config::SYSTICK_ISR);
             }
             Some(Err(_)) => {
-                self.port.isr_refused(config::SYSTICK_ISR);
                 self.port
                     .span_end_as(span::TICK_NOTHING_DUE, span::TICK_ALARMS_DUE);
+                self.port.isr_refused(config::SYSTICK_ISR);
             }
             Some(Ok(left)) => {
-                self.port.isr_entered(config::SYSTICK_ISR);
                 self.port
                     .span_end_as(span::TICK_NOTHING_DUE, span::TICK_ALARMS_DUE);
+                self.port.isr_entered(config::SYSTICK_ISR);
                 if left.is_ok() {
                     self.dispatch();
                 }
