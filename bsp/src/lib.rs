@@ -45,6 +45,7 @@ extern crate std;
 pub mod chip;
 #[cfg(feature = "host")]
 pub mod host;
+pub mod icount;
 pub mod mpc5748g;
 pub mod port;
 pub mod ring;

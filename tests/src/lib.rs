@@ -3,8 +3,8 @@
 //!
 //! The book: [the Cortex-M4 image](../../book/cortex-m4.html#the-same-ecu-emulator-in-the-loop).
 //!
-//! - [`run_image`] runs the image (`-icount shift=0`: one instruction per ns, so its
-//!   milliseconds are its own) with the scenario on its semihosting command line; UART0
+//! - [`run_image`] runs the image (`-icount shift=5`, `cw_bsp::icount`: 32 ns per
+//!   instruction, so its milliseconds are its own) with the scenario on its semihosting command line; UART0
 //!   (the SLCAN CAN controller) goes to a file, the image's report (its `defmt` log,
 //!   decoded: [`qemu`]) to the caller.
 //! - [`simulate`] runs the host simulation in-process on the same file.
@@ -95,7 +95,7 @@ pub fn run_image(
     let mut command = Command::new("qemu-system-arm");
     command
         .args(qemu::machine("cw-qemu", &args))
-        .args(["-icount", "shift=0,sleep=off"])
+        .args(["-icount", cw_bsp::icount::VIRTUAL])
         .arg("-serial")
         .arg(format!("file:{}", uart.display()))
         .arg("-kernel")

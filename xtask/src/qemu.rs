@@ -4,10 +4,11 @@
 //! The image's CAN controller is UART0 speaking SLCAN; QEMU writes it to
 //! `target/qemu/slcan.txt` (or serves it on a TCP port with `--serial tcp:PORT`). The LED
 //! register's writes go to `target/qemu/fpgaio.log` (QEMU's `mps2_fpgaio_write` trace).
-//! The run uses `-icount shift=0`: one instruction per nanosecond, so SysTick's
-//! milliseconds are the image's own, independent of the host's speed.
+//! The run uses `-icount shift=5` (`cw_bsp::icount`): 32 ns of virtual time per
+//! instruction, so SysTick's milliseconds are the image's own, independent of the host's
+//! speed, and the trace's SysTick counts measure a path to about one instruction.
 //!
-//! `--live` runs the image in real time (`-icount shift=0,sleep=on`: counted instructions
+//! `--live` runs the image in real time (`-icount shift=5,sleep=on`: counted instructions
 //! while the core runs, the host's clock while it sleeps) with UART0 (CAN, SLCAN) and
 //! UART1 (the distance sensor, `--sensor uart`) each on a TCP port and `tests/live.py`
 //! against them: a simulated A02YYUW module sends distances with bad checksums, noise
@@ -212,9 +213,9 @@ fn run_image_at(
     let serial = serial.map_or_else(|| format!("file:{}", slcan.display()), str::to_string);
     let mut qemu = std::process::Command::new("qemu-system-arm");
     let icount = if realtime {
-        "shift=0,sleep=on"
+        cw_bsp::icount::REAL_TIME
     } else {
-        "shift=0,sleep=off"
+        cw_bsp::icount::VIRTUAL
     };
     qemu.args(qemu_machine(scenario, false))
         .args(["-icount", icount])
@@ -249,7 +250,7 @@ fn decoded_run(qemu: std::process::Command, image: &Path) -> Result<String> {
 }
 
 /// `cargo xtask qemu-runner IMAGE [ARGS]..`, cargo's runner for the board's target: the
-/// image on QEMU (`-icount shift=0`, UART0's SLCAN output to `target/qemu/runner-slcan.txt`)
+/// image on QEMU (`-icount shift=5`, UART0's SLCAN output to `target/qemu/runner-slcan.txt`)
 /// with `ARGS` on its command line, its log decoded on the terminal as it comes; fails if
 /// the image exits with failure.
 pub fn runner(args: &[String]) -> Result {
@@ -271,7 +272,7 @@ pub fn runner(args: &[String]) -> Result {
     let slcan = out.join("runner-slcan.txt");
     let mut qemu = std::process::Command::new("qemu-system-arm");
     qemu.args(cw_tests::qemu::machine(&program, &args))
-        .args(["-icount", "shift=0,sleep=off"])
+        .args(["-icount", cw_bsp::icount::VIRTUAL])
         .arg("-serial")
         .arg(format!("file:{}", slcan.display()))
         .arg("-kernel")
@@ -680,7 +681,7 @@ fn event_run(image: &Path, fault: &str, success: bool, lines: &[&str], no_mpu: b
     if no_mpu {
         qemu.args(["-global", "cortex-m4-arm-cpu.pmsav7-dregion=0"]);
     }
-    qemu.args(["-icount", "shift=0,sleep=off"])
+    qemu.args(["-icount", cw_bsp::icount::VIRTUAL])
         .args(["-serial", "null"])
         .arg("-kernel")
         .arg(image);
@@ -735,15 +736,16 @@ fn live_session(
     let can_serial = format!("tcp:127.0.0.1:{can_port},server=on,wait=on");
     let sensor_serial = format!("tcp:127.0.0.1:{sensor_port},server=on,wait=on");
     println!(
-        "$ qemu-system-arm -machine mps2-an386 -icount shift=0,sleep=on -serial {can_serial} -serial {sensor_serial} -kernel {}",
+        "$ qemu-system-arm -machine mps2-an386 -icount {} -serial {can_serial} -serial {sensor_serial} -kernel {}",
+        cw_bsp::icount::REAL_TIME,
         image.display()
     );
     let mut command = std::process::Command::new("qemu-system-arm");
     command
         .args(machine)
-        // One instruction per ns while the core runs, real time while it sleeps (WFI):
-        // the run keeps pace with the test, and the image's spans are instructions.
-        .args(["-icount", "shift=0,sleep=on"])
+        // 32 ns per instruction while the core runs, real time while it sleeps (WFI): the
+        // run keeps pace with the test, and the image's spans are instructions.
+        .args(["-icount", cw_bsp::icount::REAL_TIME])
         .args(["-serial", &can_serial])
         .args(["-serial", &sensor_serial])
         .args(["-d", "trace:mps2_fpgaio_write", "-D"])

@@ -730,6 +730,22 @@ pub fn start_systick(reload: u32, osek_priority: u8) {
     cp.SYST.enable_counter();
 }
 
+/// SysTick free-running over its whole 24-bit range (0.67 s at 25 MHz) without its
+/// interrupt: the trace's clock for measurements before the OS starts, which run with
+/// interrupts off for longer than a tick (a tick's wraps would go uncounted).
+/// [`start_systick`] then starts the OS tick.
+pub fn start_free_systick() {
+    // SAFETY: as `enable_irq`.
+    let mut cp = unsafe { cortex_m::Peripherals::steal() };
+    cp.SYST
+        .set_clock_source(cortex_m::peripheral::syst::SystClkSource::Core);
+    cp.SYST.set_reload(0x00FF_FFFF);
+    trace::set_counts_per_ms(0x0100_0000);
+    cp.SYST.clear_current();
+    cp.SYST.disable_interrupt();
+    cp.SYST.enable_counter();
+}
+
 extern "C" {
     fn cw_port_enter_idle(top: u32) -> !;
     /// Moves the main stack pointer to the main stack's top and goes on in

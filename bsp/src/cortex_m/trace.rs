@@ -25,10 +25,9 @@
 //!
 //! Times are SysTick counts since the OS started (the OS tick count times the counts per
 //! tick, plus SysTick's progress into the current tick), so they need no peripheral beyond
-//! the core's own (DWT's cycle counter reads 0 in QEMU). On QEMU's mps2-an386 under
-//! `-icount shift=0` one count is exactly 40 instructions (SysTick at 25 MHz, one
-//! instruction per ns): a single span is known to 40 instructions, and the mean of many
-//! spans that start at varying phases of the counter is known far better.
+//! the core's own (DWT's cycle counter reads 0 in QEMU). On QEMU's mps2-an386 under the
+//! runs' `-icount shift=5` ([`crate::icount`]) one count (40 ns at 25 MHz) is 1.25
+//! instructions (32 ns each): a single span is known to about one instruction.
 
 use core::cell::UnsafeCell;
 

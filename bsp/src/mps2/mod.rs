@@ -197,6 +197,12 @@ impl DelayNs for CoreDelay {
     }
 }
 
+/// Starts SysTick free-running, without its interrupt: the clock of the measurements made
+/// before the OS starts ([`crate::cortex_m::start_free_systick`]).
+pub fn start_measuring_clock() {
+    crate::cortex_m::start_free_systick();
+}
+
 /// Starts SysTick: one interrupt per millisecond, at OSEK ISR priority `osek_priority`.
 pub fn start_tick(osek_priority: u8) {
     crate::cortex_m::start_systick(SYSCLK_HZ / 1000 - 1, osek_priority);

@@ -316,9 +316,12 @@ impl App for Mps2App {
         // would be an ISR the kernel cannot accept yet (a port error), and the calibration
         // may take longer than a tick when QEMU runs in real time.
         cortex_m::interrupt::disable();
-        mps2::start_tick(isr_priority(config::SYSTICK_ISR));
+        // The measurements before the OS run on SysTick free-running (longer than a tick
+        // with interrupts off), then the OS tick starts.
+        mps2::start_measuring_clock();
         calibrate(self.ecu.port());
         measure_flexcan(self.ecu.port());
+        mps2::start_tick(isr_priority(config::SYSTICK_ISR));
         cw_bsp::cortex_m::trace::set_isr_spans(span::ISR_SPANS);
         start_os_with_devices(&self.ecu, self.uart_sensor);
     }
@@ -441,10 +444,16 @@ impl Mps2App {
 /// The task slot the calibration's jobs use (no task of the ECU has it).
 const CALIBRATION_SLOT: usize = cw_bsp::cortex_m::MAX_TASKS - 1;
 
-/// Measures what the measuring costs: 1,000 back-to-back span marks and job marks, before
-/// the OS starts (its tick runs already, so the SysTick counts advance).
+/// How many times the measurements before the OS starts repeat each path: the figures
+/// are exact to about an instruction each time, and the repetitions run after `Wdg_Init`
+/// with interrupts off, so they must end well within the watchdog's timeout (at 32 ns an
+/// instruction, the two loops take about 6 ms).
+const REPEATS: u16 = 200;
+
+/// Measures what the measuring costs: [`REPEATS`] back-to-back span marks and job marks,
+/// before the OS starts (on SysTick free-running).
 fn calibrate(port: &CortexMPort<Kernel>) {
-    for _ in 0..1000 {
+    for _ in 0..REPEATS {
         port.span(span::CALIBRATION, true);
         port.span(span::CALIBRATION, false);
         port.job_started(TaskId(CALIBRATION_SLOT as u8));
@@ -453,7 +462,7 @@ fn calibrate(port: &CortexMPort<Kernel>) {
     cw_bsp::cortex_m::trace::clear_events();
 }
 
-/// Counts the FlexCAN driver's own paths, 1,000 times each, before the OS starts: the
+/// Counts the FlexCAN driver's own paths, [`REPEATS`] times each, before the OS starts: the
 /// ECU's buffer layout (`config::CAN_FILTERS`, `config::CAN_TX_BUFFERS`) on FlexCAN's
 /// register map in RAM (`mps2::flexcan_ram`: QEMU has no FlexCAN). Between the driver's
 /// calls, this function does what the module would: it marks the written frame sent
@@ -479,7 +488,7 @@ fn measure_flexcan(port: &CortexMPort<Kernel>) {
     else {
         return;
     };
-    for pdu in 0..1000u16 {
+    for pdu in 0..REPEATS {
         port.span(span::FLEXCAN_WRITE, true);
         let written = can.write(Hth(0), pdu, &frame);
         port.span(span::FLEXCAN_WRITE, false);
@@ -532,11 +541,13 @@ fn report_leds() {
 ///   and every periodic task's longest job ended within its period (`false` if not).
 fn report_trace() -> bool {
     use cw_bsp::cortex_m::trace::{self, EventKind, SpanRecord, IDLE_ROW};
+    use cw_bsp::icount;
     report_leds();
     let isr_name = |i: usize| config::OS.isrs().get(i).map_or("?", |c| c.name);
     trace::read(|t| {
-        // Under `-icount shift=0`: one SysTick count is 40 instructions. The measuring's
-        // own cost (a back-to-back pair, calibrated at start) is taken off every span.
+        // Under the runs' `-icount` (`cw_bsp::icount`): a SysTick count is 40 ns, an
+        // instruction 32 ns. The measuring's own cost (a back-to-back pair, calibrated at
+        // start) is taken off every span.
         let span_cal = t.spans.get(span::CALIBRATION).copied().unwrap_or_default();
         let job_cal = t
             .tasks
@@ -544,8 +555,9 @@ fn report_trace() -> bool {
             .map(|r| r.span)
             .unwrap_or_default();
         let instructions = |r: &SpanRecord, cal: &SpanRecord| {
-            let mean = |r: &SpanRecord| r.sum * 40 / u64::from(r.count.max(1));
-            let scale = |c: u32| (u64::from(c) * 40).saturating_sub(mean(cal));
+            // (The mean to the nearest instruction; a single span, min or max, to about one.)
+            let mean = |r: &SpanRecord| icount::mean_instructions(r.sum, r.count);
+            let scale = |c: u32| icount::instructions(u64::from(c)).saturating_sub(mean(cal));
             (
                 mean(r).saturating_sub(mean(cal)),
                 scale(r.min),
@@ -553,7 +565,10 @@ fn report_trace() -> bool {
             )
         };
         defmt::println!(
-            "cw-qemu: instructions below are SysTick counts x 40: exact under -icount shift=0 only"
+            "cw-qemu: instructions below are SysTick counts x {}/{}: exact under -icount {} only",
+            icount::NS_PER_SYSTICK_COUNT,
+            icount::NS_PER_INSTRUCTION,
+            icount::VIRTUAL
         );
         defmt::println!(
             "cw-qemu: measuring costs {} instructions per span, {} per job (calibration, taken off below)",
