@@ -261,6 +261,24 @@ mod targets {
             });
     }
 
+    /// Any frame, standard or extended, of any length and payload: its stuff bits counted
+    /// eight bits at a time through the tables are those its bits one by one get
+    /// (`cw_core::can::timing::spec::stuffing_agrees`, the CRC-15 included).
+    #[test]
+    fn frame_stuffing() {
+        bolero::check!()
+            .with_type::<(bool, u32, u8, [u8; 8])>()
+            .cloned()
+            .for_each(|(extended, raw, len, data)| {
+                let frame = cw_core::can::CanFrame::masked(
+                    cw_core::can::CanId::masked(raw, extended),
+                    len,
+                    data,
+                );
+                assert!(cw_core::can::timing::spec::stuffing_agrees(&frame));
+            });
+    }
+
     /// Any run of WdgM's main functions with any alive indications: the supervision keeps
     /// its rule (`cw_core::wdgm::spec::alive_rule`) on the ECU's own configuration.
     #[test]

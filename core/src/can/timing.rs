@@ -239,6 +239,86 @@ pub fn failed_attempt_bits(frame: &CanFrame, stuffing: Stuffing) -> u32 {
     stuffable_len(frame) + stuff_bits(frame, stuffing) + 2 + ERROR_FRAME_BITS
 }
 
+/// The stuff-bit count's specification: the frame's bits from SOF to the end of the CRC
+/// one by one, the CRC-15 bit by bit over them, and the stuffing rule bit by bit. The
+/// tables' count must equal it on every frame ([`spec::stuffing_agrees`]: the tests, the
+/// `frame_stuffing` fuzz target, a Kani harness).
+pub mod spec {
+    use super::{crc15, stuff_bits, stuffable_len, StuffableBits, Stuffing};
+    use crate::can::CanFrame;
+
+    /// The frame's bits from SOF to the end of the CRC, one by one (at most 118), and how
+    /// many there are.
+    pub fn bits_one_by_one(frame: &CanFrame) -> ([bool; 118], usize) {
+        fn push(bits: &mut [bool; 118], len: &mut usize, value: u32, width: u32) {
+            for i in (0..width).rev() {
+                if let Some(slot) = bits.get_mut(*len) {
+                    *slot = (value >> i) & 1 == 1;
+                    *len += 1;
+                }
+            }
+        }
+        let (mut bits, mut len) = ([false; 118], 0);
+        let id = frame.can_id();
+        push(&mut bits, &mut len, 0, 1);
+        if id.is_extended() {
+            push(&mut bits, &mut len, id.raw() >> 18, 11);
+            push(&mut bits, &mut len, 0b11, 2);
+            push(&mut bits, &mut len, id.raw() & 0x3_FFFF, 18);
+            push(&mut bits, &mut len, 0, 3);
+        } else {
+            push(&mut bits, &mut len, id.raw(), 11);
+            push(&mut bits, &mut len, 0, 3);
+        }
+        push(&mut bits, &mut len, u32::from(frame.len()), 4);
+        for &byte in frame.bytes() {
+            push(&mut bits, &mut len, u32::from(byte), 8);
+        }
+        let crc = crc15(bits.get(..len).unwrap_or(&[]));
+        push(&mut bits, &mut len, u32::from(crc), 15);
+        (bits, len)
+    }
+
+    /// The stuff bits the transmitter inserts into `bits`, one by one: after every run of
+    /// five equal bits, a complement bit, which itself starts the next run.
+    pub fn count_stuff_bits(bits: &[bool]) -> u32 {
+        let mut stuffed = 0;
+        let mut last = None;
+        let mut run = 0;
+        for &bit in bits {
+            if Some(bit) == last {
+                run += 1;
+            } else {
+                last = Some(bit);
+                run = 1;
+            }
+            if run == 5 {
+                stuffed += 1;
+                last = Some(!bit);
+                run = 1;
+            }
+        }
+        stuffed
+    }
+
+    /// The tables' bits (the CRC included) are the frame's bits one by one, and their
+    /// stuff-bit count is the count one by one.
+    pub fn stuffing_agrees(frame: &CanFrame) -> bool {
+        let (bits, len) = bits_one_by_one(frame);
+        let Some(bits) = bits.get(..len) else {
+            return false;
+        };
+        let fast = StuffableBits::of(frame);
+        len as u32 == stuffable_len(frame)
+            && fast.len as usize == len
+            && bits
+                .iter()
+                .enumerate()
+                .all(|(i, &bit)| (fast.field(i as u32, 1) == 1) == bit)
+            && stuff_bits(frame, Stuffing::Exact) == count_stuff_bits(bits)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -260,75 +340,14 @@ mod tests {
         CanId::extended(raw).unwrap_or_else(|| panic!("bad id"))
     }
 
-    /// The oracle: the frame's bits from SOF to the end of the CRC one by one, the CRC
-    /// bit by bit over them.
-    fn bits_one_by_one(frame: &CanFrame) -> std::vec::Vec<bool> {
-        let mut bits = std::vec::Vec::new();
-        let mut push = |value: u32, width: u32| {
-            for i in (0..width).rev() {
-                bits.push((value >> i) & 1 == 1);
-            }
-        };
-        let id = frame.can_id();
-        push(0, 1);
-        if id.is_extended() {
-            push(id.raw() >> 18, 11);
-            push(0b11, 2);
-            push(id.raw() & 0x3_FFFF, 18);
-            push(0, 3);
-        } else {
-            push(id.raw(), 11);
-            push(0, 3);
-        }
-        push(u32::from(frame.len()), 4);
-        for &byte in frame.bytes() {
-            push(u32::from(byte), 8);
-        }
-        let crc = crc15(&bits);
-        for i in (0..15).rev() {
-            bits.push((crc >> i) & 1 == 1);
-        }
-        bits
-    }
-
-    /// The oracle's stuff bits: after every run of five equal bits, a complement bit,
-    /// which itself starts the next run.
-    fn count_stuff_bits(bits: &[bool]) -> u32 {
-        let mut stuffed = 0;
-        let mut last = None;
-        let mut run = 0;
-        for &bit in bits {
-            if Some(bit) == last {
-                run += 1;
-            } else {
-                last = Some(bit);
-                run = 1;
-            }
-            if run == 5 {
-                stuffed += 1;
-                last = Some(!bit);
-                run = 1;
-            }
-        }
-        stuffed
-    }
-
     fn agrees_with_the_oracle(f: &CanFrame) {
-        let bits = bits_one_by_one(f);
-        assert_eq!(bits.len() as u32, stuffable_len(f), "{f:?}");
-        let s = StuffableBits::of(f);
-        let fast: std::vec::Vec<bool> = (0..s.len).map(|i| s.field(i, 1) == 1).collect();
-        assert_eq!(fast, bits, "{f:?}");
-        assert_eq!(
-            stuff_bits(f, Stuffing::Exact),
-            count_stuff_bits(&bits),
-            "{f:?}"
-        );
+        assert!(spec::stuffing_agrees(f), "{f:?}");
     }
 
     /// Any frame: the stuff bits counted eight bits at a time (the tables) are those the
     /// bits one by one get, the CRC computed eight bits at a time included.
     #[test]
+    #[cfg_attr(kani, kani::proof, kani::unwind(120))]
     fn any_frame_is_stuffed_as_its_bits_one_by_one() {
         bolero::check!()
             .with_type::<(bool, u32, u8, [u8; 8])>()
@@ -424,12 +443,12 @@ mod tests {
 
     #[test]
     fn stuffing_counts_runs_across_stuff_bits() {
-        assert_eq!(count_stuff_bits(&[false; 5]), 1);
-        assert_eq!(count_stuff_bits(&[false; 4]), 0);
+        assert_eq!(spec::count_stuff_bits(&[false; 5]), 1);
+        assert_eq!(spec::count_stuff_bits(&[false; 4]), 0);
         // 00000 (stuff 1) 1111: the stuff bit plus four ones is another run of five.
         let mut bits = [false; 9];
         bits[5..].fill(true);
-        assert_eq!(count_stuff_bits(&bits), 2);
+        assert_eq!(spec::count_stuff_bits(&bits), 2);
     }
 
     #[test]
