@@ -721,13 +721,7 @@ pub fn start_systick(reload: u32, osek_priority: u8) {
         cp.SCB
             .set_priority(SystemHandler::SysTick, nvic_priority(osek_priority));
     }
-    cp.SYST
-        .set_clock_source(cortex_m::peripheral::syst::SystClkSource::Core);
-    cp.SYST.set_reload(reload);
-    trace::set_counts_per_ms(reload + 1);
-    cp.SYST.clear_current();
-    cp.SYST.enable_interrupt();
-    cp.SYST.enable_counter();
+    run_systick(&mut cp.SYST, reload, true);
 }
 
 /// SysTick free-running over its whole 24-bit range (0.67 s at 25 MHz) without its
@@ -737,13 +731,22 @@ pub fn start_systick(reload: u32, osek_priority: u8) {
 pub fn start_free_systick() {
     // SAFETY: as `enable_irq`.
     let mut cp = unsafe { cortex_m::Peripherals::steal() };
-    cp.SYST
-        .set_clock_source(cortex_m::peripheral::syst::SystClkSource::Core);
-    cp.SYST.set_reload(0x00FF_FFFF);
-    trace::set_counts_per_ms(0x0100_0000);
-    cp.SYST.clear_current();
-    cp.SYST.disable_interrupt();
-    cp.SYST.enable_counter();
+    run_systick(&mut cp.SYST, 0x00FF_FFFF, false);
+}
+
+/// SysTick on the core clock from zero, wrapping every `reload + 1` counts (the trace's
+/// counts per period), its interrupt on or off.
+fn run_systick(syst: &mut cortex_m::peripheral::SYST, reload: u32, interrupt: bool) {
+    syst.set_clock_source(cortex_m::peripheral::syst::SystClkSource::Core);
+    syst.set_reload(reload);
+    trace::set_counts_per_ms(reload + 1);
+    syst.clear_current();
+    if interrupt {
+        syst.enable_interrupt();
+    } else {
+        syst.disable_interrupt();
+    }
+    syst.enable_counter();
 }
 
 extern "C" {
