@@ -6,6 +6,7 @@
 use super::call::{perform, Returned, ServiceCall};
 use super::callevel::Context;
 use super::config::{IsrCategory, Status};
+use super::kernel::NO_FRAME;
 use super::{
     CounterId, Hooks, InterruptMask, IsrId, Os, OsConfig, OsError, Phase, ResourceId, TaskId,
     TaskKind, RES_SCHEDULER,
@@ -215,6 +216,16 @@ predicate! {
 }
 
 predicate! {
+    /// The ISR stack's slots above the active ISRs are empty: an ISR's return empties the
+    /// slot its entry filled, so a step that stands for an entry and a return (the tick's
+    /// fast path) leaves the slot as it found it, without writing it.
+    pub fn free_isr_slots_empty(os) -> bool {
+        let free = usize::from(os.isr_nesting());
+        os.isr_slots().iter().skip(free).all(|frame| *frame == NO_FRAME)
+    }
+}
+
+predicate! {
     /// The call level follows the state: at task level the context is `Task` exactly when
     /// a task runs; after `ShutdownOS` nothing runs, nothing is ready and nothing is active.
     pub fn context_consistent(os) -> bool {
@@ -243,6 +254,7 @@ predicate! {
             && resources_consistent(os)
             && waiting_is_blocked(os)
             && isr_nesting_consistent(os)
+            && free_isr_slots_empty(os)
             && context_consistent(os)
     }
 }

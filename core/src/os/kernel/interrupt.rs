@@ -2,7 +2,7 @@
 //! reports them, the six interrupt services, `GetISRID` (AUTOSAR), and the interrupt mask
 //! the board must apply.
 
-use super::{IsrFrame, Os, Phase, NONE, NO_RES};
+use super::{IsrFrame, Os, Phase, NONE, NO_FRAME, NO_RES};
 use crate::os::call::ServiceCall;
 use crate::os::callevel::Context;
 use crate::os::config::{IsrCategory, ISR_LEVEL_BASE};
@@ -51,6 +51,12 @@ where
     /// How many ISRs are active (nested).
     pub const fn isr_nesting(&self) -> u8 {
         self.isr_depth
+    }
+
+    /// The ISR stack's slots, the active ISRs' frames below the free ones: for
+    /// `spec::free_isr_slots_empty`.
+    pub(crate) const fn isr_slots(&self) -> &[IsrFrame; I] {
+        &self.isr_stack
     }
 
     /// The active ISRs, outermost first, each with the processor priority it runs at now.
@@ -120,8 +126,9 @@ where
     /// `IncrementCounter(counter)`, interrupts a task or the idle loop at task level, its
     /// priority is above the processor priority, and no alarm of the counter is due at this
     /// tick. Then the ISR's entry, the service and its return together only advance the
-    /// counter and the delta of the alarm at the head of its list (and leave the ISR's
-    /// frame in the free slot, as the return does): this does that, in one step.
+    /// counter and the delta of the alarm at the head of its list (the ISR's slot, which the
+    /// entry fills and the return empties, is empty before and after): this does that, in
+    /// one step.
     ///
     /// Returns the processor priority at or below which the kernel's mask holds interrupts
     /// now (its [`InterruptMask::at_level`] is `interrupt_mask()`); `None`, with nothing
@@ -170,10 +177,8 @@ where
         {
             return None;
         }
-        let frame = self.frame_of(isr, level);
-        let slot = self.isr_stack.first_mut()?;
+        // (The ISR's slot is left as the return leaves it: empty, as it is now.)
         let value = self.counter_value.get_mut(c)?;
-        *slot = frame;
         *value = if ticks == 1 {
             if *value >= max {
                 0
@@ -229,6 +234,13 @@ where
             }
         }
         self.isr_depth -= 1;
+        // The slot it leaves is empty again (`spec::free_isr_slots_empty`), so the tick's
+        // fast path, which stands for an entry and a return, need not write it.
+        self.isr_stack
+            .iter_mut()
+            .skip(usize::from(self.isr_depth))
+            .take(1)
+            .for_each(|slot| *slot = NO_FRAME);
         self.context = frame.interrupted;
         if self.isr_depth == 0 && matches!(self.context, Context::Task | Context::Idle) {
             self.reschedule();

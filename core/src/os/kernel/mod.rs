@@ -118,7 +118,7 @@ pub(crate) struct IsrFrame {
     interrupted: Context,
 }
 
-const NO_FRAME: IsrFrame = IsrFrame {
+pub(crate) const NO_FRAME: IsrFrame = IsrFrame {
     isr: NONE,
     level: 0,
     res_top: NO_RES,
