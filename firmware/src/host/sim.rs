@@ -495,7 +495,7 @@ impl Simulation {
         }
         self.ecu.port().raise(config::SYSTICK_ISR);
         self.take_interrupts();
-        self.frames.extend(self.bus.take_trace());
+        self.bus.drain_trace_into(&mut self.frames);
         if t % 10 == 0 {
             self.trace.push(TraceRow {
                 time_ms: t,
@@ -519,7 +519,7 @@ impl Simulation {
             self.ecu.port().raise(config::CAN_ISR);
             self.take_interrupts();
         }
-        self.frames.extend(self.bus.take_trace());
+        self.bus.drain_trace_into(&mut self.frames);
     }
 
     /// The interrupt controller takes every pending request the kernel's mask admits,

@@ -996,7 +996,7 @@ impl VirtualBus {
         Some(tec)
     }
 
-    /// Starts or stops recording completed frames for [`Self::take_trace`].
+    /// Starts or stops recording completed frames for [`Self::take_trace`] and [`Self::drain_trace_into`].
     pub fn set_tracing(&self, on: bool) {
         self.bus.borrow_mut().tracing = on;
     }
@@ -1004,6 +1004,12 @@ impl VirtualBus {
     /// The frames completed since the last call (while tracing), in bus order.
     pub fn take_trace(&self) -> Vec<BusRecord> {
         core::mem::take(&mut self.bus.borrow_mut().trace)
+    }
+
+    /// Moves the frames completed since the last call (while tracing), in bus order, to
+    /// the end of `out`. The bus keeps its buffer, so a frame costs no allocation.
+    pub fn drain_trace_into(&self, out: &mut Vec<BusRecord>) {
+        out.append(&mut self.bus.borrow_mut().trace);
     }
 
     /// Bus-wide counters.

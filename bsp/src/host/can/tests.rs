@@ -690,6 +690,27 @@ fn buses_are_deterministic() {
 }
 
 #[test]
+fn draining_the_trace_appends_each_frame_once_in_bus_order() {
+    let clock = VirtualClock::new();
+    let bus = worst_case_bus(&clock);
+    bus.set_tracing(true);
+    let mut tester = bus.attach_tester();
+    // (A started node acknowledges the tester's frames.)
+    let _ecu = started(&bus, &HostCanConfig::new(&[]));
+    let mut all = Vec::new();
+    for raw in [0x300, 0x100] {
+        tester.send(&frame(id(raw), &[0; 8]));
+        clock.advance_us(1_000);
+        bus.run_until_now();
+        bus.drain_trace_into(&mut all);
+    }
+    // Nothing new on the bus: nothing more is appended.
+    bus.drain_trace_into(&mut all);
+    assert_eq!(received_ids(&all), [0x300, 0x100]);
+    assert!(bus.take_trace().is_empty());
+}
+
+#[test]
 fn a_tester_frame_and_an_ecu_frame_share_the_bus_fairly() {
     let clock = VirtualClock::new();
     let bus = worst_case_bus(&clock);
