@@ -135,6 +135,10 @@ impl Hooks<TestOs> for Recorder {
         }
     }
     fn post_task_hook(os: &mut TestOs) {
+        // Every activation is a queued record or the running task, also while the running
+        // task is about to leave the processor (a task activated at task level is queued
+        // before this hook runs).
+        assert!(spec::activations_accounted(os), "{os:?}");
         let id = os.get_task_id().unwrap_or(None);
         os.hooks_mut().push(Seen::Post(id));
         if os.hooks().fail_inside_post_task_hook {

@@ -685,16 +685,23 @@ where
     /// Returns the task's priority, which the caller needs for its scheduling decision.
     #[inline(always)]
     fn activate(&mut self, t: usize) -> Result<u8, OsError> {
-        let cfg = self.cfg();
-        let (count, max, prio) = (self.activations[t], cfg.max_activations[t], cfg.priority[t]);
-        if count >= max {
-            return Err(OsError::Limit);
-        }
+        let count = self.activation_left(t)?;
+        let prio = self.cfg().priority[t];
         self.ready
             .push_back(prio, t as u8)
             .map_err(|_| OsError::Limit)?;
         self.activations[t] = count + 1;
         Ok(prio)
+    }
+
+    /// Task `t`'s activations now, if one more is allowed (`E_OS_LIMIT` otherwise).
+    #[inline(always)]
+    fn activation_left(&self, t: usize) -> Result<u8, OsError> {
+        let count = self.activations[t];
+        if count >= self.cfg().max_activations[t] {
+            return Err(OsError::Limit);
+        }
+        Ok(count)
     }
 
     /// The rescheduling point: keeps the running task unless a strictly higher priority is
@@ -706,7 +713,7 @@ where
             return;
         };
         if top >= self.preempt_at {
-            self.switch_to(top);
+            self.switch_to(top, None);
         }
     }
 
@@ -727,18 +734,33 @@ where
         self.preempt_at = self.threshold();
     }
 
-    /// Preempts the running task (if any) and dispatches the oldest task of `top`, with
-    /// `PostTaskHook` and `PreTaskHook` around the switch. Kept out of line: the common
-    /// decision "keep running" must not pay for it.
+    /// Preempts the running task (if any) and dispatches the oldest task of `top` (or
+    /// `activated`, below), with `PostTaskHook` and `PreTaskHook` around the switch. Kept
+    /// out of line: the common decision "keep running" must not pay for it.
+    ///
+    /// `activated`: a task `ActivateTask` activated that goes to the processor at once,
+    /// without a ready-queue record. That is the same switch where the queue at its
+    /// priority is empty (the running task was a highest-priority one, below it) and
+    /// nothing runs between the activation and the switch (no `PostTaskHook`): its record
+    /// would be queued and taken again at once.
     #[inline(never)]
-    fn switch_to(&mut self, top: u8) {
+    fn switch_to(&mut self, top: u8, activated: Option<u8>) {
+        if self.running != NONE && !self.post_task_hook() {
+            return;
+        }
+        self.preempt_running();
+        match activated {
+            Some(t) => self.run(usize::from(t)),
+            None => self.dispatch(top),
+        }
+        self.switched();
+    }
+
+    /// The running task (if any) leaves the processor for the head of its priority's
+    /// queue (its `PostTaskHook` has run).
+    #[inline(always)]
+    fn preempt_running(&mut self) {
         if self.running != NONE {
-            if self.cfg().hooks.post_task {
-                self.call_hook(Context::PostTaskHook, |os| H::post_task_hook(os));
-                if self.is_shut_down() {
-                    return;
-                }
-            }
             let r = self.running as usize;
             if let Some(saved) = self.saved_prio.get_mut(r) {
                 *saved = self.running_prio;
@@ -747,7 +769,12 @@ where
             let _ = self.ready.push_front(self.running_prio, r as u8);
             self.running = NONE;
         }
-        self.dispatch(top);
+    }
+
+    /// After a task switch: the threshold and the call level follow the new running task,
+    /// then its `PreTaskHook`.
+    #[inline(always)]
+    fn switched(&mut self) {
         self.sync_threshold();
         self.sync_task_context();
         // Not in Kani builds: there the proofs check every invariant after every step, and
@@ -778,8 +805,14 @@ where
         let Some(t) = self.ready.pop_front(top) else {
             return;
         };
-        let ti = t as usize;
-        self.running = t;
+        self.run(t as usize);
+    }
+
+    /// Task `ti` becomes the running task: it resumes at the priority it was preempted at,
+    /// or starts at its dispatch priority.
+    #[inline(always)]
+    fn run(&mut self, ti: usize) {
+        self.running = ti as u8;
         let internal = self.internal_prio(ti);
         let saved = self.saved_prio.get(ti).copied().unwrap_or(0);
         self.running_prio = match self.started.get_mut(ti) {

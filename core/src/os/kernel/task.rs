@@ -35,13 +35,22 @@ where
             || ServiceCall::ActivateTask(task),
             |os| {
                 let t = Self::task_index(task)?;
-                let prio = os.activate(t)?;
                 // The running task was a highest-priority one before the call (the invariant),
-                // so the only entry that can outrank it now is the one just queued: compare
-                // with that priority instead of searching the bitmap.
+                // so the only entry that can outrank it now is the new one: compare with its
+                // priority instead of searching the bitmap.
                 debug_assert_eq!(os.preempt_at, os.threshold());
-                if prio >= os.preempt_at {
-                    os.switch_to(prio);
+                let preempts = os.cfg().priority[t] >= os.preempt_at;
+                if preempts && !os.cfg().hooks.post_task {
+                    // It preempts at once, and nothing runs before the switch: its record
+                    // would be queued at an empty priority and taken again at once.
+                    let count = os.activation_left(t)?;
+                    os.activations[t] = count + 1;
+                    os.switch_to(os.cfg().priority[t], Some(t as u8));
+                    return Ok(());
+                }
+                let prio = os.activate(t)?;
+                if preempts {
+                    os.switch_to(prio, None);
                 }
                 Ok(())
             },
