@@ -2075,6 +2075,44 @@ fn the_fast_tick_takes_the_ticks_where_nothing_is_due() {
     assert_eq!(os.try_tick(tick, counter), None);
 }
 
+/// The tick's fast path is taken while a task holds a resource it shares with an ISR
+/// below the tick (the ECU's send under `RES_COM`, interrupted by `SysTickIsr`): the mask
+/// is then that ISR's level, below the tick's, so the tick is admitted, and the state is
+/// the whole ISR's.
+#[test]
+fn the_fast_tick_is_taken_under_a_lower_isrs_ceiling() {
+    static SHARED: OsConfig<1, 1, 1, 1, 2> = match OsConfig::new(OsDescription::new(
+        [TaskConfig::basic("Sender", 1).uses(0b1).autostart()],
+        [COUNTER],
+        [AlarmConfig::new(
+            "Unarmed",
+            CounterId(0),
+            AlarmAction::ActivateTask(TaskId(0)),
+        )],
+        [
+            IsrConfig::cat2("Can", 1).uses(0b1),
+            IsrConfig::cat2("Tick", 2),
+        ],
+    )) {
+        Ok(c) => c,
+        Err(e) => panic!("{}", e.describe()),
+    };
+    let Ok(mut os) = Os::<1, 1, 1, 1, 2, 1>::new(&SHARED) else {
+        panic!("test configuration refused");
+    };
+    let (tick, counter) = (IsrId(1), CounterId(0));
+    assert_eq!(os.start_os(OSDEFAULTAPPMODE), Ok(()));
+    assert_eq!(os.running(), Some(TaskId(0)));
+    assert_eq!(os.get_resource(R0), Ok(()));
+    let can_level = SHARED.isr_level(0);
+    assert_eq!(Some(os.masked_level()), can_level);
+    let before = os;
+    assert_eq!(os.try_tick(tick, counter), can_level);
+    assert_eq!(os.counter_value(counter), Some(1));
+    let verdict = spec::fast_path_agrees(&before, spec::Service::FastTick(tick, counter));
+    assert!(verdict.is_ok(), "{verdict:?}");
+}
+
 /// A category-2 ISR takes and releases the resource it declares by the fast paths: its
 /// level rises to the ceiling and back, the same state as the services leave; a nested
 /// lock and a release out of order are declined, and the services refuse them.
