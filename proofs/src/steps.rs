@@ -252,8 +252,8 @@ mod tests {
         let run = explore(2, 2);
         assert_eq!(run.failure, None);
         // After StartOS: an ISR that activates A or B, ISR entries, locks; then more.
-        assert_eq!(run.new_at_depth, [1, 5, 86]);
-        assert_eq!(run.transitions, 6 * 4352);
+        assert_eq!(run.new_at_depth, [1, 4, 79]);
+        assert_eq!(run.transitions, 5 * 4352);
     }
 
     #[test]
