@@ -39,16 +39,17 @@ where
                 // so the only entry that can outrank it now is the new one: compare with its
                 // priority instead of searching the bitmap.
                 debug_assert_eq!(os.preempt_at, os.threshold());
-                let preempts = os.cfg().priority[t] >= os.preempt_at;
+                let prio = os.cfg().priority[t];
+                let preempts = prio >= os.preempt_at;
                 if preempts && !os.cfg().hooks.post_task {
                     // It preempts at once, and nothing runs before the switch: its record
                     // would be queued at an empty priority and taken again at once.
                     let count = os.activation_left(t)?;
                     os.activations[t] = count + 1;
-                    os.switch_to(os.cfg().priority[t], Some(t as u8));
+                    os.switch_to(prio, Some(t as u8));
                     return Ok(());
                 }
-                let prio = os.activate(t)?;
+                os.activate(t)?;
                 if preempts {
                     os.switch_to(prio, None);
                 }
