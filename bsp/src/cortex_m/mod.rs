@@ -199,35 +199,27 @@ impl Arch for CortexM {
     unsafe fn first_frame(&self, top: u32, task: u8) -> u32 {
         let frame_top = top & !7;
         let frame = frame_top - 17 * 4;
-        let words: [u32; 17] = [
-            // r4-r11
-            0,
-            0,
-            0,
-            0,
-            0,
-            0,
-            0,
-            0,
-            // EXC_RETURN: thread mode, process stack, no FPU state
-            0xFFFF_FFFD,
-            // r0 (the task index), r1-r3, r12
-            u32::from(task),
-            0,
-            0,
-            0,
-            0,
-            // lr: a job never returns (it ends through the kernel)
-            0xFFFF_FFFF,
-            // pc: the job entry, Thumb bit cleared as the exception frame wants it
-            (cw_port_job as *const () as usize as u32) & !1,
-            // xPSR: Thumb state
-            0x0100_0000,
-        ];
-        for (i, w) in words.iter().enumerate() {
-            // SAFETY: the caller's contract: the 72 bytes below `top` are free stack.
-            unsafe { (frame as *mut u32).add(i).write_volatile(*w) };
-        }
+        // The frame PendSV's return loads: r4-r11 and EXC_RETURN (its own part), then the
+        // exception frame (r0-r3, r12, lr, pc, xPSR). A new job reads none of r1-r3, r12
+        // and r4-r11 before writing them (it starts at `cw_port_job`, a function of one
+        // argument), so only the five words that decide where and how it starts are
+        // written; the others keep what the stack held (as FreeRTOS's Cortex-M ports
+        // leave them).
+        let word = |i: usize, value: u32| {
+            // SAFETY: the caller's contract: the 72 bytes below `top` are free stack, and
+            // every `i` below is under 17, the frame's words.
+            unsafe { (frame as *mut u32).add(i).write_volatile(value) };
+        };
+        // EXC_RETURN: thread mode, process stack, no FPU state
+        word(8, 0xFFFF_FFFD);
+        // r0: the task index, `cw_port_job`'s argument
+        word(9, u32::from(task));
+        // lr: a job never returns (it ends through the kernel)
+        word(14, 0xFFFF_FFFF);
+        // pc: the job entry, Thumb bit cleared as the exception frame wants it
+        word(15, (cw_port_job as *const () as usize as u32) & !1);
+        // xPSR: Thumb state
+        word(16, 0x0100_0000);
         frame
     }
 
