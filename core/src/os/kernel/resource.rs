@@ -268,11 +268,15 @@ where
     fn try_get_for_task(&mut self, res: ResourceId) -> Option<u8> {
         let t = self.running as usize;
         let ceiling = self.cfg().resource_ceiling(res.0 as usize)?;
-        let own = *self.cfg().priority.get(t)?;
-        if own > ceiling && self.extended() {
+        let current = self.running_prio;
+        // The task's priority now is at or above its own, so at or below the ceiling it
+        // passes extended status's access check (its own priority at or below the
+        // ceiling) in either status, and the ceiling is the priority it runs at next.
+        // Above it (a task that holds a resource of a higher ceiling) the full service
+        // decides: the check needs the task's own priority, a table away.
+        if current > ceiling {
             return None;
         }
-        let current = self.running_prio;
         let top = self.res_top.get_mut(t)?;
         let state = self.res.get_mut(res.0 as usize)?;
         if state.owner != NONE {
@@ -285,35 +289,33 @@ where
         };
         *top = res.0;
         // At task level in the running phase the threshold is the priority + 1.
-        let level = ceiling.max(current);
-        self.running_prio = level;
-        self.preempt_at = level.saturating_add(1);
-        Some(level)
+        self.running_prio = ceiling;
+        self.preempt_at = ceiling.saturating_add(1);
+        Some(ceiling)
     }
 
     #[inline(always)]
     fn try_get_for_isr(&mut self, res: ResourceId) -> Option<u8> {
         let depth = (self.isr_depth as usize).checked_sub(1)?;
-        let isr = self.isr_stack.get(depth)?.isr;
         let ceiling = self.cfg().resource_ceiling(res.0 as usize)?;
-        let own = *self.cfg().isr_level.get(isr as usize)?;
-        if own > ceiling && self.extended() {
+        let frame = self.isr_stack.get_mut(depth)?;
+        // As for a task: the ISR's level now is at or above its own, so at or below the
+        // ceiling the access check passes in either status; above it, the full service.
+        if frame.level > ceiling {
             return None;
         }
-        let frame = self.isr_stack.get_mut(depth)?;
         let state = self.res.get_mut(res.0 as usize)?;
         if state.owner != NONE {
             return None;
         }
         *state = ResState {
-            owner: (T + isr as usize) as u8,
+            owner: (T + frame.isr as usize) as u8,
             prev_prio: frame.level,
             next: frame.res_top,
         };
-        let level = ceiling.max(frame.level);
         frame.res_top = res.0;
-        frame.level = level;
-        Some(level)
+        frame.level = ceiling;
+        Some(ceiling)
     }
 
     /// `ReleaseResource` for the common case: the running task at task level, or the
