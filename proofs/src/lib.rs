@@ -489,7 +489,7 @@ impl<
             Step::Do(service) => {
                 let isr = last.os.active_isr();
                 let result = spec::call(&mut next.os, service);
-                next.violation = spec::fast_path_agrees(&last.os, service)
+                next.violation = spec::step_contracts(&last.os, service)
                     .and_then(|()| spec::transition_rules(&last.os, &next.os, service, result))
                     .err();
                 // The ISR's script moves on (and starts again at its next entry).

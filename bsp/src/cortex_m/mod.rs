@@ -931,7 +931,7 @@ fn SysTick() {
 
 #[cortex_m_rt::exception]
 unsafe fn NonMaskableInt() {
-    fatal(PortFault::Board("NMI"));
+    fatal(PortFault::Nmi);
 }
 
 #[cortex_m_rt::exception]

@@ -432,7 +432,7 @@ pub fn halt() -> ! {
 /// overflow then shuts the OS down, whose report follows).
 pub fn report(fault: &PortFault) {
     leds_safe();
-    if *fault == PortFault::Board("NMI") && watchdog_expired() {
+    if *fault == PortFault::Nmi && watchdog_expired() {
         defmt::println!(
             "watchdog: not triggered since {} ms; expired at {} ms (NMI), its reset follows",
             WATCHDOG_TRIGGERED_MS.load(Ordering::Relaxed),

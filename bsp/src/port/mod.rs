@@ -65,6 +65,9 @@ pub unsafe trait OsKernel {
     /// `ReleaseResource`'s fast path ([`Os::try_release_resource`]), as
     /// [`OsKernel::try_get_resource`].
     fn try_release_resource(&mut self, res: ResourceId) -> Option<u8>;
+    /// The resources the running task may lock outside the kernel now, one bit each
+    /// ([`Os::lock_free_resources`]).
+    fn lock_free_resources(&self) -> u32;
     /// The OS tick's fast path ([`Os::try_tick`]): the whole category-2 ISR `isr` whose
     /// body is `IncrementCounter(counter)` in one step where nothing is due; `None`, with
     /// nothing changed, where the port must run the ISR whole.
@@ -146,6 +149,10 @@ where
     #[inline(always)]
     fn try_release_resource(&mut self, res: ResourceId) -> Option<u8> {
         Os::try_release_resource(self, res)
+    }
+    #[inline]
+    fn lock_free_resources(&self) -> u32 {
+        Os::lock_free_resources(self)
     }
     #[inline(always)]
     fn try_tick(&mut self, isr: IsrId, counter: CounterId) -> Option<u8> {

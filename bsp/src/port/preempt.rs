@@ -27,6 +27,18 @@
 //!   resource still held) is ended by the kernel's `task_returned` (`E_OS_MISSINGEND` to
 //!   the ErrorHook, its resources and locks released, as AUTOSAR's SWS_Os_00052 and
 //!   SWS_Os_00069 say), instead of spinning at its priority for ever.
+//! - **A task's lock outside the kernel.** A task at task level that holds nothing and
+//!   has no interrupt lock in force takes a resource that no ISR uses, and that it
+//!   declares ([`Os::lock_free_resources`](cw_core::os::Os::lock_free_resources), asked at
+//!   the end of every kernel call), by one store to the port's `lazy` word, and releases
+//!   it by one exchange: no kernel call. The kernel is told at the task's next kernel call, or at the next
+//!   ISR's entry, whichever comes first: `enter` hands the lock to the kernel's own fast
+//!   path before anything else, so the kernel sees the same calls in the same order, and
+//!   every decision it makes (a switch, an error) sees the lock. A lock and release with
+//!   no kernel call between them leave the kernel as they found it
+//!   (`cw_core::os::spec::lock_pair_leaves_no_trace`), so the kernel need never see them.
+//!   A lock handed over is released through the kernel. One such lock at a time: a
+//!   second, nested, goes through the kernel.
 //! - **Stack faults.** A context switch that finds the outgoing stack pointer inside the
 //!   stack's guard or, on a CPU without an MPU, the guard's memory written
 //!   ([`Arch::guard_intact`]), or the CPU's guard fault, ends in
@@ -35,7 +47,7 @@
 //!   resumes).
 
 use core::cell::UnsafeCell;
-use core::sync::atomic::{compiler_fence, AtomicBool, Ordering};
+use core::sync::atomic::{compiler_fence, AtomicBool, AtomicU32, Ordering};
 
 use cw_core::os::{
     CounterId, InterruptMask, IsrConfig, IsrId, OsError, ResourceId, TaskConfig, TaskId, TaskKind,
@@ -165,6 +177,11 @@ pub enum PortFault {
     MainStackOverflow,
     /// The OS shut down before the application was there to end the run.
     NoApplication,
+    /// A task's lock kept outside the kernel was refused when it was handed to the
+    /// kernel (the port's own contract broken; never seen).
+    LockRefused,
+    /// The non-maskable interrupt (on the boards here, the watchdog's first timeout).
+    Nmi,
     /// A fault of the CPU or the board (its name).
     Board(&'static str),
 }
@@ -183,6 +200,11 @@ impl PortFault {
             Self::StackOverflow(None) => ("stack overflow on", "the shared task stack"),
             Self::MainStackOverflow => ("stack overflow on", "the main stack (ISRs)"),
             Self::NoApplication => ("the OS stopped", "without an application"),
+            Self::LockRefused => (
+                "a lock kept outside the kernel",
+                "was refused when handed to it",
+            ),
+            Self::Nmi => ("fault", "NMI"),
             Self::Board(what) => ("fault", what),
         }
     }
@@ -413,8 +435,18 @@ pub struct Preemptive<K, A> {
     /// A kernel call is under way: a second one would alias the kernel. Outside `sched`
     /// so that the check itself takes no reference to the tables.
     in_kernel: AtomicBool,
+    /// A task's lock kept outside the kernel: 0, or the resource + 1 (bits 0-7) and, once
+    /// a kernel call has handed it to the kernel, [`HANDED`] and the task + 1 (bits 8-15)
+    /// (the module's rules).
+    lazy: AtomicU32,
+    /// The resources the running task may lock outside the kernel, one bit each
+    /// ([`OsKernel::lock_free_resources`] at the end of the last kernel call).
+    lazy_mask: AtomicU32,
     arch: A,
 }
+
+/// The bit of the `lazy` word that says the kernel holds the lock for the task.
+const HANDED: u32 = 1 << 16;
 
 // SAFETY: the kernel and the tables are reached only with the kernel lock taken (every
 // ISR that may call the OS and the task switch masked, on a single core) and the
@@ -429,6 +461,8 @@ impl<K: OsKernel, A: Arch> Preemptive<K, A> {
             kernel: UnsafeCell::new(kernel),
             sched: UnsafeCell::new(Sched::new()),
             in_kernel: AtomicBool::new(false),
+            lazy: AtomicU32::new(0),
+            lazy_mask: AtomicU32::new(0),
             arch,
         }
     }
@@ -568,7 +602,69 @@ impl<K: OsKernel, A: Arch> Preemptive<K, A> {
         // SAFETY: the kernel lock masks every ISR that may call the OS and the switch, and
         // this caller turned `in_kernel` on: the only references until `leave` turns it
         // off.
-        unsafe { (&mut *self.kernel.get(), &mut *self.sched.get()) }
+        let (kernel, sched) = unsafe { (&mut *self.kernel.get(), &mut *self.sched.get()) };
+        let lazy = self.lazy.load(Ordering::Relaxed);
+        if lazy != 0 && lazy & HANDED == 0 {
+            self.hand_over(kernel, lazy);
+        }
+        (kernel, sched)
+    }
+
+    /// A task's lock kept outside the kernel meets the first kernel call since: the
+    /// kernel's `GetResource` takes it now, for the task (its call level is the task's:
+    /// the call's own entry, an ISR's among them, comes after), before the call goes on.
+    /// So the call, and every decision it makes, sees the lock. The service, not its fast
+    /// path: this is rare, and the image holds the service once.
+    #[cold]
+    #[inline(never)]
+    fn hand_over(&self, kernel: &mut K, lazy: u32) {
+        let res = ResourceId(((lazy & 0xFF) as u8).wrapping_sub(1));
+        let owner = kernel.running().map_or(0, |t| u32::from(t.0) + 1);
+        if kernel.get_resource(res).is_err() {
+            self.fatal(PortFault::LockRefused);
+        }
+        self.lazy
+            .store(lazy | HANDED | owner << 8, Ordering::Relaxed);
+    }
+
+    /// `GetResource` outside the kernel, where the module's rules allow it: the running
+    /// task may lock `res` so (`lazy_mask`), no kernel call is under way (a hook's lock
+    /// goes to the kernel), and no other lock is kept outside the kernel. Then the lock is
+    /// one store, and the kernel hears of it at the next kernel call
+    /// ([`Preemptive::hand_over`]). `false`: nothing done.
+    #[inline(always)]
+    fn lazy_get(&self, res: ResourceId) -> bool {
+        let mask = self.lazy_mask.load(Ordering::Relaxed);
+        if mask.checked_shr(u32::from(res.0)).unwrap_or(0) & 1 == 0
+            || self.in_kernel.load(Ordering::Relaxed)
+            || self.lazy.load(Ordering::Relaxed) != 0
+        {
+            return false;
+        }
+        // (An ISR between the test and the store finds nothing to hand over, and a task it
+        // lets in ends, or waits holding nothing, before this one goes on: the word is 0
+        // again.)
+        self.lazy.store(u32::from(res.0) + 1, Ordering::Relaxed);
+        // The resource's data is reached only after the lock.
+        compiler_fence(Ordering::SeqCst);
+        true
+    }
+
+    /// `ReleaseResource` of a lock kept outside the kernel that the kernel has not been
+    /// handed: one exchange back to 0, which fails if a kernel call (an ISR's) handed it
+    /// over meanwhile; then, as for every lock handed over, the kernel releases it.
+    /// `false`: nothing done.
+    #[inline(always)]
+    fn lazy_release(&self, res: ResourceId) -> bool {
+        let lazy = self.lazy.load(Ordering::Relaxed);
+        if lazy & (0xFF | HANDED) != u32::from(res.0) + 1 {
+            return false;
+        }
+        // The resource's data is left before the release.
+        compiler_fence(Ordering::SeqCst);
+        self.lazy
+            .compare_exchange(lazy, 0, Ordering::Relaxed, Ordering::Relaxed)
+            .is_ok()
     }
 
     /// Carries out what the kernel decided and ends the kernel lock: the OS-level mask,
@@ -587,6 +683,8 @@ impl<K: OsKernel, A: Arch> Preemptive<K, A> {
         }
         // The kernel's mask as a level (`InterruptMask::at_level`; `u8::MAX` is `All`).
         let level = kernel.masked_level();
+        self.lazy_mask
+            .store(kernel.lock_free_resources(), Ordering::Relaxed);
         compiler_fence(Ordering::SeqCst);
         self.in_kernel.store(false, Ordering::Relaxed);
         if (level == u8::MAX) == sched.all_for_kernel {
@@ -610,10 +708,25 @@ impl<K: OsKernel, A: Arch> Preemptive<K, A> {
         };
         match fast {
             Some(level) => {
+                if !take {
+                    self.released(res);
+                }
+                // (The caller holds one more, or one fewer.)
+                self.lazy_mask
+                    .store(kernel.lock_free_resources(), Ordering::Relaxed);
                 self.leave_at(level);
                 Ok(())
             }
             None => self.lock_service(kernel, sched, res, take),
+        }
+    }
+
+    /// The kernel released `res`: if it was a lock kept outside the kernel and handed
+    /// over, the port's word is free again.
+    #[inline(always)]
+    fn released(&self, res: ResourceId) {
+        if self.lazy.load(Ordering::Relaxed) & !0xFF00 == (u32::from(res.0) + 1) | HANDED {
+            self.lazy.store(0, Ordering::Relaxed);
         }
     }
 
@@ -635,6 +748,9 @@ impl<K: OsKernel, A: Arch> Preemptive<K, A> {
         } else {
             kernel.release_resource(res)
         };
+        if !take && result.is_ok() {
+            self.released(res);
+        }
         self.leave(kernel, sched);
         result
     }
@@ -674,6 +790,7 @@ impl<K: OsKernel, A: Arch> Preemptive<K, A> {
     fn stopping(&self, sched: &mut Sched) {
         self.arch.disable_all();
         let first = !core::mem::replace(&mut sched.stopped, true);
+        self.lazy_mask.store(0, Ordering::Relaxed);
         self.in_kernel.store(false, Ordering::Relaxed);
         if first {
             self.arch.stopped();
@@ -821,22 +938,32 @@ impl<K: OsKernel, A: Arch> Port for Preemptive<K, A> {
         Some(result)
     }
 
-    /// The lock by the stack resource policy: under the kernel lock the kernel's fast path
-    /// pushes the resource and raises the task's priority and preemption threshold to the
-    /// ceiling; the port then sets the OS-level mask to that level, with no task switch to
-    /// look for (taking a resource never lets another task in). Where the fast path
-    /// declines, the full service and the port's whole carrying-out, in the same kernel
-    /// lock.
+    /// The lock by the stack resource policy. A task's lock of one of its own resources
+    /// that no ISR uses, holding nothing else, is kept outside the kernel: one store, no
+    /// kernel call (the module's rules). Otherwise, under the kernel lock, the kernel's
+    /// fast path pushes the resource and raises the task's priority and preemption
+    /// threshold to the ceiling; the port then sets the OS-level mask to that level, with
+    /// no task switch to look for (taking a resource never lets another task in). Where
+    /// the fast path declines, the full service and the port's whole carrying-out, in the
+    /// same kernel lock.
     #[inline(never)]
     fn get_resource(&self, res: ResourceId) -> Result<(), OsError> {
+        if self.lazy_get(res) {
+            return Ok(());
+        }
         self.lock_step(res, true)
     }
 
-    /// The release, as [`Preemptive::get_resource`] takes the lock: the fast path applies
-    /// only where no task above the restored priority is ready (else the full service
-    /// switches to it).
+    /// The release, as [`Preemptive::get_resource`] takes the lock: a lock kept outside
+    /// the kernel that no kernel call has seen is one exchange (no task became ready
+    /// meanwhile: that takes a kernel call, which hands the lock over); the kernel's fast
+    /// path applies only where no task above the restored priority is ready (else the full
+    /// service switches to it).
     #[inline(never)]
     fn release_resource(&self, res: ResourceId) -> Result<(), OsError> {
+        if self.lazy_release(res) {
+            return Ok(());
+        }
         self.lock_step(res, false)
     }
 
@@ -852,6 +979,14 @@ impl<K: OsKernel, A: Arch> Port for Preemptive<K, A> {
                 // kernel ends it (E_OS_MISSINGEND, its resources and locks released).
                 if kernel.task_returned().is_ok() {
                     sched.ended = true;
+                }
+            }
+            if sched.ended {
+                // The job's lock kept outside the kernel, if any, was handed over at this
+                // call and released with the job (`task_returned`).
+                let lazy = self.lazy.load(Ordering::Relaxed);
+                if (lazy >> 8) & 0xFF == u32::from(sched.current) + 1 {
+                    self.lazy.store(0, Ordering::Relaxed);
                 }
             }
             (result, sched.ended)

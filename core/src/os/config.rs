@@ -613,6 +613,13 @@ pub struct OsConfig<const T: usize, const R: usize, const C: usize, const A: usi
     pub(crate) ceilings: [u8; R],
     /// Derived: the ceiling of `RES_SCHEDULER` (the highest task priority).
     pub(crate) scheduler_ceiling: u8,
+    /// Derived: every alarm's action is `ActivateTask`. With tables that are constants
+    /// (`static_tables!`) the kernel's image then holds no code for the other actions.
+    pub(crate) task_alarms_only: bool,
+    /// Derived, per task: the user resources it declares that no ISR declares (their
+    /// ceilings are tasks' priorities), one bit each (the first 32); none for a task that
+    /// is not fully preemptive (it runs at `RES_SCHEDULER`'s ceiling).
+    pub(crate) lock_free_resources: [u32; T],
     /// Derived: the sum of all tasks' activations (the ready-queue entries ever needed).
     pub(crate) total_activations: usize,
     /// Derived, per task, for the hot paths: static priority.
@@ -791,6 +798,22 @@ impl<const T: usize, const R: usize, const C: usize, const A: usize, const I: us
             }
             i += 1;
         }
+        let mut lock_free_resources = [0u32; T];
+        let mut t = 0;
+        while t < T {
+            let mut r = 0;
+            // (`R` is at most 32, `MAX_RESOURCES`: checked above.)
+            while r < R {
+                if ceilings[r] < ISR_LEVEL_BASE
+                    && d.tasks[t].resources & (1 << r) != 0
+                    && matches!(d.tasks[t].preemption, Preemption::Full)
+                {
+                    lock_free_resources[t] |= 1 << r;
+                }
+                r += 1;
+            }
+            t += 1;
+        }
         // Category 1 above every category 2: then `SuspendOSInterrupts` is one mask at the
         // highest category-2 level, which leaves every category-1 ISR free.
         let mut i = 0;
@@ -837,10 +860,14 @@ impl<const T: usize, const R: usize, const C: usize, const A: usize, const I: us
             }
             c += 1;
         }
+        let mut task_alarms_only = true;
         let mut a = 0;
         while a < A {
             let alarm = &d.alarms[a];
             let id = a as u8;
+            if !matches!(alarm.action, AlarmAction::ActivateTask(_)) {
+                task_alarms_only = false;
+            }
             if alarm.counter.0 as usize >= C {
                 return Err(ConfigError::AlarmCounter { alarm: id });
             }
@@ -887,6 +914,8 @@ impl<const T: usize, const R: usize, const C: usize, const A: usize, const I: us
             isrs: d.isrs,
             ceilings,
             scheduler_ceiling,
+            lock_free_resources,
+            task_alarms_only,
             total_activations,
             priority,
             max_activations,
@@ -950,6 +979,18 @@ impl<const T: usize, const R: usize, const C: usize, const A: usize, const I: us
             Some(self.ceilings[index])
         } else {
             None
+        }
+    }
+
+    /// The user resources task `index` declares that no ISR declares (their ceilings are
+    /// tasks' priorities), one bit each (the first 32); none for a task that is not fully
+    /// preemptive, or an unknown index. What a port may let the task lock outside the
+    /// kernel ([`Os::lock_free_resources`](crate::os::Os::lock_free_resources)).
+    pub const fn lock_free_resources(&self, index: usize) -> u32 {
+        if index < T {
+            self.lock_free_resources[index]
+        } else {
+            0
         }
     }
 

@@ -396,6 +396,68 @@ where
     }
 }
 
+/// The contract a port relies on when it keeps a task's lock outside the kernel until
+/// the task's next kernel call ([`Os::lock_free_resources`]): where that names `res`, it
+/// is a user resource the running task declares and no ISR uses (a ceiling at task
+/// level), the running task is at task level with nothing held and no interrupt lock,
+/// the lock's fast path takes it, the release's fast path right after takes that too,
+/// and the two leave the state they found. So a pair the kernel never sees (no kernel
+/// call between the two) is one it would have left no trace of, and a kernel call in
+/// between, which hands the lock to the kernel first, sees the state the lock would have
+/// made.
+///
+/// # Errors
+/// Which part of the contract is broken.
+pub fn lock_pair_leaves_no_trace<
+    const T: usize,
+    const R: usize,
+    const C: usize,
+    const A: usize,
+    const I: usize,
+    const Q: usize,
+    K,
+    H,
+>(
+    before: &Os<T, R, C, A, I, Q, K, H>,
+    res: ResourceId,
+) -> Result<(), &'static str>
+where
+    K: Tables<OsConfig<T, R, C, A, I>>,
+    H: Hooks<Os<T, R, C, A, I, Q, K, H>>,
+{
+    let named = 1u32
+        .checked_shl(u32::from(res.0))
+        .is_some_and(|bit| before.lock_free_resources() & bit != 0);
+    if !named {
+        return Ok(());
+    }
+    // What the mask names, by the definitions: the running task at task level, holding
+    // nothing, no interrupt lock; `res` one of its own resources, at a task's ceiling.
+    let running = before.running().map(|t| usize::from(t.0));
+    let task = running.and_then(|t| before.config().tasks().get(t));
+    let declared = task.is_some_and(|t| t.resources & (1u32 << res.0) != 0);
+    let task_level = before
+        .ceiling(res)
+        .is_some_and(|ceiling| ceiling < super::ISR_LEVEL_BASE);
+    let alone = at_task_level(before)
+        && !before.locks().any()
+        && running.is_some_and(|t| before.held_resources(TaskId(t as u8)).next().is_none());
+    if res == RES_SCHEDULER || !declared || !task_level || !alone {
+        return Err("the mask names a resource the task may not lock outside the kernel");
+    }
+    let mut os = *before;
+    if os.try_get_resource(res).is_none() {
+        return Err("the lock's fast path declined a lock the port may take outside the kernel");
+    }
+    if os.try_release_resource(res).is_none() {
+        return Err("the release's fast path declined the release right after the lock");
+    }
+    if os != *before {
+        return Err("a lock and its release left another state than they found");
+    }
+    Ok(())
+}
+
 /// The contract of [`Os::try_ticks`]: `ticks` ticks at once are taken exactly when each
 /// of `ticks` successive [`Os::try_tick`] calls would be, and leave the state those leave,
 /// with the same level; declined, they change nothing.
@@ -667,7 +729,39 @@ where
     fifo_discipline(before, after)
 }
 
-/// Performs `service` and checks [`transition_rules`] and [`kernel_invariants`].
+/// The contracts of the paths a port takes instead of `service` from `before`: the fast
+/// paths' ([`fast_path_agrees`]) and, for a lock, that of a lock kept outside the kernel
+/// ([`lock_pair_leaves_no_trace`]). The harnesses, the step sequences and the models
+/// check them on every step.
+///
+/// # Errors
+/// The first contract broken.
+pub fn step_contracts<
+    const T: usize,
+    const R: usize,
+    const C: usize,
+    const A: usize,
+    const I: usize,
+    const Q: usize,
+    K,
+    H,
+>(
+    before: &Os<T, R, C, A, I, Q, K, H>,
+    service: Service,
+) -> Result<(), &'static str>
+where
+    K: Tables<OsConfig<T, R, C, A, I>>,
+    H: Hooks<Os<T, R, C, A, I, Q, K, H>>,
+{
+    fast_path_agrees(before, service)?;
+    if let Service::FastGet(res) | Service::Call(ServiceCall::GetResource(res)) = service {
+        lock_pair_leaves_no_trace(before, res)?;
+    }
+    Ok(())
+}
+
+/// Performs `service` and checks [`step_contracts`], [`transition_rules`] and
+/// [`kernel_invariants`].
 ///
 /// # Errors
 /// The first rule or invariant broken.
@@ -689,7 +783,7 @@ where
     H: Hooks<Os<T, R, C, A, I, Q, K, H>>,
 {
     let before = *os;
-    fast_path_agrees(&before, service)?;
+    step_contracts(&before, service)?;
     let result = call(os, service);
     transition_rules(&before, os, service, result)?;
     if !kernel_invariants(os) {

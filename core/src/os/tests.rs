@@ -1032,6 +1032,35 @@ fn locks_left_by_hooks_are_undone() {
     check(&os);
 }
 
+/// The resources each task may lock outside the kernel, as the configuration derives
+/// them (built at run time here, so that the derivation is measured): a task's own
+/// resources that no ISR declares; none for a non-preemptive task, or an unknown index.
+#[test]
+fn lock_free_resources_are_a_tasks_own_that_no_isr_declares() {
+    let description = OsDescription::new(
+        [
+            TaskConfig::basic("A", 1).uses(0b011),
+            TaskConfig::basic("B", 2).uses(0b110),
+            TaskConfig::basic("N", 3).uses(0b010).non_preemptive(),
+        ],
+        [],
+        [],
+        // Resource 2 is the ISRs' too (the first one's level is its ceiling).
+        [
+            IsrConfig::cat2("J", 2).uses(0b100),
+            IsrConfig::cat2("I", 1).uses(0b100),
+        ],
+    );
+    let Ok(cfg) = std::hint::black_box(OsConfig::<3, 3, 0, 0, 2>::new(description)) else {
+        panic!("the configuration is valid")
+    };
+    assert_eq!(cfg.lock_free_resources(0), 0b011);
+    assert_eq!(cfg.lock_free_resources(1), 0b010);
+    assert_eq!(cfg.lock_free_resources(2), 0);
+    assert_eq!(cfg.lock_free_resources(3), 0);
+    assert_eq!(cfg.resource_ceiling(2), Some(ISR_LEVEL_BASE + 2));
+}
+
 /// A ready queue of more than 255 records cannot be indexed by the kernel's `u8` links;
 /// one of exactly 255 can, and holds every record the configuration allows.
 #[test]
@@ -2017,6 +2046,54 @@ fn any_fast_release_agrees_with_release_resource() {
             let verdict = spec::fast_path_agrees(&os, Step::FastRelease(r).service());
             assert!(verdict.is_ok(), "{r}: {verdict:?}");
         });
+}
+
+/// A lock and its release that a port keeps outside the kernel ([`Os::lock_free_resources`])
+/// leave no trace (`spec::lock_pair_leaves_no_trace`): from A or B running after an ISR,
+/// holding resource 0 through the kernel or not, for any resource id. (The step
+/// harnesses, the step sequences and the models check it too, at every `GetResource`.)
+#[test]
+#[cfg_attr(kani, kani::proof, kani::unwind(10))]
+fn a_lock_pair_outside_the_kernel_leaves_no_trace() {
+    bolero::check!()
+        .with_type::<(bool, bool, u8)>()
+        .cloned()
+        .for_each(|(b, held, r)| {
+            let mut os = small_after_an_isr(0, u8::from(b));
+            if held {
+                assert_eq!(os.get_resource(ResourceId(0)), Ok(()));
+            }
+            // A task that holds a resource taken through the kernel locks through it.
+            assert_eq!(os.lock_free_resources() != 0, !held);
+            let verdict = spec::lock_pair_leaves_no_trace(&os, ResourceId(r % 4));
+            assert!(verdict.is_ok(), "{r}: {verdict:?}");
+        });
+}
+
+/// Only the running task at task level, with no interrupt lock and nothing held, may lock
+/// outside the kernel: not before `StartOS`, not the idle loop, not an ISR, not under
+/// `SuspendOSInterrupts`, not while holding a resource.
+#[test]
+fn only_a_task_at_task_level_that_holds_nothing_may_lock_outside_the_kernel() {
+    let Ok(before_start) = SmallOs::new(&SMALL) else {
+        panic!("the small configuration is valid")
+    };
+    assert_eq!(before_start.lock_free_resources(), 0);
+    let idle = small_started();
+    assert_eq!(idle.lock_free_resources(), 0);
+    let mut os = small_after_an_isr(0, 1);
+    assert_eq!(os.lock_free_resources(), 0b1);
+    assert_eq!(os.enter_isr(IsrId(0)), Ok(()));
+    assert_eq!(os.lock_free_resources(), 0);
+    assert_eq!(os.exit_isr(), Ok(()));
+    assert_eq!(os.lock_free_resources(), 0b1);
+    assert_eq!(os.suspend_os_interrupts(), Ok(()));
+    assert_eq!(os.lock_free_resources(), 0);
+    assert_eq!(os.resume_os_interrupts(), Ok(()));
+    assert_eq!(os.get_resource(ResourceId(0)), Ok(()));
+    assert_eq!(os.lock_free_resources(), 0);
+    assert_eq!(os.release_resource(ResourceId(0)), Ok(()));
+    assert_eq!(os.lock_free_resources(), 0b1);
 }
 
 /// The OS tick's fast path agrees with the whole ISR (entry, `IncrementCounter`, return)

@@ -369,7 +369,7 @@ impl App for Mps2App {
 
     fn report(&self, fault: &PortFault) {
         report_supervision("cw-qemu", &self.ecu);
-        if *fault == PortFault::Board("NMI") && mps2::watchdog_expired() {
+        if *fault == PortFault::Nmi && mps2::watchdog_expired() {
             // The watchdog's reset ends the run without the end-of-run report: the LED
             // changes so far go to the log now.
             report_leds();

@@ -3,6 +3,7 @@
 
 extern crate std;
 
+use core::sync::atomic::Ordering;
 use std::cell::{Cell, RefCell};
 use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::vec::Vec;
@@ -544,4 +545,179 @@ fn long_schedules_keep_the_stacks_apart() {
     bolero::check!()
         .with_type::<Vec<(u8, u8)>>()
         .for_each(|steps| assert!(spec::stacks_stay_apart(steps)));
+}
+
+/// The kernel as the port leaves it, with a lock kept outside the kernel handed over as
+/// the next kernel call would: what every kernel call sees.
+fn kernel_view(port: &TestPort) -> Kernel {
+    // SAFETY: the model runs one context at a time and no kernel call is under way.
+    let mut view = unsafe { *port.kernel.get() };
+    let lazy = port.lazy.load(Ordering::Relaxed);
+    if lazy != 0 && lazy & super::HANDED == 0 {
+        let res = ResourceId(((lazy & 0xFF) as u8).wrapping_sub(1));
+        assert!(view.try_get_resource(res).is_some(), "the hand-over");
+    }
+    view
+}
+
+/// The kernel itself, without a kernel call.
+fn kernel_now(port: &TestPort) -> Kernel {
+    // SAFETY: as in `kernel_view`.
+    unsafe { *port.kernel.get() }
+}
+
+#[test]
+fn a_tasks_lock_outside_the_kernel_is_a_store_and_a_pair_leaves_the_kernel_untouched() {
+    let port = started();
+    let tasks_only = ResourceId(1);
+    let before = kernel_now(&port);
+    assert_eq!(port.get_resource(tasks_only), Ok(()));
+    assert_ne!(port.lazy.load(Ordering::Relaxed), 0);
+    assert!(kernel_now(&port) == before, "the kernel was not called");
+    // What a kernel call would see: Low holding it at its ceiling.
+    assert_eq!(kernel_view(&port).resource_owner(tasks_only), Some(LOW));
+    assert_eq!(kernel_view(&port).running_priority(), Some(2));
+    assert_eq!(port.release_resource(tasks_only), Ok(()));
+    assert_eq!(port.lazy.load(Ordering::Relaxed), 0);
+    assert!(kernel_now(&port) == before, "the pair left no trace");
+    // A resource an ISR shares goes through the kernel, which masks the ISR.
+    assert_eq!(port.get_resource(ResourceId(0)), Ok(()));
+    assert_eq!(port.lazy.load(Ordering::Relaxed), 0);
+    assert_eq!(kernel_now(&port).resource_owner(ResourceId(0)), Some(LOW));
+    assert_eq!(port.arch().level.get(), Some(InterruptMask::UpTo(1)));
+    // Holding it, the task locks through the kernel only.
+    assert_eq!(port.get_resource(tasks_only), Ok(()));
+    assert_eq!(port.lazy.load(Ordering::Relaxed), 0);
+    assert_eq!(port.release_resource(tasks_only), Ok(()));
+    assert_eq!(port.release_resource(ResourceId(0)), Ok(()));
+}
+
+#[test]
+fn the_next_kernel_call_hands_the_lock_to_the_kernel_before_anything_else() {
+    let port = started();
+    let tasks_only = ResourceId(1);
+    assert_eq!(port.get_resource(tasks_only), Ok(()));
+    // An ISR's first kernel call: the kernel holds the lock for Low already, so High,
+    // activated by the ISR, waits for the release.
+    from_isr(&port, |os| {
+        assert_eq!(os.resource_owner(tasks_only), Some(LOW));
+        assert_eq!(os.activate_task(HIGH), Ok(()));
+    });
+    assert!(!port.arch().switch.get(), "High waits for the release");
+    assert_ne!(port.lazy.load(Ordering::Relaxed) & super::HANDED, 0);
+    // The release goes through the kernel, which switches to High.
+    assert_eq!(port.release_resource(tasks_only), Ok(()));
+    assert_eq!(port.lazy.load(Ordering::Relaxed), 0);
+    assert_eq!(kernel_now(&port).resource_owner(tasks_only), None);
+    assert!(port.arch().switch.get(), "the release lets High in");
+    assert_eq!(kernel_now(&port).running(), Some(HIGH));
+}
+
+#[test]
+fn a_nested_lock_of_the_same_resource_is_refused_by_the_kernel_as_ever() {
+    let port = started();
+    let tasks_only = ResourceId(1);
+    assert_eq!(port.get_resource(tasks_only), Ok(()));
+    // The second lock goes through the kernel, which is handed the first and refuses.
+    assert_eq!(port.get_resource(tasks_only), Err(OsError::Access));
+    assert_eq!(kernel_now(&port).hooks().errors(), [OsError::Access]);
+    assert_eq!(kernel_now(&port).resource_owner(tasks_only), Some(LOW));
+    assert_eq!(port.release_resource(tasks_only), Ok(()));
+    assert_eq!(port.lazy.load(Ordering::Relaxed), 0);
+    assert_eq!(kernel_now(&port).resource_owner(tasks_only), None);
+}
+
+#[test]
+fn a_job_that_ends_holding_a_lock_outside_the_kernel_gives_it_back() {
+    let port = started();
+    let tasks_only = ResourceId(1);
+    assert_eq!(port.get_resource(tasks_only), Ok(()));
+    // TerminateTask sees the lock (E_OS_RESOURCE); the job cannot end as asked and the
+    // kernel ends it, releasing the lock (E_OS_MISSINGEND).
+    let end = ends(|| {
+        let _ = port.end_job(|os| os.terminate_task());
+    });
+    assert_eq!(end, End::JobOver);
+    assert_eq!(port.lazy.load(Ordering::Relaxed), 0);
+    let kernel = kernel_now(&port);
+    assert_eq!(kernel.resource_owner(tasks_only), None);
+    assert_eq!(
+        kernel.hooks().errors(),
+        [OsError::Resource, OsError::MissingEnd]
+    );
+}
+
+#[test]
+fn isrs_hooks_and_tasks_under_an_interrupt_lock_lock_through_the_kernel() {
+    let port = started();
+    // In an ISR (after its entry): the lock goes to the kernel.
+    port.kernel(|os| os.enter_isr(IsrId(0))).expect("enter");
+    assert_eq!(port.lazy_mask.load(Ordering::Relaxed), 0);
+    assert_eq!(port.get_resource(ResourceId(0)), Ok(()));
+    assert_eq!(port.lazy.load(Ordering::Relaxed), 0);
+    assert_eq!(port.release_resource(ResourceId(0)), Ok(()));
+    port.kernel(|os| os.exit_isr()).expect("exit");
+    // Back in Low, which may again.
+    assert_eq!(port.lazy_mask.load(Ordering::Relaxed), 0b10);
+    // Under SuspendOSInterrupts: the kernel refuses the lock (E_OS_CALLEVEL in AUTOSAR).
+    port.kernel(|os| os.suspend_os_interrupts())
+        .expect("suspend");
+    assert_eq!(port.lazy_mask.load(Ordering::Relaxed), 0);
+    assert!(port.get_resource(ResourceId(1)).is_err());
+    assert_eq!(port.lazy.load(Ordering::Relaxed), 0);
+    port.kernel(|os| os.resume_os_interrupts()).expect("resume");
+    // Inside a kernel call (a hook's lock would be one): never outside the kernel.
+    port.in_kernel.store(true, Ordering::Relaxed);
+    assert!(!port.lazy_get(ResourceId(1)));
+    port.in_kernel.store(false, Ordering::Relaxed);
+    assert!(port.lazy_get(ResourceId(1)));
+    assert!(port.lazy_release(ResourceId(1)));
+}
+
+/// One step of [`any_locks_and_calls_leave_the_kernel_as_kernel_calls_would`].
+fn lock_step_on_both(port: &TestPort, reference: &mut Kernel, op: u8) {
+    let res = ResourceId(op / 4 % 3);
+    match op % 4 {
+        0 => assert_eq!(
+            port.get_resource(res),
+            reference.get_resource(res),
+            "get {res:?}"
+        ),
+        1 => assert_eq!(
+            port.release_resource(res),
+            reference.release_resource(res),
+            "release {res:?}"
+        ),
+        2 => {
+            // An ISR that enters (where the mask lets it) and returns.
+            let entered = port.kernel(|os| os.enter_isr(IsrId(0)));
+            assert_eq!(entered, reference.enter_isr(IsrId(0)), "ISR entry");
+            if entered.is_ok() {
+                assert_eq!(port.kernel(|os| os.exit_isr()), reference.exit_isr());
+            }
+        }
+        _ => {
+            // Any kernel call of the task.
+            assert_eq!(port.kernel(|os| os.get_task_id()), reference.get_task_id());
+        }
+    }
+}
+
+/// Any sequence of locks, releases (of either resource, or an invalid one), ISRs and
+/// kernel calls of the running task: after each step the kernel a kernel call would see
+/// (the lock kept outside it handed over) is the kernel that was called for every lock,
+/// and every call returned the same. (A bolero test and fuzz target.)
+#[test]
+fn any_locks_and_calls_leave_the_kernel_as_kernel_calls_would() {
+    bolero::check!().with_type::<Vec<u8>>().for_each(|ops| {
+        let port = started();
+        let mut reference = kernel_now(&port);
+        for &op in ops.iter().take(24) {
+            lock_step_on_both(&port, &mut reference, op);
+            assert!(
+                kernel_view(&port) == reference,
+                "after {op}: the kernel differs from the one called for every lock"
+            );
+        }
+    });
 }

@@ -408,6 +408,10 @@ where
                         self.report(ServiceCall::ActivateTask(task), e);
                     }
                 }
+                // Never true where it is tested (an alarm with another action makes the
+                // flag false); with constant tables whose alarms all activate tasks, the
+                // arms below are folded away.
+                _ if self.cfg().task_alarms_only => {}
                 AlarmAction::SetEvent(task, mask) => {
                     let result = Self::task_index(task).and_then(|t| self.set_event_inner(t, mask));
                     if let Err(e) = result {

@@ -236,6 +236,26 @@ where
         )
     }
 
+    /// The resources the running task may take now as if nothing else ran, one bit each:
+    /// at task level (not in a hook, an ISR, before start or after shutdown), with no
+    /// interrupt lock in force and no resource taken, those of
+    /// [`OsConfig::lock_free_resources`] (its own, that no ISR uses); else none. A port
+    /// may keep such a lock outside the kernel until the task's next kernel call, which
+    /// hands it to `GetResource` before anything else: the kernel sees the same calls in
+    /// the same order, and a lock and release between two kernel calls leave its state as
+    /// they found it (`spec::lock_pair_leaves_no_trace`).
+    #[inline]
+    pub fn lock_free_resources(&self) -> u32 {
+        let t = usize::from(self.running);
+        if !matches!(self.context, Context::Task)
+            || self.denied & ServiceId::GetResource.bit() != 0
+            || self.res_top.get(t).copied() != Some(NO_RES)
+        {
+            return 0;
+        }
+        self.cfg().lock_free_resources(t)
+    }
+
     /// `GetResource` for the common case, by the stack resource policy: the running task at
     /// task level, or the innermost category-2 ISR, with no interrupt lock in force, a user
     /// resource that is free and (extended status) whose ceiling is at or above the caller's
