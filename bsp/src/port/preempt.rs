@@ -435,9 +435,8 @@ pub struct Preemptive<K, A> {
     /// A kernel call is under way: a second one would alias the kernel. Outside `sched`
     /// so that the check itself takes no reference to the tables.
     in_kernel: AtomicBool,
-    /// A task's lock kept outside the kernel: 0, or the resource + 1 (bits 0-7) and, once
-    /// a kernel call has handed it to the kernel, [`HANDED`] and the task + 1 (bits 8-15)
-    /// (the module's rules).
+    /// A task's lock kept outside the kernel: 0, or the lock, and once a kernel call has
+    /// handed it to the kernel, its task ([`lazy_word`]; the module's rules).
     lazy: AtomicU32,
     /// The resources the running task may lock outside the kernel, one bit each
     /// ([`OsKernel::lock_free_resources`] at the end of the last kernel call).
@@ -445,8 +444,47 @@ pub struct Preemptive<K, A> {
     arch: A,
 }
 
-/// The bit of the `lazy` word that says the kernel holds the lock for the task.
-const HANDED: u32 = 1 << 16;
+/// The `lazy` word, one place for its layout: the resource + 1 (bits 0-7; 0: no lock),
+/// the task + 1 once handed over (bits 8-15), and [`HANDED`].
+mod lazy_word {
+    use cw_core::os::ResourceId;
+
+    /// The bit that says the kernel holds the lock for the task.
+    pub const HANDED: u32 = 1 << 16;
+    const RES: u32 = 0xFF;
+    const OWNER_SHIFT: u32 = 8;
+
+    /// A lock of `res` that no kernel call has seen.
+    pub const fn unhanded(res: ResourceId) -> u32 {
+        res.0 as u32 + 1
+    }
+
+    /// `lazy`, handed to the kernel for task slot `owner`.
+    pub const fn handed(lazy: u32, owner: u8) -> u32 {
+        lazy | HANDED | (owner as u32 + 1) << OWNER_SHIFT
+    }
+
+    /// Whether `lazy` is a lock no kernel call has seen.
+    pub const fn is_unhanded(lazy: u32) -> bool {
+        lazy != 0 && lazy & HANDED == 0
+    }
+
+    /// The resource of a lock (of a word that holds one).
+    pub const fn resource(lazy: u32) -> ResourceId {
+        ResourceId(((lazy & RES) as u8).wrapping_sub(1))
+    }
+
+    /// Whether `lazy` is a lock of `res`, handed over (`handed`) or not.
+    pub const fn holds(lazy: u32, res: ResourceId, handed: bool) -> bool {
+        // (The owner's bits cleared: one instruction on the Cortex-M.)
+        lazy & !(RES << OWNER_SHIFT) == unhanded(res) | if handed { HANDED } else { 0 }
+    }
+
+    /// Whether `lazy` was handed over for task slot `owner`.
+    pub const fn owned_by(lazy: u32, owner: u8) -> bool {
+        (lazy >> OWNER_SHIFT) & RES == owner as u32 + 1
+    }
+}
 
 // SAFETY: the kernel and the tables are reached only with the kernel lock taken (every
 // ISR that may call the OS and the task switch masked, on a single core) and the
@@ -604,7 +642,7 @@ impl<K: OsKernel, A: Arch> Preemptive<K, A> {
         // off.
         let (kernel, sched) = unsafe { (&mut *self.kernel.get(), &mut *self.sched.get()) };
         let lazy = self.lazy.load(Ordering::Relaxed);
-        if lazy != 0 && lazy & HANDED == 0 {
+        if lazy_word::is_unhanded(lazy) {
             self.hand_over(kernel, lazy);
         }
         (kernel, sched)
@@ -618,13 +656,12 @@ impl<K: OsKernel, A: Arch> Preemptive<K, A> {
     #[cold]
     #[inline(never)]
     fn hand_over(&self, kernel: &mut K, lazy: u32) {
-        let res = ResourceId(((lazy & 0xFF) as u8).wrapping_sub(1));
-        let owner = kernel.running().map_or(0, |t| u32::from(t.0) + 1);
-        if kernel.get_resource(res).is_err() {
+        let owner = kernel.running().map_or(IDLE, |t| t.0);
+        if kernel.get_resource(lazy_word::resource(lazy)).is_err() {
             self.fatal(PortFault::LockRefused);
         }
         self.lazy
-            .store(lazy | HANDED | owner << 8, Ordering::Relaxed);
+            .store(lazy_word::handed(lazy, owner), Ordering::Relaxed);
     }
 
     /// `GetResource` outside the kernel, where the module's rules allow it: the running
@@ -644,7 +681,7 @@ impl<K: OsKernel, A: Arch> Preemptive<K, A> {
         // (An ISR between the test and the store finds nothing to hand over, and a task it
         // lets in ends, or waits holding nothing, before this one goes on: the word is 0
         // again.)
-        self.lazy.store(u32::from(res.0) + 1, Ordering::Relaxed);
+        self.lazy.store(lazy_word::unhanded(res), Ordering::Relaxed);
         // The resource's data is reached only after the lock.
         compiler_fence(Ordering::SeqCst);
         true
@@ -657,7 +694,7 @@ impl<K: OsKernel, A: Arch> Preemptive<K, A> {
     #[inline(always)]
     fn lazy_release(&self, res: ResourceId) -> bool {
         let lazy = self.lazy.load(Ordering::Relaxed);
-        if lazy & (0xFF | HANDED) != u32::from(res.0) + 1 {
+        if !lazy_word::holds(lazy, res, false) {
             return false;
         }
         // The resource's data is left before the release.
@@ -683,8 +720,7 @@ impl<K: OsKernel, A: Arch> Preemptive<K, A> {
         }
         // The kernel's mask as a level (`InterruptMask::at_level`; `u8::MAX` is `All`).
         let level = kernel.masked_level();
-        self.lazy_mask
-            .store(kernel.lock_free_resources(), Ordering::Relaxed);
+        self.ask_lock_free(kernel);
         compiler_fence(Ordering::SeqCst);
         self.in_kernel.store(false, Ordering::Relaxed);
         if (level == u8::MAX) == sched.all_for_kernel {
@@ -712,8 +748,7 @@ impl<K: OsKernel, A: Arch> Preemptive<K, A> {
                     self.released(res);
                 }
                 // (The caller holds one more, or one fewer.)
-                self.lazy_mask
-                    .store(kernel.lock_free_resources(), Ordering::Relaxed);
+                self.ask_lock_free(kernel);
                 self.leave_at(level);
                 Ok(())
             }
@@ -721,11 +756,19 @@ impl<K: OsKernel, A: Arch> Preemptive<K, A> {
         }
     }
 
+    /// At the end of a kernel call: which resources the running task may lock outside the
+    /// kernel now ([`OsKernel::lock_free_resources`]).
+    #[inline(always)]
+    fn ask_lock_free(&self, kernel: &K) {
+        self.lazy_mask
+            .store(kernel.lock_free_resources(), Ordering::Relaxed);
+    }
+
     /// The kernel released `res`: if it was a lock kept outside the kernel and handed
     /// over, the port's word is free again.
     #[inline(always)]
     fn released(&self, res: ResourceId) {
-        if self.lazy.load(Ordering::Relaxed) & !0xFF00 == (u32::from(res.0) + 1) | HANDED {
+        if lazy_word::holds(self.lazy.load(Ordering::Relaxed), res, true) {
             self.lazy.store(0, Ordering::Relaxed);
         }
     }
@@ -984,8 +1027,7 @@ impl<K: OsKernel, A: Arch> Port for Preemptive<K, A> {
             if sched.ended {
                 // The job's lock kept outside the kernel, if any, was handed over at this
                 // call and released with the job (`task_returned`).
-                let lazy = self.lazy.load(Ordering::Relaxed);
-                if (lazy >> 8) & 0xFF == u32::from(sched.current) + 1 {
+                if lazy_word::owned_by(self.lazy.load(Ordering::Relaxed), sched.current) {
                     self.lazy.store(0, Ordering::Relaxed);
                 }
             }

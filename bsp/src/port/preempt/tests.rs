@@ -553,8 +553,8 @@ fn kernel_view(port: &TestPort) -> Kernel {
     // SAFETY: the model runs one context at a time and no kernel call is under way.
     let mut view = unsafe { *port.kernel.get() };
     let lazy = port.lazy.load(Ordering::Relaxed);
-    if lazy != 0 && lazy & super::HANDED == 0 {
-        let res = ResourceId(((lazy & 0xFF) as u8).wrapping_sub(1));
+    if super::lazy_word::is_unhanded(lazy) {
+        let res = super::lazy_word::resource(lazy);
         assert!(view.try_get_resource(res).is_some(), "the hand-over");
     }
     view
@@ -604,7 +604,10 @@ fn the_next_kernel_call_hands_the_lock_to_the_kernel_before_anything_else() {
         assert_eq!(os.activate_task(HIGH), Ok(()));
     });
     assert!(!port.arch().switch.get(), "High waits for the release");
-    assert_ne!(port.lazy.load(Ordering::Relaxed) & super::HANDED, 0);
+    assert_ne!(
+        port.lazy.load(Ordering::Relaxed) & super::lazy_word::HANDED,
+        0
+    );
     // The release goes through the kernel, which switches to High.
     assert_eq!(port.release_resource(tasks_only), Ok(()));
     assert_eq!(port.lazy.load(Ordering::Relaxed), 0);
