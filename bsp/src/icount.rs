@@ -25,19 +25,25 @@ pub const VIRTUAL: &str = "shift=5,sleep=off";
 /// while the core sleeps, for the live tests against python-can and the sensor).
 pub const REAL_TIME: &str = "shift=5,sleep=on";
 
-/// Instructions in `counts` SysTick counts, rounded to nearest.
-pub const fn instructions(counts: u64) -> u64 {
-    (counts * NS_PER_SYSTICK_COUNT + NS_PER_INSTRUCTION / 2) / NS_PER_INSTRUCTION
+/// The trace keeps lengths in sixteenths of a SysTick count, so that a mean taken off
+/// (the measuring's own cost) keeps its fraction.
+pub const SIXTEENTHS: u64 = 16;
+
+/// Instructions in `sixteenths` sixteenths of a SysTick count, rounded to nearest.
+pub const fn instructions(sixteenths: u64) -> u64 {
+    let per = SIXTEENTHS * NS_PER_INSTRUCTION;
+    (sixteenths * NS_PER_SYSTICK_COUNT + per / 2) / per
 }
 
-/// The mean instructions of `count` spans whose SysTick counts add up to `sum`, rounded
-/// to nearest (0 for no span).
+/// The mean instructions of `count` lengths whose sixteenths of a SysTick count add up to
+/// `sum`, rounded to nearest (0 for no length).
 pub const fn mean_instructions(sum: u64, count: u32) -> u64 {
     if count == 0 {
         return 0;
     }
-    let ns = sum.saturating_mul(NS_PER_SYSTICK_COUNT) / count as u64;
-    (ns + NS_PER_INSTRUCTION / 2) / NS_PER_INSTRUCTION
+    let ns16 = sum.saturating_mul(NS_PER_SYSTICK_COUNT) / count as u64;
+    let per = SIXTEENTHS * NS_PER_INSTRUCTION;
+    (ns16 + per / 2) / per
 }
 
 #[cfg(test)]
@@ -53,13 +59,17 @@ mod tests {
         assert_eq!(shift, Some(SHIFT));
         assert_eq!(REAL_TIME.split(',').next(), VIRTUAL.split(',').next());
         // 4 counts are 160 ns: 5 instructions of 32 ns.
-        assert_eq!(instructions(4), 5);
+        assert_eq!(instructions(4 * SIXTEENTHS), 5);
         assert_eq!(instructions(0), 0);
-        assert_eq!(instructions(800), 1000);
+        assert_eq!(instructions(800 * SIXTEENTHS), 1000);
+        // A sixteenth of a count is 2.5 ns: twelve are 30 ns, one instruction rounded;
+        // six are 15 ns, none.
+        assert_eq!(instructions(12), 1);
+        assert_eq!(instructions(6), 0);
         // Three spans of 173 counts together: 2,306 ns each on average, 72.1 instructions;
         // of 174: 2,320 ns, 72.5, rounded up.
-        assert_eq!(mean_instructions(173, 3), 72);
-        assert_eq!(mean_instructions(174, 3), 73);
+        assert_eq!(mean_instructions(173 * SIXTEENTHS, 3), 72);
+        assert_eq!(mean_instructions(174 * SIXTEENTHS, 3), 73);
         assert_eq!(mean_instructions(5, 0), 0);
     }
 }

@@ -125,6 +125,9 @@ pub mod span {
     /// the LED request between them (a few loads): the lock pair as the application
     /// takes it (`Resource::lock`).
     pub const LOCK_PAIR: usize = 11;
+    /// The calibration's second span, inside or across [`CALIBRATION`] (the cost of a
+    /// span's marks as a span around them sees it).
+    pub const CALIBRATION_INNER: usize = 12;
     /// The spans named apart from [`NAMES`] (numbered after the board's).
     pub const MORE_NAMES: [(usize, &str); 1] = [(
         LOCK_PAIR,

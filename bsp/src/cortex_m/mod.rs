@@ -281,15 +281,7 @@ impl Arch for CortexM {
         if !trace::ENABLED {
             return;
         }
-        let at = trace::now();
-        match mark {
-            Mark::JobStarted(t) => trace::job_started(t.0, at),
-            Mark::JobFinished(t) => trace::job_finished(t.0, at),
-            Mark::IsrEntered(i) => trace::isr_entered(i.0, at),
-            Mark::SpanStart(id) => trace::span_start(id, at),
-            Mark::SpanEnd(id) => trace::span_end(id, at),
-            Mark::SpanEndAs { started, id } => trace::span_end_as(started, id, at),
-        }
+        trace::mark(mark);
     }
 }
 

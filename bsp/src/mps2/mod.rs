@@ -31,7 +31,7 @@ use embedded_hal::digital::{ErrorType, InputPin, OutputPin};
 use crate::chip::cmsdk::CmsdkUart;
 use crate::chip::fpgaio::FpgaLeds;
 use crate::cortex_m::{app, now_ms, now_us};
-use crate::port::preempt::PortFault;
+use crate::port::preempt::{Mark, PortFault};
 use crate::slcan::{ByteUart, SlcanBoard, SlcanBus};
 pub use crate::slcan::{SlcanEvent, SlcanStats};
 
@@ -252,12 +252,11 @@ impl SlcanBoard for Mps2Slcan {
     }
     fn mark_write(start: bool) {
         if crate::cortex_m::trace::ENABLED {
-            let at = crate::cortex_m::trace::now();
-            if start {
-                crate::cortex_m::trace::span_start(DRIVER_WRITE_SPAN, at);
+            crate::cortex_m::trace::mark(if start {
+                Mark::SpanStart(DRIVER_WRITE_SPAN)
             } else {
-                crate::cortex_m::trace::span_end(DRIVER_WRITE_SPAN, at);
-            }
+                Mark::SpanEnd(DRIVER_WRITE_SPAN)
+            });
         }
     }
 }

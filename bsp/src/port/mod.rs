@@ -26,6 +26,7 @@ use cw_core::os::{
 use cw_core::tables::Tables;
 
 pub mod preempt;
+pub mod trace;
 
 /// The kernel services a port and the [`Resource`] cells rely on.
 ///

@@ -450,16 +450,78 @@ const CALIBRATION_SLOT: usize = cw_bsp::cortex_m::MAX_TASKS - 1;
 /// instruction, the two loops take about 6 ms).
 const REPEATS: u16 = 200;
 
-/// Measures what the measuring costs: [`REPEATS`] back-to-back span marks and job marks,
-/// before the OS starts (on SysTick free-running).
+/// Measures what the measuring costs, [`REPEATS`] times each, before the OS starts (on
+/// SysTick free-running), and gives the trace the costs it takes off every span and job
+/// (`cw_bsp::cortex_m::trace::MarkCosts`): an empty span's and an empty job's length (what
+/// their own marks leave inside them), then each kind of mark's whole cost, as the length
+/// of an empty span around it less an empty span's.
 fn calibrate(port: &CortexMPort<Kernel>) {
+    use cw_bsp::cortex_m::trace::{self, MarkCosts, SpanRecord};
+    let slot = TaskId(CALIBRATION_SLOT as u8);
+    let (outer, inner) = (span::CALIBRATION, span::CALIBRATION_INNER);
+    let mean = |r: SpanRecord| {
+        let per = r.sum.checked_div(u64::from(r.count)).unwrap_or(0);
+        u32::try_from(per).unwrap_or(u32::MAX)
+    };
+    // The mean length of `outer` over the repetitions of `marks`.
+    let measure = |marks: &dyn Fn()| {
+        for _ in 0..REPEATS {
+            marks();
+        }
+        mean(trace::take_span(outer))
+    };
+    let span_inside = measure(&|| {
+        port.span(outer, true);
+        port.span(outer, false);
+    });
+    let around = |marks: &dyn Fn()| measure(marks).saturating_sub(span_inside);
+    let span_start = around(&|| {
+        port.span(outer, true);
+        port.span(inner, true);
+        port.span(outer, false);
+        port.span(inner, false);
+    });
+    let span_end = around(&|| {
+        port.span(inner, true);
+        port.span(outer, true);
+        port.span(inner, false);
+        port.span(outer, false);
+    });
+    let job_start = around(&|| {
+        port.span(outer, true);
+        port.job_started(slot);
+        port.span(outer, false);
+        port.job_finished(slot);
+    });
+    let job_end = around(&|| {
+        port.job_started(slot);
+        port.span(outer, true);
+        port.job_finished(slot);
+        port.span(outer, false);
+    });
+    // Inside a job, as the ISRs that interrupt a task are entered.
+    port.job_started(slot);
+    let isr_entered = around(&|| {
+        port.span(outer, true);
+        port.isr_entered(config::CAN_ISR);
+        port.span(outer, false);
+    });
+    port.job_finished(slot);
+    let _ = trace::take_jobs(slot.0);
     for _ in 0..REPEATS {
-        port.span(span::CALIBRATION, true);
-        port.span(span::CALIBRATION, false);
-        port.job_started(TaskId(CALIBRATION_SLOT as u8));
-        port.job_finished(TaskId(CALIBRATION_SLOT as u8));
+        port.job_started(slot);
+        port.job_finished(slot);
     }
-    cw_bsp::cortex_m::trace::clear_events();
+    let job_inside = mean(trace::take_jobs(slot.0));
+    trace::calibrated(MarkCosts {
+        span_start,
+        span_end,
+        job_start,
+        job_end,
+        isr_entered,
+        span_inside,
+        job_inside,
+    });
 }
 
 /// Counts the FlexCAN driver's own paths, [`REPEATS`] times each, before the OS starts: the
@@ -489,6 +551,9 @@ fn measure_flexcan(port: &CortexMPort<Kernel>) {
         return;
     };
     for pdu in 0..REPEATS {
+        // (Opaque to the compiler, as a frame the ECU sends: nothing of the write is
+        // computed once for the whole loop.)
+        let frame = core::hint::black_box(frame);
         port.span(span::FLEXCAN_WRITE, true);
         let written = can.write(Hth(0), pdu, &frame);
         port.span(span::FLEXCAN_WRITE, false);
@@ -546,24 +611,21 @@ fn report_trace() -> bool {
     let isr_name = |i: usize| config::OS.isrs().get(i).map_or("?", |c| c.name);
     trace::read(|t| {
         // Under the runs' `-icount` (`cw_bsp::icount`): a SysTick count is 40 ns, an
-        // instruction 32 ns. The measuring's own cost (a back-to-back pair, calibrated at
-        // start) is taken off every span.
-        let span_cal = t.spans.get(span::CALIBRATION).copied().unwrap_or_default();
-        let job_cal = t
-            .tasks
-            .get(CALIBRATION_SLOT)
-            .map(|r| r.span)
-            .unwrap_or_default();
-        let instructions = |r: &SpanRecord, cal: &SpanRecord| {
+        // instruction 32 ns. The trace took every mark's cost off every span and job
+        // open around it; what a span's or job's own marks leave inside it (calibrated at
+        // start) is taken off here.
+        let costs = t.costs;
+        let instructions = |r: &SpanRecord, inside: u32| {
             // (The mean to the nearest instruction; a single span, min or max, to about one.)
-            let mean = |r: &SpanRecord| icount::mean_instructions(r.sum, r.count);
-            let scale = |c: u32| icount::instructions(u64::from(c)).saturating_sub(mean(cal));
+            let own = r.sum.saturating_sub(u64::from(inside) * u64::from(r.count));
+            let scale = |c: u32| icount::instructions(u64::from(c.saturating_sub(inside)));
             (
-                mean(r).saturating_sub(mean(cal)),
+                icount::mean_instructions(own, r.count),
                 scale(r.min),
                 scale(r.max),
             )
         };
+        let cost = |c: u32| icount::mean_instructions(u64::from(c), 1);
         defmt::println!(
             "cw-qemu: instructions below are SysTick counts x {}/{}: exact under -icount {} only",
             icount::NS_PER_SYSTICK_COUNT,
@@ -572,11 +634,19 @@ fn report_trace() -> bool {
         );
         defmt::println!(
             "cw-qemu: measuring costs {} instructions per span, {} per job (calibration, taken off below)",
-            instructions(&span_cal, &SpanRecord::default()).0,
-            instructions(&job_cal, &SpanRecord::default()).0
+            cost(costs.span_inside),
+            cost(costs.job_inside)
+        );
+        defmt::println!(
+            "cw-qemu: marks seen from a span around them (calibration, taken off every span and job they fall in): span start {} end {}, job start {} end {}, ISR entry {}",
+            cost(costs.span_start),
+            cost(costs.span_end),
+            cost(costs.job_start),
+            cost(costs.job_end),
+            cost(costs.isr_entered)
         );
         for (i, r) in t.tasks.iter().enumerate().take(config::OS.tasks().len()) {
-            let (mean, min, max) = instructions(&r.span, &job_cal);
+            let (mean, min, max) = instructions(&r.span, costs.job_inside);
             defmt::println!(
                 "cw-qemu: task {} jobs {} preempted {} instructions mean {} min {} max {}",
                 task_name(i),
@@ -592,7 +662,7 @@ fn report_trace() -> bool {
             .chain(&span::MORE_NAMES)
             .filter_map(|&(id, name)| t.spans.get(id).map(|r| (name, r)));
         for (name, r) in span::NAMES.iter().copied().zip(&t.spans).chain(flexcan) {
-            let (mean, min, max) = instructions(r, &span_cal);
+            let (mean, min, max) = instructions(r, costs.span_inside);
             defmt::println!(
                 "cw-qemu: span {}: {} times, instructions mean {} min {} max {}",
                 name,
@@ -638,7 +708,11 @@ fn report_trace() -> bool {
             .iter()
             .zip(config::PERIOD_MS)
             .filter(|(r, period)| {
-                *period > 0 && r.span.max >= period.saturating_mul(t.counts_per_ms)
+                *period > 0
+                    && r.span.max
+                        >= period
+                            .saturating_mul(t.counts_per_ms)
+                            .saturating_mul(trace::PER_COUNT)
             })
             .count();
         defmt::println!(
