@@ -27,7 +27,10 @@
 //!   is active the code running is that ISR;
 //! - activations are neither lost nor invented and never exceed the limit;
 //! - resource stacks (of tasks and ISRs) are consistent; waiting tasks wait for something
-//!   not yet set; the call level follows the state.
+//!   not yet set; the call level follows the state;
+//! - the ISR stack's free slots are empty, and what a port reads at the end of a kernel
+//!   call in one step (`Os::port_view`) is the kernel's mask and the resources the running
+//!   task may lock outside the kernel.
 //!
 //! Checked on every transition (`cw_core::os::spec::transition_rules`, recorded as a
 //! violation in the next state): FIFO within a priority; `E_OS_LIMIT` exactly at the limit;
@@ -540,6 +543,12 @@ impl<
                 "waiting tasks are blocked on unset events; the call level follows the state",
                 |_, s: &Self::State| {
                     spec::waiting_is_blocked(&s.os) && spec::context_consistent(&s.os)
+                },
+            ),
+            Property::always(
+                "free ISR slots are empty; the port's view at a kernel call's end is the kernel's",
+                |_, s: &Self::State| {
+                    spec::free_isr_slots_empty(&s.os) && spec::port_view_agrees(&s.os)
                 },
             ),
         ];

@@ -69,6 +69,9 @@ pub unsafe trait OsKernel {
     /// The resources the running task may lock outside the kernel now, one bit each
     /// ([`Os::lock_free_resources`]).
     fn lock_free_resources(&self) -> u32;
+    /// [`OsKernel::masked_level`] and [`OsKernel::lock_free_resources`] in one
+    /// ([`Os::port_view`]), as the port reads them at the end of every kernel call.
+    fn port_view(&self) -> (u8, u32);
     /// The OS tick's fast path ([`Os::try_tick`]): the whole category-2 ISR `isr` whose
     /// body is `IncrementCounter(counter)` in one step where nothing is due; `None`, with
     /// nothing changed, where the port must run the ISR whole.
@@ -154,6 +157,10 @@ where
     #[inline]
     fn lock_free_resources(&self) -> u32 {
         Os::lock_free_resources(self)
+    }
+    #[inline(always)]
+    fn port_view(&self) -> (u8, u32) {
+        Os::port_view(self)
     }
     #[inline(always)]
     fn try_tick(&mut self, isr: IsrId, counter: CounterId) -> Option<u8> {

@@ -718,9 +718,10 @@ impl<K: OsKernel, A: Arch> Preemptive<K, A> {
         if next != sched.current || sched.ended {
             self.arch.request_switch();
         }
-        // The kernel's mask as a level (`InterruptMask::at_level`; `u8::MAX` is `All`).
-        let level = kernel.masked_level();
-        self.ask_lock_free(kernel);
+        // The kernel's mask as a level (`InterruptMask::at_level`; `u8::MAX` is `All`), and
+        // which resources the running task may lock outside the kernel now.
+        let (level, lock_free) = kernel.port_view();
+        self.lazy_mask.store(lock_free, Ordering::Relaxed);
         compiler_fence(Ordering::SeqCst);
         self.in_kernel.store(false, Ordering::Relaxed);
         if (level == u8::MAX) == sched.all_for_kernel {
@@ -744,11 +745,15 @@ impl<K: OsKernel, A: Arch> Preemptive<K, A> {
         };
         match fast {
             Some(level) => {
-                if !take {
+                if take {
+                    // The caller holds a resource now: nothing may be locked outside the
+                    // kernel (`spec::fast_path_agrees`), no need to ask.
+                    self.lazy_mask.store(0, Ordering::Relaxed);
+                } else {
                     self.released(res);
+                    // (The caller holds one fewer.)
+                    self.ask_lock_free(kernel);
                 }
-                // (The caller holds one more, or one fewer.)
-                self.ask_lock_free(kernel);
                 self.leave_at(level);
                 Ok(())
             }

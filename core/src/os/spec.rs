@@ -246,6 +246,16 @@ predicate! {
 }
 
 predicate! {
+    /// What a port reads at the end of every kernel call in one step
+    /// ([`Os::port_view`](crate::os::Os::port_view)) is the kernel's mask and the
+    /// resources the running task may lock outside the kernel, as each is defined.
+    pub fn port_view_agrees(os) -> bool {
+        let (level, lock_free) = os.port_view();
+        level == os.masked_level() && lock_free == os.lock_free_resources_by_definition()
+    }
+}
+
+predicate! {
     /// All of the above.
     pub fn kernel_invariants(os) -> bool {
         running_is_highest_ready(os)
@@ -256,6 +266,7 @@ predicate! {
             && isr_nesting_consistent(os)
             && free_isr_slots_empty(os)
             && context_consistent(os)
+            && port_view_agrees(os)
     }
 }
 
@@ -352,8 +363,10 @@ where
 /// [`Service::FastRelease`] or [`Service::FastTick`] step from `before` (any other step
 /// agrees trivially): where the fast path takes the step, it leaves exactly the state the
 /// full service (or whole ISR) leaves, that succeeds, and the level the fast path returns
-/// gives the kernel's interrupt mask; where it declines, it changed nothing. (So every rule
-/// and invariant proved of the services holds of the fast paths.)
+/// gives the kernel's interrupt mask, and after a lock nothing may be locked outside the
+/// kernel ([`Os::lock_free_resources`] is empty: a port need not ask); where it declines,
+/// it changed nothing. (So every rule and invariant proved of the services holds of the
+/// fast paths.)
 ///
 /// # Errors
 /// Which part of the contract is broken.
@@ -391,6 +404,11 @@ where
         Some(_) if fast != full => Err("the fast path left another state than the service"),
         Some(level) if InterruptMask::at_level(level) != full.interrupt_mask() => {
             Err("the fast path's level is not the kernel's interrupt mask")
+        }
+        // A port that took a lock by the fast path knows, without asking, that nothing
+        // may now be locked outside the kernel (the caller holds a resource).
+        Some(_) if matches!(service, Service::FastGet(_)) && fast.lock_free_resources() != 0 => {
+            Err("after the lock's fast path a resource may be locked outside the kernel")
         }
         Some(_) => Ok(()),
     }

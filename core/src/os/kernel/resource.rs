@@ -246,6 +246,12 @@ where
     /// they found it (`spec::lock_pair_leaves_no_trace`).
     #[inline]
     pub fn lock_free_resources(&self) -> u32 {
+        self.port_view().1
+    }
+
+    /// [`Os::lock_free_resources`] as its definition reads, for `spec::port_view_agrees`
+    /// (the kernel computes it with its mask in [`Os::port_view`]).
+    pub(crate) fn lock_free_resources_by_definition(&self) -> u32 {
         let t = usize::from(self.running);
         if !matches!(self.context, Context::Task)
             || self.denied & ServiceId::GetResource.bit() != 0
@@ -254,6 +260,28 @@ where
             return 0;
         }
         self.cfg().lock_free_resources(t)
+    }
+
+    /// What a port carries out at the end of a kernel call, in one: the processor
+    /// priority whose mask is the kernel's ([`Os::masked_level`]) and the resources the
+    /// running task may lock outside the kernel ([`Os::lock_free_resources`]). At task
+    /// level no ISR is active, so the level is the interrupt lock's or the task's
+    /// priority, with no ISR frame to look up, and the context is tested once;
+    /// `spec::port_view_agrees` states that the pair is the two, in every state the
+    /// harnesses and the models reach.
+    #[inline]
+    pub fn port_view(&self) -> (u8, u32) {
+        if !matches!(self.context, Context::Task) {
+            return (self.masked_level(), 0);
+        }
+        let level = self.gate.max(self.running_prio);
+        let t = usize::from(self.running);
+        if self.denied & ServiceId::GetResource.bit() != 0
+            || self.res_top.get(t).copied() != Some(NO_RES)
+        {
+            return (level, 0);
+        }
+        (level, self.cfg().lock_free_resources(t))
     }
 
     /// `GetResource` for the common case, by the stack resource policy: the running task at
