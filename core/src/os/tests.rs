@@ -1362,6 +1362,63 @@ fn dialects_differ_where_the_standards_do() {
     }
 }
 
+/// An alarm's ticks are kept in 32 bits: no delay exceeds `u32::MAX` (the largest counter
+/// stops one below it, and standard status, which does not check an increment against the
+/// counter, arms at most `u32::MAX` ahead). At the top of that range the deltas add up to
+/// each alarm's remaining ticks, an alarm inserted before another or cancelled leaves the
+/// other's as it was, and the fast ticks count them down exactly.
+#[test]
+fn alarms_at_the_top_of_the_32_bit_range_keep_their_ticks() {
+    const TOP: CounterConfig = CounterConfig {
+        max_allowed_value: TickType::MAX - 1,
+        ticks_per_base: 1,
+        min_cycle: 1,
+    };
+    static TOP_CFG: std::sync::LazyLock<OsConfig<1, 1, 1, 3, 1>> = std::sync::LazyLock::new(|| {
+        match OsConfig::new(
+            OsDescription::new(
+                [TaskConfig::basic("T", 1).activations(3).autostart()],
+                [TOP],
+                [
+                    AlarmConfig::new("a", CounterId(0), AlarmAction::ActivateTask(TaskId(0))),
+                    AlarmConfig::new("b", CounterId(0), AlarmAction::ActivateTask(TaskId(0))),
+                    AlarmConfig::new("c", CounterId(0), AlarmAction::ActivateTask(TaskId(0))),
+                ],
+                [IsrConfig::cat2("Tick", 1)],
+            )
+            .status(Status::Standard)
+            .dialect(Dialect::Osek),
+        ) {
+            Ok(c) => c,
+            Err(e) => panic!("{}", e.describe()),
+        }
+    });
+    let Ok(mut os) = Os::<1, 1, 1, 3, 1, 3>::new(&*TOP_CFG) else {
+        panic!("refused");
+    };
+    assert_eq!(os.start_os(OSDEFAULTAPPMODE), Ok(()));
+    let (a, b, c) = (AlarmId(0), AlarmId(1), AlarmId(2));
+    // Standard status arms beyond the counter's range; the OSEK dialect's increment 0 is a
+    // full revolution, `maxallowedvalue + 1`.
+    assert_eq!(os.set_rel_alarm(a, TickType::MAX, 0), Ok(()));
+    assert_eq!(os.set_rel_alarm(b, 0, 0), Ok(()));
+    assert_eq!(os.set_rel_alarm(c, 5, 0), Ok(()));
+    assert_eq!(os.alarm_remaining(a), Some(u64::from(TickType::MAX)));
+    assert_eq!(os.alarm_remaining(b), Some(u64::from(TickType::MAX)));
+    assert_eq!(os.alarm_remaining(c), Some(5));
+    assert_eq!(os.get_alarm(a), Ok(TickType::MAX));
+    assert_eq!(os.ticks_to_expiry(CounterId(0)), Some(5));
+    // Four ticks at once by the fast path, then one: c is due.
+    assert!(os.try_ticks(IsrId(0), CounterId(0), 4).is_some());
+    assert_eq!(os.alarm_remaining(a), Some(u64::from(TickType::MAX) - 4));
+    assert_eq!(os.try_ticks(IsrId(0), CounterId(0), 1), None);
+    // Cancelling b, the one just before a in the list, leaves a's ticks as they were.
+    assert_eq!(os.cancel_alarm(b), Ok(()));
+    assert_eq!(os.alarm_remaining(a), Some(u64::from(TickType::MAX) - 4));
+    assert_eq!(os.ticks_to_expiry(CounterId(0)), Some(1));
+    assert!(spec::kernel_invariants(&os));
+}
+
 #[test]
 fn standard_status_leaves_out_only_harmless_checks() {
     fn config(status: Status) -> OsConfig<2, 1, 1, 1, 1> {

@@ -60,7 +60,7 @@ where
 
     /// Ticks from now until the counter of `c` next shows `start` (a full revolution if it
     /// shows it now).
-    fn abs_delay(&self, c: usize, start: TickType) -> u64 {
+    fn abs_delay(&self, c: usize, start: TickType) -> TickType {
         // (`c` is a configured counter: the configuration's checks tie every alarm to one.)
         let modulus = self
             .cfg()
@@ -69,11 +69,9 @@ where
             .map_or(1, |k| u64::from(k.max_allowed_value) + 1);
         let now = self.counter_value.get(c).map_or(0, |&v| u64::from(v));
         let delay = (u64::from(start) + modulus - now % modulus) % modulus;
-        if delay == 0 {
-            modulus
-        } else {
-            delay
-        }
+        // At most the modulus, `maxallowedvalue + 1`, which fits: the configuration refuses
+        // a counter whose `maxallowedvalue` is `u32::MAX`.
+        (if delay == 0 { modulus } else { delay }) as TickType
     }
 
     /// Arms the autostart alarms of application mode `mode` (bit) as `StartOS` does.
@@ -88,7 +86,7 @@ where
             match alarm.autostart {
                 AlarmAutostart::Off => {}
                 AlarmAutostart::Relative { increment, cycle } => {
-                    self.arm(a, c, u64::from(increment), cycle);
+                    self.arm(a, c, increment, cycle);
                 }
                 AlarmAutostart::Absolute { start, cycle } => {
                     let delay = self.abs_delay(c, start);
@@ -100,7 +98,7 @@ where
 
     /// Inserts alarm `a` into counter `c`'s delta list, `delay >= 1` ticks from now, after
     /// any alarm due at the same tick.
-    fn arm(&mut self, a: usize, c: usize, delay: u64, cycle: TickType) {
+    fn arm(&mut self, a: usize, c: usize, delay: TickType, cycle: TickType) {
         if a >= A {
             return;
         }
@@ -200,7 +198,7 @@ where
             if node as usize >= A {
                 break;
             }
-            ticks += self.alarm_delta[node as usize];
+            ticks += u64::from(self.alarm_delta[node as usize]);
             if node as usize == a {
                 break;
             }
@@ -272,10 +270,11 @@ where
                 if os.extended() && (increment > k.max_allowed_value || !cycle_ok(k, cycle)) {
                     return Err(OsError::Value);
                 }
+                // (A full revolution fits: `maxallowedvalue` is below `u32::MAX`.)
                 let delay = if increment == 0 {
-                    u64::from(k.max_allowed_value) + 1
+                    k.max_allowed_value.saturating_add(1)
                 } else {
-                    u64::from(increment)
+                    increment
                 };
                 os.arm(a, c, delay, cycle);
                 Ok(())
@@ -342,7 +341,11 @@ where
     /// The ticks before that one have nothing to do but count.
     pub fn ticks_to_expiry(&self, counter: CounterId) -> Option<u64> {
         let head = usize::from(*self.counter_head.get(counter.0 as usize)?);
-        Some(self.alarm_delta.get(head).copied().unwrap_or(u64::MAX))
+        Some(
+            self.alarm_delta
+                .get(head)
+                .map_or(u64::MAX, |&d| u64::from(d)),
+        )
     }
 
     /// `IncrementCounter`: advances a counter by one tick and runs the actions of the alarms
@@ -399,7 +402,7 @@ where
             self.alarm_active[a] = false;
             self.alarm_cycle[a] = 0;
             if cycle != 0 {
-                self.arm(a, c, u64::from(cycle), cycle);
+                self.arm(a, c, cycle, cycle);
             }
             match self.cfg().alarms[a].action {
                 AlarmAction::ActivateTask(task) => {

@@ -173,7 +173,7 @@ where
         if self
             .alarm_delta
             .get(head)
-            .is_some_and(|delta| *delta <= ticks)
+            .is_some_and(|delta| u64::from(*delta) <= ticks)
         {
             return None;
         }
@@ -190,7 +190,8 @@ where
             ((u64::from(*value) + ticks) % (u64::from(max) + 1)) as TickType
         };
         if let Some(delta) = self.alarm_delta.get_mut(head) {
-            *delta -= ticks;
+            // (`ticks` is below the delta, so it fits.)
+            *delta -= ticks as TickType;
         }
         Some(masked)
     }

@@ -236,7 +236,10 @@ pub struct Os<
     counter_value: [TickType; C],
     counter_head: [u8; C],
     alarm_active: [bool; A],
-    alarm_delta: [u64; A],
+    /// Each armed alarm's ticks after the one before it in its counter's list (the
+    /// head's: after now). 32 bits: no delay exceeds `u32::MAX` ticks (a counter's
+    /// `maxallowedvalue` is below it, and standard status arms at most that far).
+    alarm_delta: [TickType; A],
     alarm_next: [u8; A],
     alarm_cycle: [TickType; A],
     hooks: H,
