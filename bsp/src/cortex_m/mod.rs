@@ -170,6 +170,18 @@ impl Arch for CortexM {
     }
 
     #[inline(always)]
+    fn level_value(level: u8) -> u8 {
+        basepri_at_level(level)
+    }
+
+    #[inline(always)]
+    fn set_level_value(&self, value: u8) {
+        // SAFETY: BASEPRI only holds interrupts back; the value is that of a resource's
+        // ceiling, the kernel's mask while a task holds it.
+        unsafe { basepri::write(value) };
+    }
+
+    #[inline(always)]
     fn all_masked(&self) -> bool {
         // PRIMASK "inactive": exceptions of configurable priority are not taken.
         cortex_m::register::primask::read().is_inactive()

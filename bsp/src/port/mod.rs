@@ -69,6 +69,9 @@ pub unsafe trait OsKernel {
     /// The resources the running task may lock outside the kernel now, one bit each
     /// ([`Os::lock_free_resources`]).
     fn lock_free_resources(&self) -> u32;
+    /// The ceiling of a resource, a processor priority ([`Os::ceiling`]): the level a
+    /// lock kept outside the kernel masks.
+    fn ceiling(&self, res: ResourceId) -> Option<u8>;
     /// [`OsKernel::masked_level`] and [`OsKernel::lock_free_resources`] in one
     /// ([`Os::port_view`]), as the port reads them at the end of every kernel call.
     fn port_view(&self) -> (u8, u32);
@@ -157,6 +160,9 @@ where
     #[inline]
     fn lock_free_resources(&self) -> u32 {
         Os::lock_free_resources(self)
+    }
+    fn ceiling(&self, res: ResourceId) -> Option<u8> {
+        Os::ceiling(self, res)
     }
     #[inline(always)]
     fn port_view(&self) -> (u8, u32) {

@@ -28,17 +28,22 @@
 //!   the ErrorHook, its resources and locks released, as AUTOSAR's SWS_Os_00052 and
 //!   SWS_Os_00069 say), instead of spinning at its priority for ever.
 //! - **A task's lock outside the kernel.** A task at task level that holds nothing and
-//!   has no interrupt lock in force takes a resource that no ISR uses, and that it
-//!   declares ([`Os::lock_free_resources`](cw_core::os::Os::lock_free_resources), asked at
-//!   the end of every kernel call), by one store to the port's `lazy` word, and releases
-//!   it by one exchange: no kernel call. The kernel is told at the task's next kernel call, or at the next
-//!   ISR's entry, whichever comes first: `enter` hands the lock to the kernel's own fast
-//!   path before anything else, so the kernel sees the same calls in the same order, and
-//!   every decision it makes (a switch, an error) sees the lock. A lock and release with
-//!   no kernel call between them leave the kernel as they found it
+//!   has no interrupt lock in force takes a resource it declares
+//!   ([`Os::lock_free_resources`](cw_core::os::Os::lock_free_resources), asked at the end
+//!   of every kernel call) without a kernel call: one store of the resource into the port's
+//!   `lazy` word where no ISR uses it; where ISRs share it, the same store under the kernel
+//!   lock and then the mask of the resource's ceiling (BASEPRI), the order that keeps every
+//!   ISR that could find the word from finding a weaker mask. The release is one exchange
+//!   of the word back to 0 and the task's mask (none). The kernel is told at the task's
+//!   next kernel call, or at the next ISR's entry, whichever comes first: `enter` hands the
+//!   lock to the kernel's own fast path before anything else, so the kernel sees the same
+//!   calls in the same order, and every decision it makes (a switch, an error, the mask an
+//!   ISR returns to) sees the lock. A lock and release with no kernel call between them
+//!   leave the kernel as they found it, with the masks the port applied
 //!   (`cw_core::os::spec::lock_pair_leaves_no_trace`), so the kernel need never see them.
-//!   A lock handed over is released through the kernel. One such lock at a time: a
-//!   second, nested, goes through the kernel.
+//!   A lock handed over is released through the kernel. One such lock at a time: a second,
+//!   nested, goes through the kernel. The tests take an interrupt at every point between
+//!   two stores ([`Arch::may_interrupt`]).
 //! - **Stack faults.** A context switch that finds the outgoing stack pointer inside the
 //!   stack's guard or, on a CPU without an MPU, the guard's memory written
 //!   ([`Arch::guard_intact`]), or the CPU's guard fault, ends in
@@ -47,11 +52,11 @@
 //!   resumes).
 
 use core::cell::UnsafeCell;
-use core::sync::atomic::{compiler_fence, AtomicBool, AtomicU32, Ordering};
+use core::sync::atomic::{compiler_fence, AtomicBool, AtomicU32, AtomicU8, Ordering};
 
 use cw_core::os::{
     CounterId, InterruptMask, IsrConfig, IsrId, OsError, ResourceId, TaskConfig, TaskId, TaskKind,
-    TaskState,
+    TaskState, ISR_LEVEL_BASE,
 };
 
 use super::{OsKernel, Port};
@@ -92,6 +97,20 @@ pub trait Arch {
     fn set_level(&self, level: u8) {
         self.set_mask(InterruptMask::at_level(level));
     }
+    /// What [`Arch::set_level`] puts in the mask register for processor priority `level`,
+    /// an interrupt level (at or above `ISR_LEVEL_BASE`, below `u8::MAX`), computed once:
+    /// the port keeps it per resource for the locks outside the kernel, and takes 0 for a
+    /// ceiling at a task's level, so the value of an interrupt level is never 0. The level
+    /// itself by default.
+    #[inline(always)]
+    fn level_value(level: u8) -> u8 {
+        level
+    }
+    /// [`Arch::set_level`] with the value [`Arch::level_value`] computed for the level.
+    #[inline(always)]
+    fn set_level_value(&self, value: u8) {
+        self.set_level(value);
+    }
     /// Whether every interrupt is masked now ([`Arch::disable_all`], or the caller's own
     /// critical section).
     fn all_masked(&self) -> bool;
@@ -131,6 +150,12 @@ pub trait Arch {
     fn now_ms(&self) -> u64;
     /// A mark for the task trace (the measuring images); nothing by default.
     fn trace(&self, _mark: Mark) {}
+    /// A point in the port's paths outside the kernel (a lock kept there, its release)
+    /// where an interrupt the mask in force admits may arrive: nothing on a CPU, where the
+    /// interrupt comes by itself. The port's model CPU takes one there, so that its
+    /// harness checks every place between two stores.
+    #[inline(always)]
+    fn may_interrupt(&self) {}
 }
 
 /// A mark the port passes to the CPU's task trace.
@@ -438,11 +463,28 @@ pub struct Preemptive<K, A> {
     /// A task's lock kept outside the kernel: 0, or the lock, and once a kernel call has
     /// handed it to the kernel, its task ([`lazy_word`]; the module's rules).
     lazy: AtomicU32,
-    /// The resources the running task may lock outside the kernel, one bit each
-    /// ([`OsKernel::lock_free_resources`] at the end of the last kernel call).
+    /// The resources the running task may lock outside the kernel, one bit each: the
+    /// kernel's answer at the end of the last kernel call ([`OsKernel::port_view`]), 0
+    /// after a lock by the kernel's fast path (the caller then holds a resource).
     lazy_mask: AtomicU32,
+    /// The mask a lock kept outside the kernel applies, per resource: the
+    /// [`Arch::level_value`] of its ceiling ([`OsKernel::ceiling`]) where that is an
+    /// interrupt level, 0 where it is a task's (no mask), computed by
+    /// [`Preemptive::start_checked`]. (Until then no task runs, so nothing is locked
+    /// outside the kernel.)
+    lazy_levels: [AtomicU8; LAZY_RESOURCES],
     arch: A,
 }
+
+/// The resources a lock may be kept outside the kernel for: one bit each of the kernel's
+/// answer ([`OsKernel::lock_free_resources`]).
+const LAZY_RESOURCES: usize = 32;
+
+/// The processor priority a task returns to when it releases a lock kept outside the
+/// kernel: the task held nothing and had no interrupt lock when it took the lock, so it
+/// masked no interrupt (`cw_core::os::spec::lock_pair_leaves_no_trace`), and level 0
+/// masks none.
+const TASK_LEVEL: u8 = 0;
 
 /// The `lazy` word, one place for its layout: the resource + 1 (bits 0-7; 0: no lock),
 /// the task + 1 once handed over (bits 8-15), and [`HANDED`].
@@ -501,6 +543,7 @@ impl<K: OsKernel, A: Arch> Preemptive<K, A> {
             in_kernel: AtomicBool::new(false),
             lazy: AtomicU32::new(0),
             lazy_mask: AtomicU32::new(0),
+            lazy_levels: [const { AtomicU8::new(0) }; LAZY_RESOURCES],
             arch,
         }
     }
@@ -594,6 +637,15 @@ impl<K: OsKernel, A: Arch> Preemptive<K, A> {
         if let Err(r) = refused {
             self.fatal(PortFault::Refused(r));
         }
+        self.before_start(|k, _| {
+            for (r, level) in (0u8..).zip(&self.lazy_levels) {
+                let value = match k.ceiling(ResourceId(r)) {
+                    Some(ceiling) if ceiling >= ISR_LEVEL_BASE => A::level_value(ceiling),
+                    _ => 0,
+                };
+                level.store(value, Ordering::Relaxed);
+            }
+        });
         // The idle loop is the shared stack's bottom context.
         self.with_sched(|s| s.guard_slot_start());
     }
@@ -666,9 +718,10 @@ impl<K: OsKernel, A: Arch> Preemptive<K, A> {
 
     /// `GetResource` outside the kernel, where the module's rules allow it: the running
     /// task may lock `res` so (`lazy_mask`), no kernel call is under way (a hook's lock
-    /// goes to the kernel), and no other lock is kept outside the kernel. Then the lock is
-    /// one store, and the kernel hears of it at the next kernel call
-    /// ([`Preemptive::hand_over`]). `false`: nothing done.
+    /// goes to the kernel), and no other lock is kept outside the kernel. Then, under the
+    /// kernel lock, one store, and the mask of the resource's ceiling: no kernel call. The
+    /// kernel hears of the lock at the next kernel call ([`Preemptive::hand_over`]).
+    /// `false`: nothing done.
     #[inline(always)]
     fn lazy_get(&self, res: ResourceId) -> bool {
         let mask = self.lazy_mask.load(Ordering::Relaxed);
@@ -678,10 +731,30 @@ impl<K: OsKernel, A: Arch> Preemptive<K, A> {
         {
             return false;
         }
-        // (An ISR between the test and the store finds nothing to hand over, and a task it
-        // lets in ends, or waits holding nothing, before this one goes on: the word is 0
-        // again.)
-        self.lazy.store(lazy_word::unhanded(res), Ordering::Relaxed);
+        let Some(level) = self.lazy_levels.get(usize::from(res.0)) else {
+            return false;
+        };
+        let value = level.load(Ordering::Relaxed);
+        // (An ISR between the test and the store, or the kernel lock, finds nothing to
+        // hand over, and a task it lets in ends, or waits holding nothing, before this one
+        // goes on: the word is 0 again and the mask the task's.)
+        self.arch.may_interrupt();
+        if value == 0 {
+            // A ceiling at a task's level: no ISR uses the resource, and an ISR that finds
+            // the word ends with the mask of the task at that ceiling, which masks nothing.
+            self.lazy.store(lazy_word::unhanded(res), Ordering::Relaxed);
+        } else {
+            // The store under the kernel lock: an ISR that finds the word finds the
+            // ceiling's mask in force, which it keeps (the kernel it hands the lock to
+            // masks as much). Without it an ISR above the ceiling, between the ceiling's
+            // mask and the store, would end by putting back the mask of a task that holds
+            // nothing.
+            self.arch.lock_os();
+            self.arch.may_interrupt();
+            self.lazy.store(lazy_word::unhanded(res), Ordering::Relaxed);
+            self.arch.may_interrupt();
+            self.arch.set_level_value(value);
+        }
         // The resource's data is reached only after the lock.
         compiler_fence(Ordering::SeqCst);
         true
@@ -689,8 +762,8 @@ impl<K: OsKernel, A: Arch> Preemptive<K, A> {
 
     /// `ReleaseResource` of a lock kept outside the kernel that the kernel has not been
     /// handed: one exchange back to 0, which fails if a kernel call (an ISR's) handed it
-    /// over meanwhile; then, as for every lock handed over, the kernel releases it.
-    /// `false`: nothing done.
+    /// over meanwhile (then, as for every lock handed over, the kernel releases it), and
+    /// the task's mask again. `false`: nothing done.
     #[inline(always)]
     fn lazy_release(&self, res: ResourceId) -> bool {
         let lazy = self.lazy.load(Ordering::Relaxed);
@@ -699,9 +772,19 @@ impl<K: OsKernel, A: Arch> Preemptive<K, A> {
         }
         // The resource's data is left before the release.
         compiler_fence(Ordering::SeqCst);
-        self.lazy
+        self.arch.may_interrupt();
+        if self
+            .lazy
             .compare_exchange(lazy, 0, Ordering::Relaxed, Ordering::Relaxed)
-            .is_ok()
+            .is_err()
+        {
+            return false;
+        }
+        // (An ISR between the exchange and the mask finds a task that holds nothing, and
+        // ends with the task's mask, which this puts back too.)
+        self.arch.may_interrupt();
+        self.arch.set_level(TASK_LEVEL);
+        true
     }
 
     /// Carries out what the kernel decided and ends the kernel lock: the OS-level mask,
@@ -759,6 +842,19 @@ impl<K: OsKernel, A: Arch> Preemptive<K, A> {
             }
             None => self.lock_service(kernel, sched, res, take),
         }
+    }
+
+    /// A lock (`take`) or release as a kernel call: under the kernel lock the kernel's
+    /// fast path pushes the resource and raises the task's priority and preemption
+    /// threshold to the ceiling (taking a resource never lets another task in), or pops it
+    /// where no task above the restored priority is ready; the port then sets the OS-level
+    /// mask to the level. Where the fast path declines, the full service and the port's
+    /// whole carrying-out, in the same kernel lock. Out of line, so that a lock outside the
+    /// kernel takes no stack frame, and one function for both, so that the image holds the
+    /// kernel lock's entry and end once.
+    #[inline(never)]
+    fn lock_call(&self, res: ResourceId, take: bool) -> Result<(), OsError> {
+        self.lock_step(res, take)
     }
 
     /// At the end of a kernel call: which resources the running task may lock outside the
@@ -986,33 +1082,28 @@ impl<K: OsKernel, A: Arch> Port for Preemptive<K, A> {
         Some(result)
     }
 
-    /// The lock by the stack resource policy. A task's lock of one of its own resources
-    /// that no ISR uses, holding nothing else, is kept outside the kernel: one store, no
-    /// kernel call (the module's rules). Otherwise, under the kernel lock, the kernel's
-    /// fast path pushes the resource and raises the task's priority and preemption
-    /// threshold to the ceiling; the port then sets the OS-level mask to that level, with
-    /// no task switch to look for (taking a resource never lets another task in). Where
-    /// the fast path declines, the full service and the port's whole carrying-out, in the
-    /// same kernel lock.
+    /// The lock by the stack resource policy. A task's lock of one of its own resources,
+    /// holding nothing else, is kept outside the kernel: under the kernel lock one store
+    /// and the ceiling's mask, no kernel call (the module's rules). Otherwise the kernel
+    /// call `lock_call`.
     #[inline(never)]
     fn get_resource(&self, res: ResourceId) -> Result<(), OsError> {
         if self.lazy_get(res) {
             return Ok(());
         }
-        self.lock_step(res, true)
+        self.lock_call(res, true)
     }
 
     /// The release, as [`Preemptive::get_resource`] takes the lock: a lock kept outside
-    /// the kernel that no kernel call has seen is one exchange (no task became ready
-    /// meanwhile: that takes a kernel call, which hands the lock over); the kernel's fast
-    /// path applies only where no task above the restored priority is ready (else the full
-    /// service switches to it).
+    /// the kernel that no kernel call has seen is one exchange and the task's mask (no
+    /// task became ready meanwhile: that takes a kernel call, which hands the lock over);
+    /// otherwise the kernel call `lock_call`.
     #[inline(never)]
     fn release_resource(&self, res: ResourceId) -> Result<(), OsError> {
         if self.lazy_release(res) {
             return Ok(());
         }
-        self.lock_step(res, false)
+        self.lock_call(res, false)
     }
 
     fn end_job(&self, f: impl FnOnce(&mut K) -> Result<(), OsError>) -> Result<(), OsError> {

@@ -616,9 +616,9 @@ pub struct OsConfig<const T: usize, const R: usize, const C: usize, const A: usi
     /// Derived: every alarm's action is `ActivateTask`. With tables that are constants
     /// (`static_tables!`) the kernel's image then holds no code for the other actions.
     pub(crate) task_alarms_only: bool,
-    /// Derived, per task: the user resources it declares that no ISR declares (their
-    /// ceilings are tasks' priorities), one bit each (the first 32); none for a task that
-    /// is not fully preemptive (it runs at `RES_SCHEDULER`'s ceiling).
+    /// Derived, per task: the user resources it declares, one bit each (the first 32);
+    /// none for a task that is not fully preemptive (it runs at `RES_SCHEDULER`'s
+    /// ceiling).
     pub(crate) lock_free_resources: [u32; T],
     /// Derived: the sum of all tasks' activations (the ready-queue entries ever needed).
     pub(crate) total_activations: usize,
@@ -804,8 +804,7 @@ impl<const T: usize, const R: usize, const C: usize, const A: usize, const I: us
             let mut r = 0;
             // (`R` is at most 32, `MAX_RESOURCES`: checked above.)
             while r < R {
-                if ceilings[r] < ISR_LEVEL_BASE
-                    && d.tasks[t].resources & (1 << r) != 0
+                if d.tasks[t].resources & (1 << r) != 0
                     && matches!(d.tasks[t].preemption, Preemption::Full)
                 {
                     lock_free_resources[t] |= 1 << r;
@@ -982,10 +981,11 @@ impl<const T: usize, const R: usize, const C: usize, const A: usize, const I: us
         }
     }
 
-    /// The user resources task `index` declares that no ISR declares (their ceilings are
-    /// tasks' priorities), one bit each (the first 32); none for a task that is not fully
-    /// preemptive, or an unknown index. What a port may let the task lock outside the
-    /// kernel ([`Os::lock_free_resources`](crate::os::Os::lock_free_resources)).
+    /// The user resources task `index` declares, one bit each (the first 32): those an
+    /// ISR shares too (a ceiling at interrupt level) among them; none for a task that is
+    /// not fully preemptive, or an unknown index. What a port may let the task lock
+    /// outside the kernel ([`Os::lock_free_resources`](crate::os::Os::lock_free_resources)),
+    /// masking the ISRs at or below the ceiling itself.
     pub const fn lock_free_resources(&self, index: usize) -> u32 {
         if index < T {
             self.lock_free_resources[index]

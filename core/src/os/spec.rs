@@ -416,13 +416,15 @@ where
 
 /// The contract a port relies on when it keeps a task's lock outside the kernel until
 /// the task's next kernel call ([`Os::lock_free_resources`]): where that names `res`, it
-/// is a user resource the running task declares and no ISR uses (a ceiling at task
-/// level), the running task is at task level with nothing held and no interrupt lock,
-/// the lock's fast path takes it, the release's fast path right after takes that too,
-/// and the two leave the state they found. So a pair the kernel never sees (no kernel
-/// call between the two) is one it would have left no trace of, and a kernel call in
-/// between, which hands the lock to the kernel first, sees the state the lock would have
-/// made.
+/// is a user resource the running task declares, the running task is at task level with
+/// nothing held and no interrupt lock, so that the kernel masks no interrupt; the lock's
+/// fast path takes it and masks what the resource's ceiling ([`Os::ceiling`]) masks (the
+/// ISRs that share it and those below: the mask the port applies itself), the
+/// release's fast path right after takes that too and masks nothing again, and the two
+/// leave the state they found. So a pair the kernel never sees (no kernel call between
+/// the two) is one it would have left no trace of, with the masks the port applied, and
+/// a kernel call in between, which hands the lock to the kernel first, sees the state the
+/// lock would have made.
 ///
 /// # Errors
 /// Which part of the contract is broken.
@@ -450,25 +452,29 @@ where
         return Ok(());
     }
     // What the mask names, by the definitions: the running task at task level, holding
-    // nothing, no interrupt lock; `res` one of its own resources, at a task's ceiling.
+    // nothing, no interrupt lock, masking nothing; `res` one of its own resources.
     let running = before.running().map(|t| usize::from(t.0));
     let task = running.and_then(|t| before.config().tasks().get(t));
     let declared = task.is_some_and(|t| t.resources & (1u32 << res.0) != 0);
-    let task_level = before
-        .ceiling(res)
-        .is_some_and(|ceiling| ceiling < super::ISR_LEVEL_BASE);
     let alone = at_task_level(before)
         && !before.locks().any()
         && running.is_some_and(|t| before.held_resources(TaskId(t as u8)).next().is_none());
-    if res == RES_SCHEDULER || !declared || !task_level || !alone {
+    let unmasked = before.interrupt_mask() == InterruptMask::None;
+    if res == RES_SCHEDULER || !declared || !alone || !unmasked {
         return Err("the mask names a resource the task may not lock outside the kernel");
     }
     let mut os = *before;
-    if os.try_get_resource(res).is_none() {
+    let Some(level) = os.try_get_resource(res) else {
         return Err("the lock's fast path declined a lock the port may take outside the kernel");
+    };
+    if Some(level) != before.ceiling(res) || os.masked_level() != level {
+        return Err("the lock's fast path masks another level than the resource's ceiling");
     }
-    if os.try_release_resource(res).is_none() {
+    let Some(level) = os.try_release_resource(res) else {
         return Err("the release's fast path declined the release right after the lock");
+    };
+    if InterruptMask::at_level(level) != InterruptMask::None {
+        return Err("the release's fast path left an interrupt masked");
     }
     if os != *before {
         return Err("a lock and its release left another state than they found");

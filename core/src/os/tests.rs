@@ -1034,9 +1034,10 @@ fn locks_left_by_hooks_are_undone() {
 
 /// The resources each task may lock outside the kernel, as the configuration derives
 /// them (built at run time here, so that the derivation is measured): a task's own
-/// resources that no ISR declares; none for a non-preemptive task, or an unknown index.
+/// resources, those an ISR shares too among them (the port masks the ISRs itself); none
+/// for a non-preemptive task, or an unknown index.
 #[test]
-fn lock_free_resources_are_a_tasks_own_that_no_isr_declares() {
+fn lock_free_resources_are_a_preemptive_tasks_own() {
     let description = OsDescription::new(
         [
             TaskConfig::basic("A", 1).uses(0b011),
@@ -1055,7 +1056,7 @@ fn lock_free_resources_are_a_tasks_own_that_no_isr_declares() {
         panic!("the configuration is valid")
     };
     assert_eq!(cfg.lock_free_resources(0), 0b011);
-    assert_eq!(cfg.lock_free_resources(1), 0b010);
+    assert_eq!(cfg.lock_free_resources(1), 0b110);
     assert_eq!(cfg.lock_free_resources(2), 0);
     assert_eq!(cfg.lock_free_resources(3), 0);
     assert_eq!(cfg.resource_ceiling(2), Some(ISR_LEVEL_BASE + 2));
@@ -2125,6 +2126,33 @@ fn a_lock_pair_outside_the_kernel_leaves_no_trace() {
             let verdict = spec::lock_pair_leaves_no_trace(&os, ResourceId(r % 4));
             assert!(verdict.is_ok(), "{r}: {verdict:?}");
         });
+}
+
+/// A task's own resource that an ISR shares is one it may lock outside the kernel too:
+/// the port then masks the ISR itself, at the ceiling the kernel's lock would mask
+/// (`spec::lock_pair_leaves_no_trace` checks the level), and nothing after the release.
+#[test]
+fn a_resource_an_isr_shares_may_be_locked_outside_the_kernel_at_its_ceiling() {
+    static SHARED: OsConfig<1, 1, 0, 0, 1> = match OsConfig::new(OsDescription::new(
+        [TaskConfig::basic("Sender", 1).uses(0b1).autostart()],
+        [],
+        [],
+        [IsrConfig::cat2("Can", 2).uses(0b1)],
+    )) {
+        Ok(c) => c,
+        Err(e) => panic!("{}", e.describe()),
+    };
+    let Ok(mut os) = Os::<1, 1, 0, 0, 1, 1>::new(&SHARED) else {
+        panic!("test configuration refused");
+    };
+    assert_eq!(os.start_os(OSDEFAULTAPPMODE), Ok(()));
+    assert_eq!(os.lock_free_resources(), 0b1);
+    assert_eq!(os.interrupt_mask(), InterruptMask::None);
+    let verdict = spec::lock_pair_leaves_no_trace(&os, R0);
+    assert!(verdict.is_ok(), "{verdict:?}");
+    assert_eq!(os.try_get_resource(R0), SHARED.isr_level(0));
+    assert_eq!(os.interrupt_mask(), InterruptMask::UpTo(2));
+    assert_eq!(os.lock_free_resources(), 0);
 }
 
 /// Only the running task at task level, with no interrupt lock and nothing held, may lock

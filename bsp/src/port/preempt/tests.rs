@@ -22,7 +22,7 @@ const LOW: TaskId = TaskId(0);
 const HIGH: TaskId = TaskId(1);
 const WAITER: TaskId = TaskId(2);
 
-static OS: OsConfig<3, 2, 1, 1, 2> = match OsConfig::new(
+static OS: OsConfig<3, 2, 1, 1, 3> = match OsConfig::new(
     OsDescription::new(
         [
             TaskConfig::basic("Low", 1).autostart().uses(0b11),
@@ -42,6 +42,7 @@ static OS: OsConfig<3, 2, 1, 1, 2> = match OsConfig::new(
         [
             IsrConfig::cat2("Tick", 1).uses(0b01),
             IsrConfig::cat1("Fast", 3),
+            IsrConfig::cat2("Can", 2),
         ],
     )
     .class(ConformanceClass::Ecc1)
@@ -57,7 +58,7 @@ static OS: OsConfig<3, 2, 1, 1, 2> = match OsConfig::new(
     Err(_) => panic!("the test configuration is inconsistent"),
 };
 
-cw_core::static_tables!(TestTables: OsConfig<3, 2, 1, 1, 2> = OS);
+cw_core::static_tables!(TestTables: OsConfig<3, 2, 1, 1, 3> = OS);
 
 /// What the hooks saw: the first errors, in order.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Hash)]
@@ -72,7 +73,7 @@ impl Seen {
     }
 }
 
-type Kernel = Os<3, 2, 1, 1, 2, 3, TestTables, Seen>;
+type Kernel = Os<3, 2, 1, 1, 3, 3, TestTables, Seen>;
 
 impl Hooks<Kernel> for Seen {
     fn error_hook(os: &mut Kernel, error: OsError) {
@@ -102,6 +103,8 @@ enum End {
 struct Model {
     /// `None`: the kernel lock (the OS level); `Some(mask)`: the kernel's mask applied.
     level: Cell<Option<InterruptMask>>,
+    /// How many times the kernel lock was taken.
+    os_locks: Cell<u32>,
     all: Cell<bool>,
     /// Every-interrupt masking was ever turned on while the kernel lock was held.
     all_in_lock: Cell<bool>,
@@ -120,6 +123,7 @@ impl Arch for Model {
     const FIRST_FRAME_BYTES: u32 = 72;
 
     fn lock_os(&self) {
+        self.os_locks.set(self.os_locks.get() + 1);
         self.level.set(None);
     }
     fn set_mask(&self, mask: InterruptMask) {
@@ -167,6 +171,9 @@ impl Arch for Model {
     }
     fn now_ms(&self) -> u64 {
         0
+    }
+    fn may_interrupt(&self) {
+        take_pending(self, true);
     }
 }
 
@@ -571,25 +578,46 @@ fn a_tasks_lock_outside_the_kernel_is_a_store_and_a_pair_leaves_the_kernel_untou
     let port = started();
     let tasks_only = ResourceId(1);
     let before = kernel_now(&port);
+    let os_locks = port.arch().os_locks.get();
     assert_eq!(port.get_resource(tasks_only), Ok(()));
     assert_ne!(port.lazy.load(Ordering::Relaxed), 0);
     assert!(kernel_now(&port) == before, "the kernel was not called");
-    // What a kernel call would see: Low holding it at its ceiling.
+    // No ISR uses it: the store alone, not even the kernel lock.
+    assert_eq!(port.arch().os_locks.get(), os_locks);
+    // What a kernel call would see: Low holding it at its ceiling, which masks no ISR.
     assert_eq!(kernel_view(&port).resource_owner(tasks_only), Some(LOW));
     assert_eq!(kernel_view(&port).running_priority(), Some(2));
+    assert_eq!(port.arch().level.get(), Some(InterruptMask::None));
     assert_eq!(port.release_resource(tasks_only), Ok(()));
     assert_eq!(port.lazy.load(Ordering::Relaxed), 0);
     assert!(kernel_now(&port) == before, "the pair left no trace");
-    // A resource an ISR shares goes through the kernel, which masks the ISR.
-    assert_eq!(port.get_resource(ResourceId(0)), Ok(()));
-    assert_eq!(port.lazy.load(Ordering::Relaxed), 0);
-    assert_eq!(kernel_now(&port).resource_owner(ResourceId(0)), Some(LOW));
+    // A resource an ISR shares too: the port masks the ISR itself, at the ceiling.
+    let shared = ResourceId(0);
+    assert_eq!(port.get_resource(shared), Ok(()));
+    assert_ne!(port.lazy.load(Ordering::Relaxed), 0);
+    assert!(kernel_now(&port) == before, "the kernel was not called");
+    // The store under the kernel lock, then the ceiling's mask.
+    assert_eq!(port.arch().os_locks.get(), os_locks + 1);
+    assert_eq!(kernel_view(&port).resource_owner(shared), Some(LOW));
     assert_eq!(port.arch().level.get(), Some(InterruptMask::UpTo(1)));
-    // Holding it, the task locks through the kernel only.
+    assert_eq!(
+        port.arch().level.get(),
+        Some(kernel_view(&port).interrupt_mask())
+    );
+    // Holding it, the task locks through the kernel only, which is handed the first.
     assert_eq!(port.get_resource(tasks_only), Ok(()));
-    assert_eq!(port.lazy.load(Ordering::Relaxed), 0);
+    assert_eq!(kernel_now(&port).resource_owner(shared), Some(LOW));
+    assert_eq!(kernel_now(&port).resource_owner(tasks_only), Some(LOW));
     assert_eq!(port.release_resource(tasks_only), Ok(()));
-    assert_eq!(port.release_resource(ResourceId(0)), Ok(()));
+    assert_eq!(port.release_resource(shared), Ok(()));
+    assert_eq!(port.lazy.load(Ordering::Relaxed), 0);
+    assert!(kernel_now(&port) == before, "both released");
+    assert_eq!(port.arch().level.get(), Some(InterruptMask::None));
+    // The pair again: the release puts the task's mask back itself.
+    assert_eq!(port.get_resource(shared), Ok(()));
+    assert_eq!(port.release_resource(shared), Ok(()));
+    assert!(kernel_now(&port) == before, "the pair left no trace");
+    assert_eq!(port.arch().level.get(), Some(InterruptMask::None));
 }
 
 #[test]
@@ -661,7 +689,7 @@ fn isrs_hooks_and_tasks_under_an_interrupt_lock_lock_through_the_kernel() {
     assert_eq!(port.release_resource(ResourceId(0)), Ok(()));
     port.kernel(|os| os.exit_isr()).expect("exit");
     // Back in Low, which may again.
-    assert_eq!(port.lazy_mask.load(Ordering::Relaxed), 0b10);
+    assert_eq!(port.lazy_mask.load(Ordering::Relaxed), 0b11);
     // Under SuspendOSInterrupts: the kernel refuses the lock (E_OS_CALLEVEL in AUTOSAR).
     port.kernel(|os| os.suspend_os_interrupts())
         .expect("suspend");
@@ -722,5 +750,198 @@ fn any_locks_and_calls_leave_the_kernel_as_kernel_calls_would() {
                 "after {op}: the kernel differs from the one called for every lock"
             );
         }
+    });
+}
+
+std::thread_local! {
+    /// The interrupt the model CPU takes at the next [`Arch::may_interrupt`] point whose
+    /// mask admits it ([`any_interrupt_between_the_stores_of_a_lock_outside_the_kernel`]).
+    static PENDING: Cell<Option<Pending>> = const { Cell::new(None) };
+}
+
+/// An interrupt waiting for the model CPU to take it.
+#[derive(Clone, Copy)]
+struct Pending {
+    port: &'static TestPort,
+    /// `may_interrupt` points to pass first.
+    after: u8,
+    /// `Tick` (which locks the resource it shares with Low), else `Can` (which activates
+    /// High).
+    tick: bool,
+    /// Whether it was taken, and whether a lock outside the kernel was in the port's word
+    /// then (the order the kernel sees: after the lock, before its release).
+    taken: Option<bool>,
+}
+
+impl Model {
+    /// Whether the mask in force admits category-2 ISR `isr` (priority 1 or 2).
+    fn admits(&self, priority: u8) -> bool {
+        !self.all.get() && self.level.get().is_some_and(|mask| mask.admits(priority))
+    }
+}
+
+/// The ISR the model takes: `Tick` locks resource 0 (which it shares with Low: taken, it
+/// would be refused) and returns; `Can` activates High, and where that asks for the
+/// switch, High's job runs to its end before the interrupted code goes on.
+fn interrupt(port: &TestPort, tick: bool) {
+    let isr = if tick { IsrId(0) } else { IsrId(2) };
+    port.kernel(|os| os.enter_isr(isr)).expect("entry");
+    if tick {
+        assert_eq!(
+            port.get_resource(ResourceId(0)),
+            Ok(()),
+            "the mask let in an ISR whose resource is held"
+        );
+        assert_eq!(port.release_resource(ResourceId(0)), Ok(()));
+    } else {
+        // (Refused where High is active already: the reference sees the same.)
+        let _ = port.kernel(|os| os.activate_task(HIGH));
+    }
+    port.kernel(|os| os.exit_isr()).expect("return");
+    high_runs(port);
+}
+
+/// Where a switch was asked for (to High, which an ISR activated), High's job runs to
+/// its end and Low goes on.
+fn high_runs(port: &TestPort) {
+    if port.arch().switch.get() {
+        let interrupted = SHARED.1 - 256;
+        take_switch(port, interrupted);
+        assert_eq!(port.inspect(|os| os.running()), Some(HIGH));
+        let end = ends(|| {
+            let _ = port.end_job(|os| os.terminate_task());
+        });
+        assert_eq!(end, End::JobOver);
+        assert_eq!(take_switch(port, SHARED.1 - 400), interrupted);
+    }
+}
+
+/// High's job on the reference kernel, where it runs.
+fn high_runs_reference(reference: &mut Kernel) {
+    if reference.running() == Some(HIGH) {
+        assert_eq!(reference.terminate_task(), Ok(()));
+    }
+}
+
+/// The same ISR on the reference kernel, High's job included.
+fn interrupt_reference(reference: &mut Kernel, tick: bool) {
+    let isr = if tick { IsrId(0) } else { IsrId(2) };
+    assert_eq!(reference.enter_isr(isr), Ok(()));
+    if tick {
+        assert_eq!(reference.get_resource(ResourceId(0)), Ok(()));
+        assert_eq!(reference.release_resource(ResourceId(0)), Ok(()));
+    } else {
+        let _ = reference.activate_task(HIGH);
+    }
+    assert_eq!(reference.exit_isr(), Ok(()));
+    high_runs_reference(reference);
+}
+
+/// Takes the pending interrupt if the mask admits it now (`point`: at a `may_interrupt`
+/// point, where it may have points to pass first).
+fn take_pending(model: &Model, point: bool) {
+    let Some(mut pending) = PENDING.get() else {
+        return;
+    };
+    if pending.taken.is_some() {
+        return;
+    }
+    if point && pending.after > 0 {
+        pending.after -= 1;
+        PENDING.set(Some(pending));
+        return;
+    }
+    if !model.admits(if pending.tick { 1 } else { 2 }) {
+        return;
+    }
+    let locked = pending.port.lazy.load(Ordering::Relaxed) != 0;
+    pending.taken = Some(locked);
+    PENDING.set(Some(pending));
+    interrupt(pending.port, pending.tick);
+}
+
+/// Any sequence of locks and releases of either resource (the one Low shares with `Tick`,
+/// the one it shares with High), kernel calls of the task, and interrupts (`Tick`, which
+/// locks the resource it shares; `Can`, which activates High) arriving at any point the
+/// mask admits, between any two stores of a lock kept outside the kernel or of its release:
+/// no ISR is let in whose resource the task holds, after every step the mask in force is
+/// the one the kernel (the lock handed over) would apply, and the kernel is the one called
+/// for every lock with each interrupt where it fell (after the lock's store, or before the
+/// release's exchange, when it found the lock in the word). (A bolero test and fuzz
+/// target.)
+#[test]
+fn any_interrupt_between_the_stores_of_a_lock_outside_the_kernel() {
+    bolero::check!().with_type::<Vec<u8>>().for_each(|ops| {
+        let port: &'static TestPort = std::boxed::Box::leak(std::boxed::Box::new(started()));
+        let mut reference = kernel_now(port);
+        PENDING.set(None);
+        for &op in ops.iter().take(24) {
+            let res = ResourceId(op / 5 % 2);
+            match op % 5 {
+                0 | 1 => {
+                    let take = op % 5 == 0;
+                    let result = if take {
+                        port.get_resource(res)
+                    } else {
+                        port.release_resource(res)
+                    };
+                    // The interrupt taken inside the call, where the kernel saw it.
+                    let inside = PENDING.get().and_then(|p| p.taken.map(|l| (p.tick, l)));
+                    let before = inside.is_some_and(|(_, locked)| locked != take);
+                    if let (Some((tick, _)), true) = (inside, before) {
+                        interrupt_reference(&mut reference, tick);
+                    }
+                    let expected = if take {
+                        reference.get_resource(res)
+                    } else {
+                        reference.release_resource(res)
+                    };
+                    assert_eq!(result, expected, "{op}");
+                    // A release that lets High in (the lock was handed over).
+                    high_runs(port);
+                    high_runs_reference(&mut reference);
+                    if let (Some((tick, _)), false) = (inside, before) {
+                        interrupt_reference(&mut reference, tick);
+                    }
+                    if inside.is_some() {
+                        PENDING.set(None);
+                    }
+                }
+                2 => {
+                    // An interrupt becomes pending, taken at a point inside a lock or a
+                    // release, or between steps.
+                    if PENDING.get().is_none() {
+                        PENDING.set(Some(Pending {
+                            port,
+                            after: op / 10 % 3,
+                            tick: op / 5 % 2 == 0,
+                            taken: None,
+                        }));
+                    }
+                }
+                3 => {
+                    // Between steps: the pending interrupt, if the mask admits it.
+                    take_pending(port.arch(), false);
+                    if let Some(Pending {
+                        tick,
+                        taken: Some(_),
+                        ..
+                    }) = PENDING.get()
+                    {
+                        interrupt_reference(&mut reference, tick);
+                        PENDING.set(None);
+                    }
+                }
+                _ => assert_eq!(port.kernel(|os| os.get_task_id()), reference.get_task_id()),
+            }
+            let view = kernel_view(port);
+            assert!(view == reference, "after {op}: the kernel differs");
+            assert_eq!(
+                port.arch().level.get(),
+                Some(view.interrupt_mask()),
+                "after {op}: the mask in force"
+            );
+        }
+        PENDING.set(None);
     });
 }

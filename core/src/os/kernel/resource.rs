@@ -239,11 +239,13 @@ where
     /// The resources the running task may take now as if nothing else ran, one bit each:
     /// at task level (not in a hook, an ISR, before start or after shutdown), with no
     /// interrupt lock in force and no resource taken, those of
-    /// [`OsConfig::lock_free_resources`] (its own, that no ISR uses); else none. A port
-    /// may keep such a lock outside the kernel until the task's next kernel call, which
-    /// hands it to `GetResource` before anything else: the kernel sees the same calls in
-    /// the same order, and a lock and release between two kernel calls leave its state as
-    /// they found it (`spec::lock_pair_leaves_no_trace`).
+    /// [`OsConfig::lock_free_resources`] (its own); else none. A port may keep such a lock
+    /// outside the kernel until the task's next kernel call, which hands it to
+    /// `GetResource` before anything else: the kernel sees the same calls in the same
+    /// order, and a lock and release between two kernel calls leave its state as they
+    /// found it (`spec::lock_pair_leaves_no_trace`). The port masks what the kernel's
+    /// lock would: the interrupts at or below the ceiling ([`Os::ceiling`]) while the lock
+    /// is held, none after the release (the task's level masks none).
     #[inline]
     pub fn lock_free_resources(&self) -> u32 {
         self.port_view().1
