@@ -38,9 +38,10 @@
 //!   may already have been written.
 //! - **Masks.** The kernel's interrupt mask ([`cw_core::os::InterruptMask`]) becomes
 //!   BASEPRI (`UpTo(p)`: every ISR of OSEK priority up to `p`, and PendSV, held) after every
-//!   kernel call; PRIMASK is set and cleared only where the kernel's mask says
-//!   `All` (`DisableAllInterrupts`, `SuspendAllInterrupts`), so a kernel call made inside
-//!   the caller's own critical section leaves it closed.
+//!   kernel call, and around a task's lock kept outside the kernel of a resource that ISRs
+//!   share (the ceiling's, [`crate::port::preempt`]); PRIMASK is set and cleared only where
+//!   the kernel's mask says `All` (`DisableAllInterrupts`, `SuspendAllInterrupts`), so a
+//!   kernel call made inside the caller's own critical section leaves it closed.
 //! - **Shutdown and faults.** When a kernel call leaves the OS shut down (`ShutdownOS`, or
 //!   the OS's own on a stack fault), PRIMASK stays set for good and the port hands the end
 //!   to [`App::shut_down`]. Panics, HardFault, NMI, BusFault and UsageFault go to the

@@ -4,18 +4,33 @@
 //! raises them and the kernel's interrupt mask admits them: the simulation takes them
 //! only through [`HostPort::take_interrupt`], which applies the kernel's mask first, so
 //! the mask need not be applied after every service call.
+//!
+//! A task's lock of one of its own resources, holding nothing else, is kept outside the
+//! kernel as the preemptive port keeps it (`crate::port::preempt`, "A task's lock outside
+//! the kernel"): one store, and the kernel is handed the lock at the next kernel call.
+//! No interrupt comes inside a job here, so the store needs no mask around it.
 
 use std::cell::{Ref, RefCell};
 use std::vec::Vec;
 
-use cw_core::os::{InterruptControl, IsrConfig, IsrId, TaskId, VirtualInterrupts};
+use cw_core::os::{
+    InterruptControl, IsrConfig, IsrId, OsError, ResourceId, TaskId, VirtualInterrupts,
+};
 
 use super::clock::VirtualClock;
+use crate::port::lazy::LazyLock;
 use crate::port::{OsKernel, Port};
+
+/// The task slot a lock kept outside the kernel is handed over for when no task runs
+/// (never: the kernel names no resource then).
+const NO_TASK: u8 = u8::MAX - 1;
 
 /// The host port of a kernel `K`.
 pub struct HostPort<K> {
     kernel: RefCell<K>,
+    /// A task's lock kept outside the kernel, and which resources the running task may
+    /// lock so.
+    lazy: LazyLock,
     irq: RefCell<VirtualInterrupts>,
     clock: VirtualClock,
     /// The jobs on the stack, innermost last.
@@ -31,6 +46,7 @@ impl<K: OsKernel> HostPort<K> {
     pub fn new(kernel: K, clock: &VirtualClock) -> Self {
         Self {
             kernel: RefCell::new(kernel),
+            lazy: LazyLock::new(),
             irq: RefCell::new(VirtualInterrupts::new()),
             clock: clock.clone(),
             jobs: RefCell::new(Vec::new()),
@@ -39,9 +55,61 @@ impl<K: OsKernel> HostPort<K> {
         }
     }
 
-    /// The kernel, for inspection.
+    /// The kernel, for inspection (with a lock kept outside it handed over).
     pub fn os(&self) -> Ref<'_, K> {
+        self.hand_over();
         self.kernel.borrow()
+    }
+
+    /// A lock kept outside the kernel is handed to it, where there is one: what is read
+    /// of the kernel then includes it.
+    #[inline]
+    fn hand_over(&self) {
+        if self.lazy.to_hand_over().is_some() {
+            self.hand_over_now();
+        }
+    }
+
+    /// [`HostPort::hand_over`]'s kernel call (rare: a lock is kept outside the kernel only
+    /// inside a job, and a job reads the kernel by kernel calls).
+    #[cold]
+    #[inline(never)]
+    fn hand_over_now(&self) {
+        self.kernel(|_| ());
+    }
+
+    /// A lock kept outside the kernel meets the first kernel call since
+    /// ([`LazyLock::hand_over`]). A refusal (never seen: the kernel's own contract broken)
+    /// reached ErrorHook, which counts it, and the lock is no longer kept.
+    #[cold]
+    #[inline(never)]
+    fn hand_over_to(&self, kernel: &mut K, lazy: u32) {
+        if !self.lazy.hand_over(kernel, lazy, NO_TASK) {
+            self.lazy.drop_lock();
+        }
+    }
+
+    /// A lock's kernel call: the kernel's fast path where it applies, else the service;
+    /// a release frees the word of a lock the kernel was handed. Out of line, so that the
+    /// lock outside the kernel stays small where it is inlined.
+    #[inline(never)]
+    fn lock_call(&self, res: ResourceId, take: bool) -> Result<(), OsError> {
+        self.kernel(|os| {
+            if take {
+                return match os.try_get_resource(res) {
+                    Some(_) => Ok(()),
+                    None => os.get_resource(res),
+                };
+            }
+            let result = match os.try_release_resource(res) {
+                Some(_) => Ok(()),
+                None => os.release_resource(res),
+            };
+            if result.is_ok() {
+                self.lazy.released(res);
+            }
+            result
+        })
     }
 
     /// Raises an interrupt request.
@@ -56,7 +124,7 @@ impl<K: OsKernel> HostPort<K> {
         if irq.pending() == 0 {
             return None;
         }
-        irq.apply_mask(self.kernel.borrow().interrupt_mask());
+        irq.apply_mask(self.os().interrupt_mask());
         irq.take_next(isrs)
     }
 
@@ -81,14 +149,45 @@ impl<K: OsKernel> Port for HostPort<K> {
     type Kernel = K;
     const NESTED: bool = true;
 
+    /// Runs `f` on the kernel, a lock kept outside it handed over first; then asks which
+    /// resources the running task may lock outside the kernel.
     #[inline]
     fn kernel<R>(&self, f: impl FnOnce(&mut K) -> R) -> R {
-        f(&mut self.kernel.borrow_mut())
+        let mut kernel = self.kernel.borrow_mut();
+        if let Some(lazy) = self.lazy.to_hand_over() {
+            self.hand_over_to(&mut kernel, lazy);
+        }
+        let result = f(&mut kernel);
+        self.lazy.set_mask(kernel.lock_free_resources());
+        result
     }
 
     #[inline]
     fn inspect<R>(&self, f: impl FnOnce(&K) -> R) -> R {
-        f(&self.kernel.borrow())
+        f(&self.os())
+    }
+
+    /// The lock outside the kernel where the rules allow it (the running task may lock
+    /// `res` so, no other lock is kept so, no kernel call is under way): one store.
+    /// Otherwise the kernel's fast path, or the service.
+    #[inline]
+    fn get_resource(&self, res: ResourceId) -> Result<(), OsError> {
+        if self.lazy.may_take(res) && self.kernel.try_borrow_mut().is_ok() {
+            self.lazy.take(res);
+            return Ok(());
+        }
+        self.lock_call(res, true)
+    }
+
+    /// The release of a lock kept outside the kernel that no kernel call has seen: the
+    /// word back to 0. Otherwise through the kernel, which frees the word of a lock it was
+    /// handed.
+    #[inline]
+    fn release_resource(&self, res: ResourceId) -> Result<(), OsError> {
+        if self.lazy.clear_alone(res) {
+            return Ok(());
+        }
+        self.lock_call(res, false)
     }
 
     fn end_job(
@@ -119,3 +218,6 @@ impl<K: OsKernel> Port for HostPort<K> {
         self.refused.borrow_mut().push(isr);
     }
 }
+
+#[cfg(test)]
+mod tests;

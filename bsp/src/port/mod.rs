@@ -25,6 +25,7 @@ use cw_core::os::{
 };
 use cw_core::tables::Tables;
 
+pub(crate) mod lazy;
 pub mod preempt;
 pub mod trace;
 

@@ -42,8 +42,8 @@
 //!   leave the kernel as they found it, with the masks the port applied
 //!   (`cw_core::os::spec::lock_pair_leaves_no_trace`), so the kernel need never see them.
 //!   A lock handed over is released through the kernel. One such lock at a time: a second,
-//!   nested, goes through the kernel. The tests take an interrupt at every point between
-//!   two stores ([`Arch::may_interrupt`]).
+//!   nested, goes through the kernel. The tests take an interrupt, one per call, at each
+//!   point the code marks between two stores ([`Arch::may_interrupt`]).
 //! - **Stack faults.** A context switch that finds the outgoing stack pointer inside the
 //!   stack's guard or, on a CPU without an MPU, the guard's memory written
 //!   ([`Arch::guard_intact`]), or the CPU's guard fault, ends in
@@ -52,13 +52,14 @@
 //!   resumes).
 
 use core::cell::UnsafeCell;
-use core::sync::atomic::{compiler_fence, AtomicBool, AtomicU32, AtomicU8, Ordering};
+use core::sync::atomic::{compiler_fence, AtomicBool, AtomicU8, Ordering};
 
 use cw_core::os::{
     CounterId, InterruptMask, IsrConfig, IsrId, OsError, ResourceId, TaskConfig, TaskId, TaskKind,
     TaskState, ISR_LEVEL_BASE,
 };
 
+use super::lazy::LazyLock;
 use super::{OsKernel, Port};
 
 pub mod spec;
@@ -460,13 +461,9 @@ pub struct Preemptive<K, A> {
     /// A kernel call is under way: a second one would alias the kernel. Outside `sched`
     /// so that the check itself takes no reference to the tables.
     in_kernel: AtomicBool,
-    /// A task's lock kept outside the kernel: 0, or the lock, and once a kernel call has
-    /// handed it to the kernel, its task ([`lazy_word`]; the module's rules).
-    lazy: AtomicU32,
-    /// The resources the running task may lock outside the kernel, one bit each: the
-    /// kernel's answer at the end of the last kernel call ([`OsKernel::port_view`]), 0
-    /// after a lock by the kernel's fast path (the caller then holds a resource).
-    lazy_mask: AtomicU32,
+    /// A task's lock kept outside the kernel and the resources the running task may lock
+    /// so (the module's rules).
+    lazy: LazyLock,
     /// The mask a lock kept outside the kernel applies, per resource: the
     /// [`Arch::level_value`] of its ceiling ([`OsKernel::ceiling`]) where that is an
     /// interrupt level, 0 where it is a task's (no mask), computed by
@@ -486,48 +483,6 @@ const LAZY_RESOURCES: usize = 32;
 /// masks none.
 const TASK_LEVEL: u8 = 0;
 
-/// The `lazy` word, one place for its layout: the resource + 1 (bits 0-7; 0: no lock),
-/// the task + 1 once handed over (bits 8-15), and [`HANDED`].
-mod lazy_word {
-    use cw_core::os::ResourceId;
-
-    /// The bit that says the kernel holds the lock for the task.
-    pub const HANDED: u32 = 1 << 16;
-    const RES: u32 = 0xFF;
-    const OWNER_SHIFT: u32 = 8;
-
-    /// A lock of `res` that no kernel call has seen.
-    pub const fn unhanded(res: ResourceId) -> u32 {
-        res.0 as u32 + 1
-    }
-
-    /// `lazy`, handed to the kernel for task slot `owner`.
-    pub const fn handed(lazy: u32, owner: u8) -> u32 {
-        lazy | HANDED | (owner as u32 + 1) << OWNER_SHIFT
-    }
-
-    /// Whether `lazy` is a lock no kernel call has seen.
-    pub const fn is_unhanded(lazy: u32) -> bool {
-        lazy != 0 && lazy & HANDED == 0
-    }
-
-    /// The resource of a lock (of a word that holds one).
-    pub const fn resource(lazy: u32) -> ResourceId {
-        ResourceId(((lazy & RES) as u8).wrapping_sub(1))
-    }
-
-    /// Whether `lazy` is a lock of `res`, handed over (`handed`) or not.
-    pub const fn holds(lazy: u32, res: ResourceId, handed: bool) -> bool {
-        // (The owner's bits cleared: one instruction on the Cortex-M.)
-        lazy & !(RES << OWNER_SHIFT) == unhanded(res) | if handed { HANDED } else { 0 }
-    }
-
-    /// Whether `lazy` was handed over for task slot `owner`.
-    pub const fn owned_by(lazy: u32, owner: u8) -> bool {
-        (lazy >> OWNER_SHIFT) & RES == owner as u32 + 1
-    }
-}
-
 // SAFETY: the kernel and the tables are reached only with the kernel lock taken (every
 // ISR that may call the OS and the task switch masked, on a single core) and the
 // `in_kernel` flag set by a swap that refuses a second entry; the fault paths that take
@@ -541,8 +496,7 @@ impl<K: OsKernel, A: Arch> Preemptive<K, A> {
             kernel: UnsafeCell::new(kernel),
             sched: UnsafeCell::new(Sched::new()),
             in_kernel: AtomicBool::new(false),
-            lazy: AtomicU32::new(0),
-            lazy_mask: AtomicU32::new(0),
+            lazy: LazyLock::new(),
             lazy_levels: [const { AtomicU8::new(0) }; LAZY_RESOURCES],
             arch,
         }
@@ -629,7 +583,9 @@ impl<K: OsKernel, A: Arch> Preemptive<K, A> {
 
     /// Checks the kernel's configuration against the port (task count, ISR priorities,
     /// an own stack for every extended task); a fatal port fault naming the item if it
-    /// does not fit. Called by the CPU's start, before the OS starts.
+    /// does not fit; then computes each resource's mask for the locks outside the kernel.
+    /// Called by the CPU's start, before the OS starts: a port that starts the OS without
+    /// it would lock a resource that ISRs share with the store alone.
     pub fn start_checked(&self) {
         let stacks = self.own_stacks();
         let refused =
@@ -693,42 +649,32 @@ impl<K: OsKernel, A: Arch> Preemptive<K, A> {
         // this caller turned `in_kernel` on: the only references until `leave` turns it
         // off.
         let (kernel, sched) = unsafe { (&mut *self.kernel.get(), &mut *self.sched.get()) };
-        let lazy = self.lazy.load(Ordering::Relaxed);
-        if lazy_word::is_unhanded(lazy) {
+        if let Some(lazy) = self.lazy.to_hand_over() {
             self.hand_over(kernel, lazy);
         }
         (kernel, sched)
     }
 
-    /// A task's lock kept outside the kernel meets the first kernel call since: the
-    /// kernel's `GetResource` takes it now, for the task (its call level is the task's:
-    /// the call's own entry, an ISR's among them, comes after), before the call goes on.
-    /// So the call, and every decision it makes, sees the lock. The service, not its fast
-    /// path: this is rare, and the image holds the service once.
+    /// A task's lock kept outside the kernel meets the first kernel call since
+    /// ([`LazyLock::hand_over`]); a refusal breaks the port's own contract: a fatal fault.
     #[cold]
     #[inline(never)]
     fn hand_over(&self, kernel: &mut K, lazy: u32) {
-        let owner = kernel.running().map_or(IDLE, |t| t.0);
-        if kernel.get_resource(lazy_word::resource(lazy)).is_err() {
+        if !self.lazy.hand_over(kernel, lazy, IDLE) {
             self.fatal(PortFault::LockRefused);
         }
-        self.lazy
-            .store(lazy_word::handed(lazy, owner), Ordering::Relaxed);
     }
 
     /// `GetResource` outside the kernel, where the module's rules allow it: the running
-    /// task may lock `res` so (`lazy_mask`), no kernel call is under way (a hook's lock
-    /// goes to the kernel), and no other lock is kept outside the kernel. Then, under the
-    /// kernel lock, one store, and the mask of the resource's ceiling: no kernel call. The
-    /// kernel hears of the lock at the next kernel call ([`Preemptive::hand_over`]).
-    /// `false`: nothing done.
+    /// task may lock `res` so and no other lock is kept outside the kernel
+    /// ([`LazyLock::may_take`]), and no kernel call is under way (a hook's lock goes to
+    /// the kernel). Then one store where no ISR uses the resource; where ISRs share it, the
+    /// store under the kernel lock and then the mask of the resource's ceiling: no kernel
+    /// call either way. The kernel hears of the lock at the next kernel call
+    /// ([`Preemptive::hand_over`]). `false`: nothing done.
     #[inline(always)]
     fn lazy_get(&self, res: ResourceId) -> bool {
-        let mask = self.lazy_mask.load(Ordering::Relaxed);
-        if mask.checked_shr(u32::from(res.0)).unwrap_or(0) & 1 == 0
-            || self.in_kernel.load(Ordering::Relaxed)
-            || self.lazy.load(Ordering::Relaxed) != 0
-        {
+        if !self.lazy.may_take(res) || self.in_kernel.load(Ordering::Relaxed) {
             return false;
         }
         let Some(level) = self.lazy_levels.get(usize::from(res.0)) else {
@@ -742,7 +688,7 @@ impl<K: OsKernel, A: Arch> Preemptive<K, A> {
         if value == 0 {
             // A ceiling at a task's level: no ISR uses the resource, and an ISR that finds
             // the word ends with the mask of the task at that ceiling, which masks nothing.
-            self.lazy.store(lazy_word::unhanded(res), Ordering::Relaxed);
+            self.lazy.take(res);
         } else {
             // The store under the kernel lock: an ISR that finds the word finds the
             // ceiling's mask in force, which it keeps (the kernel it hands the lock to
@@ -751,7 +697,7 @@ impl<K: OsKernel, A: Arch> Preemptive<K, A> {
             // nothing.
             self.arch.lock_os();
             self.arch.may_interrupt();
-            self.lazy.store(lazy_word::unhanded(res), Ordering::Relaxed);
+            self.lazy.take(res);
             self.arch.may_interrupt();
             self.arch.set_level_value(value);
         }
@@ -766,18 +712,13 @@ impl<K: OsKernel, A: Arch> Preemptive<K, A> {
     /// the task's mask again. `false`: nothing done.
     #[inline(always)]
     fn lazy_release(&self, res: ResourceId) -> bool {
-        let lazy = self.lazy.load(Ordering::Relaxed);
-        if !lazy_word::holds(lazy, res, false) {
+        let Some(lazy) = self.lazy.unhanded_of(res) else {
             return false;
-        }
+        };
         // The resource's data is left before the release.
         compiler_fence(Ordering::SeqCst);
         self.arch.may_interrupt();
-        if self
-            .lazy
-            .compare_exchange(lazy, 0, Ordering::Relaxed, Ordering::Relaxed)
-            .is_err()
-        {
+        if !self.lazy.clear(lazy) {
             return false;
         }
         // (An ISR between the exchange and the mask finds a task that holds nothing, and
@@ -804,7 +745,7 @@ impl<K: OsKernel, A: Arch> Preemptive<K, A> {
         // The kernel's mask as a level (`InterruptMask::at_level`; `u8::MAX` is `All`), and
         // which resources the running task may lock outside the kernel now.
         let (level, lock_free) = kernel.port_view();
-        self.lazy_mask.store(lock_free, Ordering::Relaxed);
+        self.lazy.set_mask(lock_free);
         compiler_fence(Ordering::SeqCst);
         self.in_kernel.store(false, Ordering::Relaxed);
         if (level == u8::MAX) == sched.all_for_kernel {
@@ -831,9 +772,9 @@ impl<K: OsKernel, A: Arch> Preemptive<K, A> {
                 if take {
                     // The caller holds a resource now: nothing may be locked outside the
                     // kernel (`spec::fast_path_agrees`), no need to ask.
-                    self.lazy_mask.store(0, Ordering::Relaxed);
+                    self.lazy.set_mask(0);
                 } else {
-                    self.released(res);
+                    self.lazy.released(res);
                     // (The caller holds one fewer.)
                     self.ask_lock_free(kernel);
                 }
@@ -850,8 +791,8 @@ impl<K: OsKernel, A: Arch> Preemptive<K, A> {
     /// where no task above the restored priority is ready; the port then sets the OS-level
     /// mask to the level. Where the fast path declines, the full service and the port's
     /// whole carrying-out, in the same kernel lock. Out of line, so that a lock outside the
-    /// kernel takes no stack frame, and one function for both, so that the image holds the
-    /// kernel lock's entry and end once.
+    /// kernel saves no register but the frame pointer and the return address, and one
+    /// function for both, so that the image holds the kernel lock's entry and end once.
     #[inline(never)]
     fn lock_call(&self, res: ResourceId, take: bool) -> Result<(), OsError> {
         self.lock_step(res, take)
@@ -861,17 +802,7 @@ impl<K: OsKernel, A: Arch> Preemptive<K, A> {
     /// kernel now ([`OsKernel::lock_free_resources`]).
     #[inline(always)]
     fn ask_lock_free(&self, kernel: &K) {
-        self.lazy_mask
-            .store(kernel.lock_free_resources(), Ordering::Relaxed);
-    }
-
-    /// The kernel released `res`: if it was a lock kept outside the kernel and handed
-    /// over, the port's word is free again.
-    #[inline(always)]
-    fn released(&self, res: ResourceId) {
-        if lazy_word::holds(self.lazy.load(Ordering::Relaxed), res, true) {
-            self.lazy.store(0, Ordering::Relaxed);
-        }
+        self.lazy.set_mask(kernel.lock_free_resources());
     }
 
     /// The rest of a lock's kernel call whose fast path declined, with the kernel lock
@@ -893,7 +824,7 @@ impl<K: OsKernel, A: Arch> Preemptive<K, A> {
             kernel.release_resource(res)
         };
         if !take && result.is_ok() {
-            self.released(res);
+            self.lazy.released(res);
         }
         self.leave(kernel, sched);
         result
@@ -934,7 +865,7 @@ impl<K: OsKernel, A: Arch> Preemptive<K, A> {
     fn stopping(&self, sched: &mut Sched) {
         self.arch.disable_all();
         let first = !core::mem::replace(&mut sched.stopped, true);
-        self.lazy_mask.store(0, Ordering::Relaxed);
+        self.lazy.set_mask(0);
         self.in_kernel.store(false, Ordering::Relaxed);
         if first {
             self.arch.stopped();
@@ -993,6 +924,7 @@ impl<K: OsKernel, A: Arch> Preemptive<K, A> {
         let (kernel, sched) = unsafe { (&mut *self.kernel.get(), &mut *self.sched.get()) };
         kernel.shutdown_on_fault(OsError::StackFault);
         sched.stopped = true;
+        self.lazy.set_mask(0);
         // The abandoned call's flag goes: the application's end may still read the
         // kernel (its hooks' record), which a stopped OS serves.
         self.in_kernel.store(false, Ordering::Release);
@@ -1083,9 +1015,9 @@ impl<K: OsKernel, A: Arch> Port for Preemptive<K, A> {
     }
 
     /// The lock by the stack resource policy. A task's lock of one of its own resources,
-    /// holding nothing else, is kept outside the kernel: under the kernel lock one store
-    /// and the ceiling's mask, no kernel call (the module's rules). Otherwise the kernel
-    /// call `lock_call`.
+    /// holding nothing else, is kept outside the kernel: one store, under the kernel lock
+    /// and with the ceiling's mask after it where ISRs share the resource; no kernel call
+    /// (the module's rules). Otherwise the kernel call `lock_call`.
     #[inline(never)]
     fn get_resource(&self, res: ResourceId) -> Result<(), OsError> {
         if self.lazy_get(res) {
@@ -1123,9 +1055,7 @@ impl<K: OsKernel, A: Arch> Port for Preemptive<K, A> {
             if sched.ended {
                 // The job's lock kept outside the kernel, if any, was handed over at this
                 // call and released with the job (`task_returned`).
-                if lazy_word::owned_by(self.lazy.load(Ordering::Relaxed), sched.current) {
-                    self.lazy.store(0, Ordering::Relaxed);
-                }
+                self.lazy.job_ended(sched.current);
             }
             (result, sched.ended)
         });

@@ -559,9 +559,9 @@ fn long_schedules_keep_the_stacks_apart() {
 fn kernel_view(port: &TestPort) -> Kernel {
     // SAFETY: the model runs one context at a time and no kernel call is under way.
     let mut view = unsafe { *port.kernel.get() };
-    let lazy = port.lazy.load(Ordering::Relaxed);
-    if super::lazy_word::is_unhanded(lazy) {
-        let res = super::lazy_word::resource(lazy);
+    let lazy = port.lazy.word();
+    if crate::port::lazy::word::is_unhanded(lazy) {
+        let res = crate::port::lazy::word::resource(lazy);
         assert!(view.try_get_resource(res).is_some(), "the hand-over");
     }
     view
@@ -580,7 +580,7 @@ fn a_tasks_lock_outside_the_kernel_is_a_store_and_a_pair_leaves_the_kernel_untou
     let before = kernel_now(&port);
     let os_locks = port.arch().os_locks.get();
     assert_eq!(port.get_resource(tasks_only), Ok(()));
-    assert_ne!(port.lazy.load(Ordering::Relaxed), 0);
+    assert_ne!(port.lazy.word(), 0);
     assert!(kernel_now(&port) == before, "the kernel was not called");
     // No ISR uses it: the store alone, not even the kernel lock.
     assert_eq!(port.arch().os_locks.get(), os_locks);
@@ -589,12 +589,12 @@ fn a_tasks_lock_outside_the_kernel_is_a_store_and_a_pair_leaves_the_kernel_untou
     assert_eq!(kernel_view(&port).running_priority(), Some(2));
     assert_eq!(port.arch().level.get(), Some(InterruptMask::None));
     assert_eq!(port.release_resource(tasks_only), Ok(()));
-    assert_eq!(port.lazy.load(Ordering::Relaxed), 0);
+    assert_eq!(port.lazy.word(), 0);
     assert!(kernel_now(&port) == before, "the pair left no trace");
     // A resource an ISR shares too: the port masks the ISR itself, at the ceiling.
     let shared = ResourceId(0);
     assert_eq!(port.get_resource(shared), Ok(()));
-    assert_ne!(port.lazy.load(Ordering::Relaxed), 0);
+    assert_ne!(port.lazy.word(), 0);
     assert!(kernel_now(&port) == before, "the kernel was not called");
     // The store under the kernel lock, then the ceiling's mask.
     assert_eq!(port.arch().os_locks.get(), os_locks + 1);
@@ -610,7 +610,7 @@ fn a_tasks_lock_outside_the_kernel_is_a_store_and_a_pair_leaves_the_kernel_untou
     assert_eq!(kernel_now(&port).resource_owner(tasks_only), Some(LOW));
     assert_eq!(port.release_resource(tasks_only), Ok(()));
     assert_eq!(port.release_resource(shared), Ok(()));
-    assert_eq!(port.lazy.load(Ordering::Relaxed), 0);
+    assert_eq!(port.lazy.word(), 0);
     assert!(kernel_now(&port) == before, "both released");
     assert_eq!(port.arch().level.get(), Some(InterruptMask::None));
     // The pair again: the release puts the task's mask back itself.
@@ -632,13 +632,10 @@ fn the_next_kernel_call_hands_the_lock_to_the_kernel_before_anything_else() {
         assert_eq!(os.activate_task(HIGH), Ok(()));
     });
     assert!(!port.arch().switch.get(), "High waits for the release");
-    assert_ne!(
-        port.lazy.load(Ordering::Relaxed) & super::lazy_word::HANDED,
-        0
-    );
+    assert_ne!(port.lazy.word() & crate::port::lazy::word::HANDED, 0);
     // The release goes through the kernel, which switches to High.
     assert_eq!(port.release_resource(tasks_only), Ok(()));
-    assert_eq!(port.lazy.load(Ordering::Relaxed), 0);
+    assert_eq!(port.lazy.word(), 0);
     assert_eq!(kernel_now(&port).resource_owner(tasks_only), None);
     assert!(port.arch().switch.get(), "the release lets High in");
     assert_eq!(kernel_now(&port).running(), Some(HIGH));
@@ -654,7 +651,7 @@ fn a_nested_lock_of_the_same_resource_is_refused_by_the_kernel_as_ever() {
     assert_eq!(kernel_now(&port).hooks().errors(), [OsError::Access]);
     assert_eq!(kernel_now(&port).resource_owner(tasks_only), Some(LOW));
     assert_eq!(port.release_resource(tasks_only), Ok(()));
-    assert_eq!(port.lazy.load(Ordering::Relaxed), 0);
+    assert_eq!(port.lazy.word(), 0);
     assert_eq!(kernel_now(&port).resource_owner(tasks_only), None);
 }
 
@@ -669,7 +666,7 @@ fn a_job_that_ends_holding_a_lock_outside_the_kernel_gives_it_back() {
         let _ = port.end_job(|os| os.terminate_task());
     });
     assert_eq!(end, End::JobOver);
-    assert_eq!(port.lazy.load(Ordering::Relaxed), 0);
+    assert_eq!(port.lazy.word(), 0);
     let kernel = kernel_now(&port);
     assert_eq!(kernel.resource_owner(tasks_only), None);
     assert_eq!(
@@ -683,19 +680,19 @@ fn isrs_hooks_and_tasks_under_an_interrupt_lock_lock_through_the_kernel() {
     let port = started();
     // In an ISR (after its entry): the lock goes to the kernel.
     port.kernel(|os| os.enter_isr(IsrId(0))).expect("enter");
-    assert_eq!(port.lazy_mask.load(Ordering::Relaxed), 0);
+    assert_eq!(port.lazy.mask(), 0);
     assert_eq!(port.get_resource(ResourceId(0)), Ok(()));
-    assert_eq!(port.lazy.load(Ordering::Relaxed), 0);
+    assert_eq!(port.lazy.word(), 0);
     assert_eq!(port.release_resource(ResourceId(0)), Ok(()));
     port.kernel(|os| os.exit_isr()).expect("exit");
     // Back in Low, which may again.
-    assert_eq!(port.lazy_mask.load(Ordering::Relaxed), 0b11);
+    assert_eq!(port.lazy.mask(), 0b11);
     // Under SuspendOSInterrupts: the kernel refuses the lock (E_OS_CALLEVEL in AUTOSAR).
     port.kernel(|os| os.suspend_os_interrupts())
         .expect("suspend");
-    assert_eq!(port.lazy_mask.load(Ordering::Relaxed), 0);
+    assert_eq!(port.lazy.mask(), 0);
     assert!(port.get_resource(ResourceId(1)).is_err());
-    assert_eq!(port.lazy.load(Ordering::Relaxed), 0);
+    assert_eq!(port.lazy.word(), 0);
     port.kernel(|os| os.resume_os_interrupts()).expect("resume");
     // Inside a kernel call (a hook's lock would be one): never outside the kernel.
     port.in_kernel.store(true, Ordering::Relaxed);
@@ -854,7 +851,7 @@ fn take_pending(model: &Model, point: bool) {
     if !model.admits(if pending.tick { 1 } else { 2 }) {
         return;
     }
-    let locked = pending.port.lazy.load(Ordering::Relaxed) != 0;
+    let locked = pending.port.lazy.word() != 0;
     pending.taken = Some(locked);
     PENDING.set(Some(pending));
     interrupt(pending.port, pending.tick);

@@ -1,0 +1,196 @@
+//! A task's lock kept outside the kernel, the part both ports share: the port's word that
+//! holds the lock, the kernel's answer to which resources the running task may lock so
+//! ([`OsKernel::lock_free_resources`]), the lock's hand-over to the kernel at the next
+//! kernel call, and the release. The rules are in the preemptive port's module
+//! (`preempt`), which adds the interrupt masks a CPU needs around the store; the host
+//! port, whose interrupts come only between jobs, keeps the lock with the store alone.
+//!
+//! The book: [the OS](../../../../book/os.html), "A task's lock outside the kernel".
+
+use core::sync::atomic::{AtomicU32, Ordering};
+
+use cw_core::os::ResourceId;
+
+use super::OsKernel;
+
+/// The word's layout, one place for it: the resource + 1 (bits 0-7; 0: no lock), the
+/// task + 1 once handed over (bits 8-15), and [`HANDED`](word::HANDED).
+pub(crate) mod word {
+    use cw_core::os::ResourceId;
+
+    /// The bit that says the kernel holds the lock for the task.
+    pub const HANDED: u32 = 1 << 16;
+    const RES: u32 = 0xFF;
+    const OWNER_SHIFT: u32 = 8;
+
+    /// A lock of `res` that no kernel call has seen.
+    pub const fn unhanded(res: ResourceId) -> u32 {
+        res.0 as u32 + 1
+    }
+
+    /// `lazy`, handed to the kernel for task slot `owner`.
+    pub const fn handed(lazy: u32, owner: u8) -> u32 {
+        lazy | HANDED | (owner as u32 + 1) << OWNER_SHIFT
+    }
+
+    /// Whether `lazy` is a lock no kernel call has seen.
+    pub const fn is_unhanded(lazy: u32) -> bool {
+        lazy != 0 && lazy & HANDED == 0
+    }
+
+    /// The resource of a lock (of a word that holds one).
+    pub const fn resource(lazy: u32) -> ResourceId {
+        ResourceId(((lazy & RES) as u8).wrapping_sub(1))
+    }
+
+    /// Whether `lazy` is a lock of `res`, handed over (`handed`) or not.
+    pub const fn holds(lazy: u32, res: ResourceId, handed: bool) -> bool {
+        // (The owner's bits cleared: one instruction on the Cortex-M.)
+        lazy & !(RES << OWNER_SHIFT) == unhanded(res) | if handed { HANDED } else { 0 }
+    }
+
+    /// Whether `lazy` was handed over for task slot `owner`.
+    pub const fn owned_by(lazy: u32, owner: u8) -> bool {
+        (lazy >> OWNER_SHIFT) & RES == owner as u32 + 1
+    }
+}
+
+/// The lock kept outside the kernel (at most one) and the kernel's last answer to which
+/// resources the running task may lock so.
+#[derive(Debug)]
+pub(crate) struct LazyLock {
+    /// 0, or the lock, and once a kernel call has handed it to the kernel, its task
+    /// ([`word`]).
+    word: AtomicU32,
+    /// The resources the running task may lock outside the kernel, one bit each: the
+    /// kernel's answer at the end of the last kernel call, 0 after a lock by the kernel's
+    /// fast path (the caller then holds a resource).
+    mask: AtomicU32,
+}
+
+impl LazyLock {
+    /// No lock, and no resource the running task may lock outside the kernel (until the
+    /// first kernel call's answer).
+    pub(crate) const fn new() -> Self {
+        Self {
+            word: AtomicU32::new(0),
+            mask: AtomicU32::new(0),
+        }
+    }
+
+    /// Whether the running task may lock `res` outside the kernel now: the kernel's last
+    /// answer names it and no other lock is kept so. (The port adds that no kernel call
+    /// is under way.)
+    #[inline(always)]
+    pub(crate) fn may_take(&self, res: ResourceId) -> bool {
+        let mask = self.mask.load(Ordering::Relaxed);
+        mask.checked_shr(u32::from(res.0)).unwrap_or(0) & 1 != 0
+            && self.word.load(Ordering::Relaxed) == 0
+    }
+
+    /// The lock of `res`, one store (where [`LazyLock::may_take`] allowed it).
+    #[inline(always)]
+    pub(crate) fn take(&self, res: ResourceId) {
+        self.word.store(word::unhanded(res), Ordering::Relaxed);
+    }
+
+    /// The word, where it holds a lock of `res` that no kernel call has seen: what
+    /// [`LazyLock::clear`] takes back.
+    #[inline(always)]
+    pub(crate) fn unhanded_of(&self, res: ResourceId) -> Option<u32> {
+        let lazy = self.word.load(Ordering::Relaxed);
+        word::holds(lazy, res, false).then_some(lazy)
+    }
+
+    /// The release of a lock no kernel call has seen: one exchange of `lazy` (what
+    /// [`LazyLock::unhanded_of`] found) back to 0, which fails where a kernel call (an
+    /// ISR's) handed the lock over meanwhile. `false`: nothing done.
+    #[inline(always)]
+    pub(crate) fn clear(&self, lazy: u32) -> bool {
+        self.word
+            .compare_exchange(lazy, 0, Ordering::Relaxed, Ordering::Relaxed)
+            .is_ok()
+    }
+
+    /// The release of a lock of `res` that no kernel call has seen, where nothing can come
+    /// between the test and the store (the host port: no interrupt comes inside a job):
+    /// the word back to 0, without the exchange a CPU needs (a locked instruction on the
+    /// host). `false`: nothing done.
+    #[cfg(feature = "host")]
+    #[inline(always)]
+    pub(crate) fn clear_alone(&self, res: ResourceId) -> bool {
+        if self.unhanded_of(res).is_none() {
+            return false;
+        }
+        self.word.store(0, Ordering::Relaxed);
+        true
+    }
+
+    /// The word where it holds a lock no kernel call has seen, which the kernel call
+    /// beginning now must hand over ([`LazyLock::hand_over`]) before anything else.
+    #[inline(always)]
+    pub(crate) fn to_hand_over(&self) -> Option<u32> {
+        let lazy = self.word.load(Ordering::Relaxed);
+        word::is_unhanded(lazy).then_some(lazy)
+    }
+
+    /// A lock kept outside the kernel meets the first kernel call since: the kernel's
+    /// `GetResource` takes it now, for the running task (slot `idle` where none runs), in
+    /// the task's call level (the call's own entry, an ISR's among them, comes after). So
+    /// the call, and every decision it makes, sees the lock. The service, not its fast
+    /// path: this is rare, and an image holds the service once (the ports call this from
+    /// a function of their own kept out of line). `false`: the kernel refused it (the
+    /// ports' contract broken), and the word is as it was.
+    #[inline(always)]
+    pub(crate) fn hand_over<K: OsKernel>(&self, kernel: &mut K, lazy: u32, idle: u8) -> bool {
+        let owner = kernel.running().map_or(idle, |t| t.0);
+        if kernel.get_resource(word::resource(lazy)).is_err() {
+            return false;
+        }
+        self.word
+            .store(word::handed(lazy, owner), Ordering::Relaxed);
+        true
+    }
+
+    /// The lock is no longer kept (the kernel refused it at its hand-over).
+    #[cfg(feature = "host")]
+    pub(crate) fn drop_lock(&self) {
+        self.word.store(0, Ordering::Relaxed);
+    }
+
+    /// The kernel released `res`: if it was a lock kept outside the kernel and handed
+    /// over, the word is free again.
+    #[inline(always)]
+    pub(crate) fn released(&self, res: ResourceId) {
+        if word::holds(self.word.load(Ordering::Relaxed), res, true) {
+            self.word.store(0, Ordering::Relaxed);
+        }
+    }
+
+    /// The job of task slot `owner` ended, its locks released with it: its lock, if one
+    /// was handed over, is no longer kept.
+    pub(crate) fn job_ended(&self, owner: u8) {
+        if word::owned_by(self.word.load(Ordering::Relaxed), owner) {
+            self.word.store(0, Ordering::Relaxed);
+        }
+    }
+
+    /// The kernel's answer at the end of a kernel call ([`OsKernel::lock_free_resources`],
+    /// or 0 where the caller holds a resource).
+    #[inline(always)]
+    pub(crate) fn set_mask(&self, lock_free: u32) {
+        self.mask.store(lock_free, Ordering::Relaxed);
+    }
+
+    /// The kernel's last answer.
+    #[cfg(test)]
+    pub(crate) fn mask(&self) -> u32 {
+        self.mask.load(Ordering::Relaxed)
+    }
+
+    /// The word.
+    #[cfg(test)]
+    pub(crate) fn word(&self) -> u32 {
+        self.word.load(Ordering::Relaxed)
+    }
+}
