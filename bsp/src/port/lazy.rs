@@ -194,3 +194,30 @@ impl LazyLock {
         self.word.load(Ordering::Relaxed)
     }
 }
+
+/// The harness both ports' tests run (a bolero test and fuzz target): any sequence of
+/// steps (the first 24 bytes, each one `step` on the port and on the reference kernel),
+/// from `start`'s port and, as the reference, the kernel it holds (`now`); after each
+/// step, the kernel a kernel call would see (`view`: the lock kept outside it handed
+/// over) is the reference kernel, the one called for every lock.
+#[cfg(test)]
+pub(crate) fn check_any_steps<P, K: PartialEq>(
+    start: impl Fn() -> P + core::panic::RefUnwindSafe,
+    now: impl Fn(&P) -> K + core::panic::RefUnwindSafe,
+    step: impl Fn(&P, &mut K, u8) + core::panic::RefUnwindSafe,
+    view: impl Fn(&P) -> K + core::panic::RefUnwindSafe,
+) {
+    bolero::check!()
+        .with_type::<std::vec::Vec<u8>>()
+        .for_each(|ops| {
+            let port = start();
+            let mut reference = now(&port);
+            for &op in ops.iter().take(24) {
+                step(&port, &mut reference, op);
+                assert!(
+                    view(&port) == reference,
+                    "after {op}: the kernel differs from the one called for every lock"
+                );
+            }
+        });
+}

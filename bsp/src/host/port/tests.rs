@@ -2,8 +2,6 @@
 //! kernel at the next kernel call, and any sequence of locks, releases, ISRs and kernel
 //! calls leaving the kernel as kernel calls would.
 
-use std::vec::Vec;
-
 use cw_core::os::{
     CounterConfig, IsrConfig, IsrId, Os, OsConfig, OsDescription, OsError, ResourceId, TaskConfig,
     TaskId, OSDEFAULTAPPMODE,
@@ -11,7 +9,7 @@ use cw_core::os::{
 
 use super::HostPort;
 use crate::host::clock::VirtualClock;
-use crate::port::lazy::word;
+use crate::port::lazy::{check_any_steps, word};
 use crate::port::Port;
 
 const LOW: TaskId = TaskId(0);
@@ -165,15 +163,5 @@ fn step_on_both(port: &HostPort<Kernel>, reference: &mut Kernel, op: u8) {
 /// every call returned the same. (A bolero test and fuzz target.)
 #[test]
 fn any_locks_and_calls_leave_the_kernel_as_kernel_calls_would() {
-    bolero::check!().with_type::<Vec<u8>>().for_each(|ops| {
-        let port = started();
-        let mut reference = kernel_now(&port);
-        for &op in ops.iter().take(24) {
-            step_on_both(&port, &mut reference, op);
-            assert!(
-                kernel_view(&port) == reference,
-                "after {op}: the kernel differs from the one called for every lock"
-            );
-        }
-    });
+    check_any_steps(started, kernel_now, step_on_both, kernel_view);
 }

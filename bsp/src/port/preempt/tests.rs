@@ -16,6 +16,7 @@ use cw_core::os::{
 
 use super::spec;
 use super::{check, Arch, InterruptMask, PortFault, Preemptive, Refusal, IDLE, MAX_TASKS};
+use crate::port::lazy::check_any_steps;
 use crate::port::Port;
 
 const LOW: TaskId = TaskId(0);
@@ -737,17 +738,7 @@ fn lock_step_on_both(port: &TestPort, reference: &mut Kernel, op: u8) {
 /// and every call returned the same. (A bolero test and fuzz target.)
 #[test]
 fn any_locks_and_calls_leave_the_kernel_as_kernel_calls_would() {
-    bolero::check!().with_type::<Vec<u8>>().for_each(|ops| {
-        let port = started();
-        let mut reference = kernel_now(&port);
-        for &op in ops.iter().take(24) {
-            lock_step_on_both(&port, &mut reference, op);
-            assert!(
-                kernel_view(&port) == reference,
-                "after {op}: the kernel differs from the one called for every lock"
-            );
-        }
-    });
+    check_any_steps(started, kernel_now, lock_step_on_both, kernel_view);
 }
 
 std::thread_local! {
