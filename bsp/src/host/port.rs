@@ -19,7 +19,7 @@ use cw_core::os::{
 
 use super::clock::VirtualClock;
 use crate::port::lazy::LazyLock;
-use crate::port::{OsKernel, Port};
+use crate::port::{lock_in_kernel, OsKernel, Port};
 
 /// The task slot a lock kept outside the kernel is handed over for when no task runs
 /// (never: the kernel names no resource then).
@@ -95,17 +95,8 @@ impl<K: OsKernel> HostPort<K> {
     #[inline(never)]
     fn lock_call(&self, res: ResourceId, take: bool) -> Result<(), OsError> {
         self.kernel(|os| {
-            if take {
-                return match os.try_get_resource(res) {
-                    Some(_) => Ok(()),
-                    None => os.get_resource(res),
-                };
-            }
-            let result = match os.try_release_resource(res) {
-                Some(_) => Ok(()),
-                None => os.release_resource(res),
-            };
-            if result.is_ok() {
+            let result = lock_in_kernel(os, res, take);
+            if !take && result.is_ok() {
                 self.lazy.released(res);
             }
             result

@@ -197,6 +197,27 @@ where
     }
 }
 
+/// `GetResource` (`take`) or `ReleaseResource` on the kernel: its fast path where it
+/// applies, else the full service (which decides, refuses and reports).
+#[inline]
+pub(crate) fn lock_in_kernel<K: OsKernel>(
+    os: &mut K,
+    res: ResourceId,
+    take: bool,
+) -> Result<(), OsError> {
+    if take {
+        match os.try_get_resource(res) {
+            Some(_) => Ok(()),
+            None => os.get_resource(res),
+        }
+    } else {
+        match os.try_release_resource(res) {
+            Some(_) => Ok(()),
+            None => os.release_resource(res),
+        }
+    }
+}
+
 /// How the ECU reaches the kernel on a board.
 pub trait Port {
     /// The kernel type.
@@ -233,10 +254,7 @@ pub trait Port {
     /// As the kernel's service.
     #[inline]
     fn get_resource(&self, res: ResourceId) -> Result<(), OsError> {
-        self.kernel(|os| match os.try_get_resource(res) {
-            Some(_) => Ok(()),
-            None => os.get_resource(res),
-        })
+        self.kernel(|os| lock_in_kernel(os, res, true))
     }
 
     /// Releases a resource (`ReleaseResource`), as [`Port::get_resource`] takes it.
@@ -245,10 +263,7 @@ pub trait Port {
     /// As the kernel's service.
     #[inline]
     fn release_resource(&self, res: ResourceId) -> Result<(), OsError> {
-        self.kernel(|os| match os.try_release_resource(res) {
-            Some(_) => Ok(()),
-            None => os.release_resource(res),
-        })
+        self.kernel(|os| lock_in_kernel(os, res, false))
     }
 
     /// The OS tick, category-2 ISR `isr` whose whole body is `IncrementCounter(counter)`,
