@@ -46,6 +46,7 @@ pub mod chip;
 #[cfg(feature = "host")]
 pub mod host;
 pub mod icount;
+pub mod mem;
 pub mod mpc5748g;
 pub mod port;
 pub mod ring;

@@ -211,6 +211,21 @@ mod targets {
             .for_each(|steps| assert!(cw_bsp::port::preempt::spec::stacks_stay_apart(steps)));
     }
 
+    /// Any copy, move (overlapping or not) and fill, at any alignment and length in 64
+    /// bytes: the Cortex-M images' memory functions leave the bytes the standard
+    /// library's copies and fills leave (`cw_bsp::mem::spec`).
+    #[test]
+    fn mem_functions() {
+        use cw_bsp::mem::spec::{all_agree, Buf};
+        bolero::check!()
+            .with_type::<([u8; 64], [u8; 4])>()
+            .for_each(|(bytes, ops)| {
+                let mut b = Buf(*bytes);
+                b.0.reverse();
+                assert!(all_agree(&Buf(*bytes), &b, *ops));
+            });
+    }
+
     /// Any writes, received bytes, transmitter room and interrupt work on the SLCAN
     /// controller over a model UART: each accepted frame confirmed once, in order, its
     /// line out whole (`cw_bsp::slcan::spec`).

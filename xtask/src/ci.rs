@@ -20,6 +20,7 @@ pub const FUZZ_TARGETS: &[&str] = &[
     "targets::blf_bytes",
     "targets::view_replay",
     "targets::port_switch",
+    "targets::mem_functions",
     "targets::wdgm_alive",
     "targets::slcan_controller",
     "targets::bit_timing",
@@ -76,12 +77,12 @@ const BUDGET_S: &[(&str, u32)] = &[
     ("coverage", 215),
     ("mutants", 80),
     ("mutation", 280),
-    ("qemu", 112),
+    ("qemu", 100),
     ("differential", 6),
     ("interop", 15),
     ("view", 6),
     ("docs", 160),
-    ("fuzz", 340),
+    ("fuzz", 352),
     ("bench", 70),
 ];
 
