@@ -19,7 +19,10 @@
 //!   kernel's interrupt mask allows, saves r4-r11 (and s16-s31 when the task used the FPU)
 //!   on the outgoing task's stack and restores the incoming one's. A higher-priority task
 //!   activated by a task therefore starts the moment the service returns; one activated
-//!   by an ISR starts when the last nested ISR returns (tail-chained).
+//!   by an ISR starts when the last nested ISR returns (tail-chained). A new job of a
+//!   basic task that a basic task's own kernel call lets in (thread mode, PRIMASK clear)
+//!   starts without PendSV: the port calls it at the end of the kernel call, on the
+//!   caller's stack, and the call returns when the job has ended.
 //! - **Stacks.** OSEK basic tasks run to completion and preempt each other in LIFO order,
 //!   so they share one stack: a new job's first frame is built just below the deepest
 //!   preempted job. The idle loop is the stack's bottom. An extended task (whose
@@ -54,7 +57,10 @@
 //! context kept), and the verified kernel's decision would be duplicated by a second
 //! scheduler that must be shown to agree with it. Here the kernel is the only scheduler,
 //! and the cost is a software context switch (its instructions are counted in the book:
-//! `docs/src/performance.md`).
+//! `docs/src/performance.md`), except where a task lets in a basic task by its own kernel
+//! call: that job starts by a plain call on the caller's stack, at the end of the kernel
+//! call ([`crate::port::preempt`], "A new job by a call"; `Arch::may_call_job` here: thread
+//! mode, PRIMASK clear).
 //!
 //! NVIC priorities (3 priority bits are assumed, the fewest a Cortex-M4 implements): an
 //! OSEK ISR of priority `p` (1 to 6, either category) gets `0xE0 - 0x20 * p`; PendSV gets
@@ -295,6 +301,22 @@ impl Arch for CortexM {
             return;
         }
         trace::mark(mark);
+    }
+
+    #[inline(always)]
+    fn may_call_job(&self) -> bool {
+        // Thread mode (IPSR 0: a task's code, no exception active) and PRIMASK clear.
+        let ipsr: u32;
+        // SAFETY: reads IPSR, no side effect.
+        unsafe { core::arch::asm!("mrs {}, ipsr", out(reg) ipsr, options(nomem, nostack)) };
+        ipsr & 0x1FF == 0 && !self.all_masked()
+    }
+
+    #[inline(always)]
+    fn call_job(&self, task: u8) {
+        if let Some(app) = app() {
+            app.run_job(TaskId(task));
+        }
     }
 }
 

@@ -23,6 +23,17 @@
 //!   stack; a job that ends gives its part back. A task that can wait (an extended task)
 //!   keeps its context while lower tasks run, so it must have a stack of its own: the
 //!   port refuses to start otherwise ([`check`]), naming the task.
+//! - **A new job by a call.** Where a job on the shared stack lets in, by its own kernel
+//!   call, a new job of a task on the shared stack (an `ActivateTask`, a `Schedule`, a
+//!   `ReleaseResource`, a `SetEvent` that wakes nothing with a stack of its own), and the
+//!   CPU runs a task's code with no critical section of the caller's own
+//!   ([`Arch::may_call_job`]), the port calls the new job at the end of that kernel
+//!   call, on the caller's stack, instead of requesting the switch exception: the LIFO
+//!   order above makes the new job end before its caller resumes, as a call does. Its end
+//!   gives the context back to the caller ([`back_to_caller`]), whose call returns; if the
+//!   kernel then chose another job, the switch exception saves the context as the
+//!   caller's. The kernel's decisions and state are the same either way: only how the
+//!   port carries out a switch changes (`spec::stacks_stay_apart` covers both ways).
 //! - **A job that cannot end** (its `TerminateTask` refused: interrupts left disabled, a
 //!   resource still held) is ended by the kernel's `task_returned` (`E_OS_MISSINGEND` to
 //!   the ErrorHook, its resources and locks released, as AUTOSAR's SWS_Os_00052 and
@@ -157,6 +168,14 @@ pub trait Arch {
     /// harness checks every place between two stores.
     #[inline(always)]
     fn may_interrupt(&self) {}
+    /// Whether a new job may start here by a call, on the running context's stack: the
+    /// CPU runs a task's code (no ISR or exception active) and every interrupt is
+    /// unmasked but for the OS level's mask (no critical section of the caller's own,
+    /// which a switch must wait for). `false` keeps every switch the switch exception's.
+    fn may_call_job(&self) -> bool;
+    /// Runs a job of `task` from its first line to its end (the application's job entry),
+    /// as a call: it returns once the job has ended and its caller goes on.
+    fn call_job(&self, task: u8);
 }
 
 /// A mark the port passes to the CPU's task trace.
@@ -330,6 +349,9 @@ pub struct Sched {
     started: u32,
     /// The shared stack's top when each job on it started (given back when it ends).
     job_base: [u32; MAX_TASKS],
+    /// Of each job started by a call ([`start_by_call`]), the slot of the job that called
+    /// it, which goes on when it ends, plus one; 0 for a job the switch started.
+    called_from: [u8; MAX_TASKS],
     /// Where the next new job's first frame goes on the shared stack.
     basic_top: u32,
     /// The shared stack: (lowest address, top).
@@ -352,6 +374,7 @@ impl Sched {
             sp: [0; MAX_TASKS + 1],
             started: 0,
             job_base: [0; MAX_TASKS],
+            called_from: [0; MAX_TASKS],
             basic_top: 0,
             shared: (0, 0),
             own_stack: [(0, 0); MAX_TASKS],
@@ -363,6 +386,25 @@ impl Sched {
     /// Whether `slot` runs on the shared stack.
     fn on_shared(&self, slot: usize) -> bool {
         self.own_stack.get(slot).is_none_or(|r| r.1 == 0)
+    }
+
+    /// Whether the job under way in `slot` was started by a call.
+    fn was_called(&self, slot: usize) -> bool {
+        self.called_from.get(slot).is_some_and(|&from| from != 0)
+    }
+
+    /// The slot that called the job under way in `slot`, if a call started it.
+    pub fn caller_of(&self, slot: usize) -> Option<u8> {
+        self.called_from
+            .get(slot)
+            .and_then(|&from| from.checked_sub(1))
+    }
+
+    /// Gives `slot` its own stack `bottom .. top` (nothing if out of range).
+    pub(crate) fn set_own_stack(&mut self, slot: usize, bottom: u32, top: u32) {
+        if let Some(own) = self.own_stack.get_mut(slot) {
+            *own = (bottom, top);
+        }
     }
 
     /// The stack of `slot`: (lowest address, top).
@@ -452,6 +494,56 @@ pub fn decide(s: &mut Sched, sp: u32, guard_bytes: u32) -> Switch {
         task: next as u8,
         top,
     }
+}
+
+/// What the end of a kernel call returns where no job starts by a call (else the task).
+const NO_CALL: u8 = IDLE;
+
+/// Whether the kernel's choice `s.next` may start by a call from the running job: a new
+/// job of a task on the shared stack, the running context a job on the shared stack that
+/// goes on (OSEK's basic tasks start and end in LIFO order there, so the new job ends
+/// before its caller resumes, as a call does).
+pub fn callable(s: &Sched) -> bool {
+    let (current, next) = (usize::from(s.current), usize::from(s.next));
+    // (A job under way has its bit in `started`: `next` is not `current`.)
+    !s.ended
+        && current < MAX_TASKS
+        && next < MAX_TASKS
+        && s.started & (1 << next) == 0
+        && s.on_shared(current)
+        && s.on_shared(next)
+}
+
+/// The bookkeeping of a new job of `s.next` started by a call ([`callable`]): it runs
+/// on the running job's stack below the call, and its caller's context is the call
+/// chain above it. The port writes nothing on the stack for it (a switch away from the
+/// new job saves the new job's stack pointer, below both), so there is no check of the
+/// stack pointer here: the call is one more call of the caller's, under the same guard.
+pub fn start_by_call(s: &mut Sched) {
+    let next = usize::from(s.next);
+    if let Some(from) = s.called_from.get_mut(next) {
+        *from = s.current + 1;
+    }
+    s.started |= 1 << next;
+    s.current = s.next;
+}
+
+/// The running job ended and was started by a call: the context is its caller's again
+/// (whose call returns once the ended job's frames are left), and the switch, if the
+/// kernel chose another job, saves it as the caller's. `false`: not such a job, nothing
+/// done.
+pub fn back_to_caller(s: &mut Sched) -> bool {
+    let current = usize::from(s.current);
+    let Some(from) = s.called_from.get_mut(current) else {
+        return false;
+    };
+    if !s.ended || *from == 0 {
+        return false;
+    }
+    s.current = core::mem::take(from) - 1;
+    s.started &= !(1 << current);
+    s.ended = false;
+    true
 }
 
 /// The preemptive port of a kernel `K` on a CPU `A`.
@@ -556,14 +648,16 @@ impl<K: OsKernel, A: Arch> Preemptive<K, A> {
                 .chain(core::iter::once(&s.shared))
                 .any(|&(b, t)| t != 0 && bottom < t && b < top);
             let fits = top > bottom && top - bottom >= A::GUARD_BYTES + 2 * A::FIRST_FRAME_BYTES;
-            match s.own_stack.get_mut(usize::from(task.0)) {
-                None => Some("task out of range"),
-                Some(_) if !fits => Some("too small for its guard and a frame"),
-                Some(_) if overlaps => Some("overlaps another stack"),
-                Some(slot) => {
-                    *slot = (bottom, top);
-                    None
-                }
+            let slot = usize::from(task.0);
+            if slot >= MAX_TASKS {
+                Some("task out of range")
+            } else if !fits {
+                Some("too small for its guard and a frame")
+            } else if overlaps {
+                Some("overlaps another stack")
+            } else {
+                s.set_own_stack(slot, bottom, top);
+                None
             }
         });
         if let Some(why) = refused {
@@ -628,7 +722,7 @@ impl<K: OsKernel, A: Arch> Preemptive<K, A> {
     fn locked<R>(&self, f: impl FnOnce(&mut K, &mut Sched) -> R) -> R {
         let (kernel, sched) = self.enter();
         let result = f(kernel, sched);
-        self.leave(kernel, sched);
+        self.leave();
         result
     }
 
@@ -645,14 +739,24 @@ impl<K: OsKernel, A: Arch> Preemptive<K, A> {
         }
         self.in_kernel.store(true, Ordering::Relaxed);
         compiler_fence(Ordering::SeqCst);
-        // SAFETY: the kernel lock masks every ISR that may call the OS and the switch, and
-        // this caller turned `in_kernel` on: the only references until `leave` turns it
-        // off.
-        let (kernel, sched) = unsafe { (&mut *self.kernel.get(), &mut *self.sched.get()) };
+        let (kernel, sched) = self.tables();
         if let Some(lazy) = self.lazy.to_hand_over() {
             self.hand_over(kernel, lazy);
         }
         (kernel, sched)
+    }
+
+    /// The kernel and the tables, in a kernel call (the kernel lock taken, `in_kernel`
+    /// on): the references of [`Preemptive::enter`], taken again by the call's end, which
+    /// must not be given them as arguments (a job it starts by a call makes kernel calls
+    /// of its own, and takes them again).
+    #[inline(always)]
+    #[allow(clippy::mut_from_ref)]
+    fn tables(&self) -> (&mut K, &mut Sched) {
+        // SAFETY: the kernel lock masks every ISR that may call the OS and the switch, and
+        // the caller turned `in_kernel` on: the only references until `leave` turns it off
+        // (each caller takes them once, and the earlier ones are not used after).
+        unsafe { (&mut *self.kernel.get(), &mut *self.sched.get()) }
     }
 
     /// A task's lock kept outside the kernel meets the first kernel call since
@@ -730,9 +834,14 @@ impl<K: OsKernel, A: Arch> Preemptive<K, A> {
 
     /// Carries out what the kernel decided and ends the kernel lock: the OS-level mask,
     /// every-interrupt masking if the kernel's mask changed it, the task switch, or the
-    /// end of the OS.
+    /// end of the OS. A job started by a call that ended gives the context back to its
+    /// caller ([`back_to_caller`]). A new job the running job's own kernel call let in
+    /// starts by a call where it may ([`callable`], [`Arch::may_call_job`]), once the
+    /// kernel lock has ended and the references to the kernel and the tables are no
+    /// longer used ([`Preemptive::call_job`]).
     #[inline]
-    fn leave(&self, kernel: &mut K, sched: &mut Sched) {
+    fn leave(&self) {
+        let (kernel, sched) = self.tables();
         let next = kernel.running().map_or(IDLE, |t| t.0);
         if next == IDLE && kernel.is_shut_down() {
             self.stopping(sched);
@@ -740,10 +849,37 @@ impl<K: OsKernel, A: Arch> Preemptive<K, A> {
         }
         sched.next = next;
         if next != sched.current || sched.ended {
-            self.arch.request_switch();
+            // (An ISR's kernel call, the common one here, is decided at once: the switch
+            // exception, after the ISR.)
+            let call = if sched.ended {
+                if sched.was_called(usize::from(sched.current)) {
+                    self.switch_or_call(sched, false)
+                } else {
+                    // A job the switch started ended: the switch frees its part of the
+                    // stack.
+                    self.arch.request_switch();
+                    NO_CALL
+                }
+            } else if self.arch.may_call_job() {
+                self.switch_or_call(sched, true)
+            } else {
+                self.arch.request_switch();
+                NO_CALL
+            };
+            if call != NO_CALL {
+                self.end_lock(kernel, sched);
+                self.call_job(call);
+                return;
+            }
         }
-        // The kernel's mask as a level (`InterruptMask::at_level`; `u8::MAX` is `All`), and
-        // which resources the running task may lock outside the kernel now.
+        self.end_lock(kernel, sched);
+    }
+
+    /// The kernel lock's end: the kernel's mask as a level (`InterruptMask::at_level`;
+    /// `u8::MAX` is `All`), and which resources the running task may lock outside the
+    /// kernel now.
+    #[inline(always)]
+    fn end_lock(&self, kernel: &K, sched: &mut Sched) {
         let (level, lock_free) = kernel.port_view();
         self.lazy.set_mask(lock_free);
         compiler_fence(Ordering::SeqCst);
@@ -756,12 +892,52 @@ impl<K: OsKernel, A: Arch> Preemptive<K, A> {
         }
     }
 
+    /// The kernel chose another job, or the running one ended. A job started by a call
+    /// that ended gives the context back to its caller ([`back_to_caller`]), which may be
+    /// the kernel's choice. Otherwise the switch to the kernel's choice: by a call where
+    /// the job may start so ([`callable`], [`Arch::may_call_job`]; its task returned, the
+    /// bookkeeping done), else the switch exception requested. `may_call`: what
+    /// [`Arch::may_call_job`] answered, for a job that goes on (asked here for the caller
+    /// of a job that ended).
+    #[inline(never)]
+    fn switch_or_call(&self, sched: &mut Sched, may_call: bool) -> u8 {
+        let may_call = if sched.ended {
+            if back_to_caller(sched) && sched.next == sched.current {
+                return NO_CALL;
+            }
+            self.arch.may_call_job()
+        } else {
+            may_call
+        };
+        if may_call && callable(sched) {
+            start_by_call(sched);
+            return sched.current;
+        }
+        self.arch.request_switch();
+        NO_CALL
+    }
+
+    /// A job started by a call ([`start_by_call`]), with the kernel lock ended: the
+    /// application's job entry, which returns once the job has ended and the context is
+    /// its caller's again ([`back_to_caller`]). A job that returns without its end is a
+    /// fatal fault, as for a job the switch started.
+    #[inline(never)]
+    fn call_job(&self, task: u8) {
+        self.arch.call_job(task);
+        // SAFETY: a read of the caller's own slot, which no kernel call changes but the
+        // job's end (before this point) or this job's start; no reference to the tables
+        // is held here.
+        if unsafe { (*self.sched.get()).was_called(usize::from(task)) } {
+            self.fatal(PortFault::Board("a job returned"));
+        }
+    }
+
     /// A lock's kernel call (`take`: `GetResource`, else `ReleaseResource`): the kernel's
     /// fast path under the kernel lock, then the level's mask; where it declines, the full
     /// service and the port's whole carrying-out.
     #[inline(always)]
     fn lock_step(&self, res: ResourceId, take: bool) -> Result<(), OsError> {
-        let (kernel, sched) = self.enter();
+        let (kernel, _) = self.enter();
         let fast = if take {
             kernel.try_get_resource(res)
         } else {
@@ -781,7 +957,7 @@ impl<K: OsKernel, A: Arch> Preemptive<K, A> {
                 self.leave_at(level);
                 Ok(())
             }
-            None => self.lock_service(kernel, sched, res, take),
+            None => self.lock_service(res, take),
         }
     }
 
@@ -811,13 +987,8 @@ impl<K: OsKernel, A: Arch> Preemptive<K, A> {
     /// function for both, so that the image holds the carrying-out once.
     #[cold]
     #[inline(never)]
-    fn lock_service(
-        &self,
-        kernel: &mut K,
-        sched: &mut Sched,
-        res: ResourceId,
-        take: bool,
-    ) -> Result<(), OsError> {
+    fn lock_service(&self, res: ResourceId, take: bool) -> Result<(), OsError> {
+        let (kernel, _) = self.tables();
         let result = if take {
             kernel.get_resource(res)
         } else {
@@ -826,7 +997,7 @@ impl<K: OsKernel, A: Arch> Preemptive<K, A> {
         if !take && result.is_ok() {
             self.lazy.released(res);
         }
-        self.leave(kernel, sched);
+        self.leave();
         result
     }
 
@@ -1004,13 +1175,13 @@ impl<K: OsKernel, A: Arch> Port for Preemptive<K, A> {
         counter: CounterId,
         whole: impl FnOnce(&mut K) -> R,
     ) -> Option<R> {
-        let (kernel, sched) = self.enter();
+        let (kernel, _) = self.enter();
         if let Some(level) = kernel.try_tick(isr, counter) {
             self.leave_at(level);
             return None;
         }
         let result = whole(kernel);
-        self.leave(kernel, sched);
+        self.leave();
         Some(result)
     }
 
@@ -1039,7 +1210,7 @@ impl<K: OsKernel, A: Arch> Port for Preemptive<K, A> {
     }
 
     fn end_job(&self, f: impl FnOnce(&mut K) -> Result<(), OsError>) -> Result<(), OsError> {
-        let (result, ended) = self.locked(|kernel, sched| {
+        let (result, ended, called) = self.locked(|kernel, sched| {
             let result = f(kernel);
             if result.is_ok() {
                 sched.ended = true;
@@ -1057,15 +1228,18 @@ impl<K: OsKernel, A: Arch> Port for Preemptive<K, A> {
                 // call and released with the job (`task_returned`).
                 self.lazy.job_ended(sched.current);
             }
-            (result, sched.ended)
+            let called = sched.was_called(usize::from(sched.current));
+            (result, sched.ended, called)
         });
-        if ended {
+        if ended && !called {
             // The switch is pending and runs as soon as the mask allows: this job is over.
             loop {
                 self.arch.wait();
             }
         }
-        // Not in a task's job (nothing to end): the caller goes on.
+        // A job started by a call returns to its caller (if the kernel chose another job,
+        // the switch it requested ran first, and this context is the caller's); not in a
+        // task's job (nothing to end): the caller goes on.
         result
     }
 

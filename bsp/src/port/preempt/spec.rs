@@ -3,17 +3,22 @@
 //!
 //! The model runs a legal schedule on a layout of four basic tasks on the shared stack and
 //! two tasks with stacks of their own (which may wait): a step starts a job of a task
-//! above the running one, lets the running job use stack, ends it, makes it wait (a task
-//! with its own stack), or resumes a waiting one. After each switch the property holds:
+//! above the running one (by the switch, or by a call from a job on the shared stack:
+//! [`start_by_call`]), lets the running job use stack, ends it (a job started by a call
+//! gives the context back to its caller, [`back_to_caller`], whose call returns or, where
+//! the kernel chose a new job, is saved below the ended job's frames), makes it wait (a
+//! task with its own stack), or resumes a waiting one. After each switch the property
+//! holds:
 //!
 //! - a new job on the shared stack starts at or below every context saved on it (no
-//!   job's first frame lands on a preempted job's context), and above its guard;
+//!   job's first frame lands on a preempted job's context, no called job's frames on its
+//!   caller's), and above its guard;
 //! - a new job of a task with its own stack starts at that stack's top;
 //! - a resumed context gets back exactly the stack pointer it left with;
 //! - when every job has ended, the shared stack is whole again (the next job starts at
 //!   the idle loop's stack pointer).
 
-use super::{decide, Sched, Switch, IDLE, MAX_TASKS};
+use super::{back_to_caller, callable, decide, start_by_call, Sched, Switch, IDLE, MAX_TASKS};
 
 /// The guard's bytes in the model.
 pub const GUARD: u32 = 256;
@@ -28,15 +33,40 @@ pub const TASKS: u8 = 6;
 /// Bytes a first frame takes in the model.
 const FRAME: u32 = 72;
 
-/// A context the model keeps: its slot and saved stack pointer.
+/// A context the model keeps: its slot and saved stack pointer, whether its job was
+/// started by a call, and the stack pointer it goes back to when the frames of a called
+/// job that ended under it are left (0: none).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 struct Saved {
     slot: u8,
     sp: u32,
+    called: bool,
+    unwind: u32,
+}
+
+impl Saved {
+    const fn new(slot: u8, sp: u32) -> Self {
+        Self {
+            slot,
+            sp,
+            called: false,
+            unwind: 0,
+        }
+    }
+
+    /// The context resumes: the frames of a called job that ended under it are left.
+    fn resumed(mut self) -> Self {
+        if self.unwind != 0 {
+            self.sp = self.unwind;
+            self.unwind = 0;
+        }
+        self
+    }
 }
 
 /// The running job ends and the context below it resumes: whether the switch gave that
-/// context back exactly its saved stack pointer.
+/// context back exactly its saved stack pointer (a job started by a call: whether the
+/// context is its caller's again, with no switch, and the call returns).
 fn end_running(s: &mut Sched, running: &mut Saved, below: &[Saved], depth: &mut usize) -> bool {
     *depth -= 1;
     let Some(&back) = below.get(*depth) else {
@@ -44,10 +74,14 @@ fn end_running(s: &mut Sched, running: &mut Saved, below: &[Saved], depth: &mut 
     };
     s.ended = true;
     s.next = back.slot;
-    if decide(s, running.sp, GUARD) != Switch::Resume(back.sp) {
+    if running.called {
+        if !back_to_caller(s) || s.current != back.slot || s.ended {
+            return false;
+        }
+    } else if decide(s, running.sp, GUARD) != Switch::Resume(back.sp) {
         return false;
     }
-    *running = back;
+    *running = back.resumed();
     true
 }
 
@@ -59,16 +93,13 @@ pub fn stacks_stay_apart(steps: &[(u8, u8)]) -> bool {
     s.basic_top = SHARED.1;
     for t in OWN_FROM..TASKS {
         let bottom = 0x2000 + u32::from(t - OWN_FROM) * OWN_BYTES;
-        s.own_stack[usize::from(t)] = (bottom, bottom + OWN_BYTES);
+        s.set_own_stack(usize::from(t), bottom, bottom + OWN_BYTES);
     }
     // The running context: its slot and stack pointer.
     let idle_sp = SHARED.1 - 64;
-    let mut running = Saved {
-        slot: IDLE,
-        sp: idle_sp,
-    };
+    let mut running = Saved::new(IDLE, idle_sp);
     // Preempted contexts, innermost last (the LIFO of preemption).
-    let mut below = [Saved { slot: 0, sp: 0 }; MAX_TASKS + 1];
+    let mut below = [Saved::new(0, 0); MAX_TASKS + 1];
     let mut depth = 0usize;
     // Waiting contexts (tasks with their own stacks), by task.
     let mut waiting = [None::<u32>; MAX_TASKS];
@@ -76,7 +107,7 @@ pub fn stacks_stay_apart(steps: &[(u8, u8)]) -> bool {
         running.slot == t || below.iter().take(depth).any(|c| c.slot == t)
     };
     for &(op, arg) in steps {
-        match op % 5 {
+        match op % 7 {
             // A job of a task above the running one starts (the running context is
             // preempted).
             0 => {
@@ -121,10 +152,7 @@ pub fn stacks_stay_apart(steps: &[(u8, u8)]) -> bool {
                 }
                 below[depth] = running;
                 depth += 1;
-                running = Saved {
-                    slot: t,
-                    sp: top - FRAME,
-                };
+                running = Saved::new(t, top - FRAME);
             }
             // The running job uses stack (within its stack, above the guard).
             1 => {
@@ -153,7 +181,76 @@ pub fn stacks_stay_apart(steps: &[(u8, u8)]) -> bool {
                 if decide(&mut s, running.sp, GUARD) != Switch::Resume(back.sp) {
                     return false;
                 }
-                running = back;
+                running = back.resumed();
+            }
+            // A job of a task on the shared stack above the running job, also on it, starts
+            // by a call: its frames go right below the caller's.
+            5 => {
+                let t = arg % OWN_FROM;
+                if started(&below, depth, running, t)
+                    || running.slot == IDLE
+                    || running.slot >= OWN_FROM
+                    || t <= running.slot
+                    || depth >= below.len()
+                {
+                    continue;
+                }
+                s.next = t;
+                if !callable(&s) {
+                    return false;
+                }
+                start_by_call(&mut s);
+                if s.current != t {
+                    return false;
+                }
+                below[depth] = running;
+                depth += 1;
+                running = Saved {
+                    called: true,
+                    ..Saved::new(t, running.sp)
+                };
+            }
+            // The running job, started by a call, ends, and the kernel chose a new job of
+            // a task above its caller: the context is the caller's again, and the switch
+            // saves it below the ended job's frames (a new job on the shared stack starts
+            // below them). The caller leaves those frames when it resumes.
+            6 => {
+                let t = arg % TASKS;
+                if !running.called
+                    || depth == 0
+                    || started(&below, depth, running, t)
+                    || waiting[usize::from(t)].is_some()
+                    || below[depth - 1].slot >= t
+                    || (t < OWN_FROM && running.sp < SHARED.0 + GUARD + FRAME)
+                {
+                    continue;
+                }
+                depth -= 1;
+                let caller = below[depth];
+                s.ended = true;
+                s.next = t;
+                if !back_to_caller(&mut s) || s.current != caller.slot {
+                    return false;
+                }
+                let dead_frames = Saved {
+                    sp: running.sp,
+                    unwind: caller.sp,
+                    ..caller
+                };
+                let Switch::Start { task, top } = decide(&mut s, dead_frames.sp, GUARD) else {
+                    return false;
+                };
+                let right_place = if t < OWN_FROM {
+                    top <= dead_frames.sp && top >= SHARED.0 + GUARD + FRAME
+                } else {
+                    top == s.own_stack[usize::from(t)].1
+                };
+                if task != t || !right_place {
+                    return false;
+                }
+                below[depth] = dead_frames;
+                depth += 1;
+                running = Saved::new(t, top - FRAME);
             }
             // A waiting task's event arrives: it resumes above the running context.
             _ => {
@@ -171,7 +268,7 @@ pub fn stacks_stay_apart(steps: &[(u8, u8)]) -> bool {
                 waiting[usize::from(t)] = None;
                 below[depth] = running;
                 depth += 1;
-                running = Saved { slot: t, sp };
+                running = Saved::new(t, sp);
             }
         }
     }
@@ -192,7 +289,7 @@ pub fn stacks_stay_apart(steps: &[(u8, u8)]) -> bool {
             }
             below[depth] = running;
             depth += 1;
-            running = Saved { slot: t, sp };
+            running = Saved::new(t, sp);
         } else {
             break;
         }

@@ -96,6 +96,9 @@ enum End {
     Halted,
     /// An ended job waited for its switch.
     JobOver,
+    /// A job of the task started by a call (the model stops there; the test goes on as
+    /// that job).
+    Called(u8),
 }
 
 /// The model CPU: the OS-level mask, every-interrupt masking, a pending switch, the
@@ -116,6 +119,10 @@ struct Model {
     quieted: Cell<u32>,
     reports: RefCell<Vec<PortFault>>,
     frames: RefCell<Vec<(u32, u8)>>,
+    /// The CPU runs a task's code, where a new job may start by a call
+    /// ([`Arch::may_call_job`], with every-interrupt masking off); off by default, so
+    /// that every other test's switch is the switch exception's.
+    calls: Cell<bool>,
 }
 
 impl Arch for Model {
@@ -175,6 +182,12 @@ impl Arch for Model {
     }
     fn may_interrupt(&self) {
         take_pending(self, true);
+    }
+    fn may_call_job(&self) -> bool {
+        self.calls.get() && !self.all.get()
+    }
+    fn call_job(&self, task: u8) {
+        std::panic::panic_any(End::Called(task))
     }
 }
 
@@ -932,4 +945,153 @@ fn any_interrupt_between_the_stores_of_a_lock_outside_the_kernel() {
         }
         PENDING.set(None);
     });
+}
+
+/// The port's tables now.
+fn sched(port: &TestPort) -> super::Sched {
+    port.before_start(|_, s| s.clone())
+}
+
+/// `Low` runs on the shared stack, in a task's code where the CPU lets a job start by a
+/// call; `High`'s activation there starts its job so.
+fn high_called(port: &TestPort) {
+    port.arch().calls.set(true);
+    let end = ends(|| {
+        let _ = port.kernel(|os| os.activate_task(HIGH));
+    });
+    assert_eq!(end, End::Called(HIGH.0), "High's job starts by a call");
+}
+
+/// A job that a job on the shared stack lets in by its own kernel call, of a task on the
+/// shared stack, starts by a call on the caller's stack, with the kernel lock ended and
+/// the new job's mask; its end gives the context back to the caller, whose call returns:
+/// no switch either way, and the shared stack as it was.
+#[test]
+fn a_job_let_in_by_a_job_on_the_shared_stack_starts_by_a_call_and_returns_to_it() {
+    let port = started();
+    let before = sched(&port);
+    high_called(&port);
+    assert!(!port.arch().switch.get(), "no switch exception");
+    assert!(
+        !port.in_kernel.load(Ordering::Relaxed),
+        "the kernel lock ended"
+    );
+    assert_eq!(port.arch().level.get(), Some(InterruptMask::None));
+    assert_eq!(port.inspect(|os| os.running()), Some(HIGH));
+    let during = sched(&port);
+    assert_eq!(during.current(), HIGH.0);
+    assert_eq!(
+        during.basic_top(),
+        before.basic_top(),
+        "the call writes nothing there"
+    );
+    assert_eq!(
+        port.arch().frames.borrow().len(),
+        1,
+        "no first frame written"
+    );
+    // High ends: its end returns (a job the switch started waits for its switch).
+    port.end_job(|os| os.terminate_task())
+        .expect("TerminateTask");
+    assert!(!port.arch().switch.get(), "no switch exception");
+    assert_eq!(port.inspect(|os| os.running()), Some(LOW));
+    let after = sched(&port);
+    assert_eq!(after.current(), LOW.0);
+    assert_eq!(after.started, before.started);
+    assert_eq!(after.called_from, before.called_from);
+    assert!(port.inspect(|os| os.hooks().errors()).is_empty());
+}
+
+/// Where the CPU may not start a job by a call (an ISR runs, or the caller's own critical
+/// section is closed, which the switch must wait for) the switch exception does it, as
+/// for a task with its own stack, whose job never starts on another's stack.
+#[test]
+fn a_job_starts_by_the_switch_where_a_call_may_not_start_it() {
+    let port = started();
+    port.arch().calls.set(true);
+    port.arch().all.set(true);
+    port.kernel(|os| os.activate_task(HIGH)).expect("activate");
+    assert!(
+        port.arch().switch.get(),
+        "the switch, once the section opens"
+    );
+    port.arch().all.set(false);
+    take_switch(&port, SHARED.1 - 200);
+    assert_eq!(sched(&port).current(), HIGH.0);
+    // High, on the shared stack, lets in Waiter, which has a stack of its own.
+    port.kernel(|os| os.activate_task(WAITER))
+        .expect("activate");
+    assert!(port.arch().switch.get(), "the switch to its own stack");
+    take_switch(&port, SHARED.1 - 300);
+    assert_eq!(sched(&port).current(), WAITER.0);
+    assert_eq!(port.arch().guard.get(), WAITER_STACK.0);
+}
+
+/// A called job that lets in a task with its own stack is switched away as every job
+/// is, and resumed; a called job that chains itself gives the context back to its caller
+/// and its new job starts by a call from there.
+#[test]
+fn a_called_job_is_preempted_resumed_and_chained_as_any_job() {
+    let port = started();
+    high_called(&port);
+    port.kernel(|os| os.activate_task(WAITER))
+        .expect("activate");
+    take_switch(&port, SHARED.1 - 260);
+    assert_eq!(sched(&port).current(), WAITER.0);
+    port.kernel(|os| os.wait_event(1)).expect("wait");
+    assert_eq!(
+        take_switch(&port, WAITER_STACK.1 - 100),
+        SHARED.1 - 260,
+        "High resumes"
+    );
+    assert_eq!(sched(&port).current(), HIGH.0);
+    let end = ends(|| {
+        let _ = port.end_job(|os| os.chain_task(HIGH));
+    });
+    assert_eq!(
+        end,
+        End::Called(HIGH.0),
+        "the new job, called from Low's context"
+    );
+    assert!(!port.arch().switch.get());
+    let during = sched(&port);
+    assert_eq!(during.current(), HIGH.0);
+    assert_eq!(during.caller_of(usize::from(HIGH.0)), Some(LOW.0));
+    port.end_job(|os| os.terminate_task())
+        .expect("TerminateTask");
+    assert_eq!(sched(&port).current(), LOW.0);
+    assert_eq!(port.inspect(|os| os.running()), Some(LOW));
+}
+
+/// A called job whose end lets in a job of a task above its caller (here by chaining
+/// one with a stack of its own) gives the context back to the caller and requests the
+/// switch, which saves the context as the caller's, below the ended job's frames: the
+/// caller resumes there, and its call returns.
+#[test]
+fn a_called_jobs_end_that_lets_in_another_task_saves_the_context_as_the_callers() {
+    let port = started();
+    high_called(&port);
+    // (On the CPU the switch runs inside the end, before it returns.)
+    port.end_job(|os| os.chain_task(WAITER)).expect("ChainTask");
+    assert!(port.arch().switch.get(), "the switch to Waiter's stack");
+    assert_eq!(sched(&port).current(), LOW.0, "the context is Low's again");
+    take_switch(&port, SHARED.1 - 240);
+    assert_eq!(sched(&port).current(), WAITER.0);
+    assert_eq!(port.arch().guard.get(), WAITER_STACK.0);
+    let end = ends(|| {
+        let _ = port.end_job(|os| os.terminate_task());
+    });
+    assert_eq!(
+        end,
+        End::JobOver,
+        "Waiter's job, started by the switch, waits for it"
+    );
+    assert_eq!(
+        take_switch(&port, WAITER_STACK.1 - 100),
+        SHARED.1 - 240,
+        "Low resumes where the switch saved it"
+    );
+    assert_eq!(sched(&port).current(), LOW.0);
+    assert_eq!(port.inspect(|os| os.running()), Some(LOW));
+    assert!(port.inspect(|os| os.hooks().errors()).is_empty());
 }
