@@ -23,17 +23,19 @@
 //!   stack; a job that ends gives its part back. A task that can wait (an extended task)
 //!   keeps its context while lower tasks run, so it must have a stack of its own: the
 //!   port refuses to start otherwise ([`check`]), naming the task.
-//! - **A new job by a call.** Where a job on the shared stack lets in, by its own kernel
-//!   call, a new job of a task on the shared stack (an `ActivateTask`, a `Schedule`, a
-//!   `ReleaseResource`, a `SetEvent` that wakes nothing with a stack of its own), and the
-//!   CPU runs a task's code with no critical section of the caller's own
-//!   ([`Arch::may_call_job`]), the port calls the new job at the end of that kernel
-//!   call, on the caller's stack, instead of requesting the switch exception: the LIFO
-//!   order above makes the new job end before its caller resumes, as a call does. Its end
-//!   gives the context back to the caller ([`back_to_caller`]), whose call returns; if the
-//!   kernel then chose another job, the switch exception saves the context as the
-//!   caller's. The kernel's decisions and state are the same either way: only how the
-//!   port carries out a switch changes (`spec::stacks_stay_apart` covers both ways).
+//! - **A new job by a call.** Where a job on the shared stack that goes on lets in, by
+//!   its own kernel call, a new job of a task on the shared stack (an `ActivateTask`, a
+//!   `Schedule`, a `ReleaseResource`), and the CPU runs a task's code with no critical
+//!   section of the caller's own ([`Arch::may_call_job`]), the port calls the new job at
+//!   the end of that kernel call, on the caller's stack, instead of requesting the switch
+//!   exception: the LIFO order above makes the new job end before its caller resumes, as
+//!   a call does. Its end gives the context back to the caller ([`back_to_caller`]),
+//!   whose call returns; if the kernel then chose another job, the switch exception saves
+//!   the context as the caller's, below the ended job's frames, and starts that job
+//!   there (never a call from an ended job: a job that chains itself would nest on its
+//!   own dead frames without end). The kernel's decisions and state are the same either
+//!   way: only how the port carries out a switch changes (`spec::stacks_stay_apart`
+//!   covers both ways).
 //! - **A job that cannot end** (its `TerminateTask` refused: interrupts left disabled, a
 //!   resource still held) is ended by the kernel's `task_returned` (`E_OS_MISSINGEND` to
 //!   the ErrorHook, its resources and locks released, as AUTOSAR's SWS_Os_00052 and
@@ -499,6 +501,15 @@ pub fn decide(s: &mut Sched, sp: u32, guard_bytes: u32) -> Switch {
 /// What the end of a kernel call returns where no job starts by a call (else the task).
 const NO_CALL: u8 = IDLE;
 
+/// The mask that ends a kernel lock ([`Preemptive::end_lock`]).
+#[derive(Clone, Copy)]
+enum LockEnd {
+    /// The kernel's mask as a processor level.
+    Level(u8),
+    /// Every-interrupt masking began or ended: the kernel's mask.
+    AllChanged(InterruptMask),
+}
+
 /// Whether the kernel's choice `s.next` may start by a call from the running job: a new
 /// job of a task on the shared stack, the running context a job on the shared stack that
 /// goes on (OSEK's basic tasks start and end in LIFO order there, so the new job ends
@@ -848,73 +859,95 @@ impl<K: OsKernel, A: Arch> Preemptive<K, A> {
             return;
         }
         sched.next = next;
+        let mut call = NO_CALL;
         if next != sched.current || sched.ended {
-            // (An ISR's kernel call, the common one here, is decided at once: the switch
-            // exception, after the ISR.)
-            let call = if sched.ended {
-                if sched.was_called(usize::from(sched.current)) {
-                    self.switch_or_call(sched, false)
-                } else {
-                    // A job the switch started ended: the switch frees its part of the
-                    // stack.
+            if sched.ended {
+                // A job started by a call gives the context back to its caller; if the
+                // kernel chose another job, the switch exception saves the context as the
+                // caller's, below the ended job's frames. (A new job started by a call
+                // from there would nest on those frames, and a job that chains itself
+                // would nest without end.) A job the switch started: the switch frees
+                // its part of the stack.
+                if !back_to_caller(sched) || next != sched.current {
                     self.arch.request_switch();
-                    NO_CALL
                 }
             } else if self.arch.may_call_job() {
-                self.switch_or_call(sched, true)
+                call = self.switch_or_call(sched);
             } else {
+                // (An ISR's kernel call, the common one here: the switch exception, after
+                // the ISR.)
                 self.arch.request_switch();
-                NO_CALL
-            };
-            if call != NO_CALL {
-                self.end_lock(kernel, sched);
-                self.call_job(call);
-                return;
             }
         }
-        self.end_lock(kernel, sched);
+        let end = self.end_lock(kernel, sched);
+        // The references above are no longer used: an interrupt the mask below lets in,
+        // and the job called, take them again.
+        self.apply(end);
+        if call != NO_CALL {
+            self.call_job(call);
+        }
     }
 
-    /// The kernel lock's end: the kernel's mask as a level (`InterruptMask::at_level`;
-    /// `u8::MAX` is `All`), and which resources the running task may lock outside the
-    /// kernel now.
+    /// The kernel lock's end, with the references of the kernel call: the kernel's mask
+    /// as a level (`InterruptMask::at_level`; `u8::MAX` is `All`), and which resources
+    /// the running task may lock outside the kernel now. Returns the mask to apply, which
+    /// the caller applies once it no longer uses those references ([`Preemptive::apply`]).
     #[inline(always)]
-    fn end_lock(&self, kernel: &K, sched: &mut Sched) {
+    fn end_lock(&self, kernel: &K, sched: &mut Sched) -> LockEnd {
         let (level, lock_free) = kernel.port_view();
         self.lazy.set_mask(lock_free);
-        compiler_fence(Ordering::SeqCst);
-        self.in_kernel.store(false, Ordering::Relaxed);
-        if (level == u8::MAX) == sched.all_for_kernel {
-            self.arch.set_level(level);
+        let all = level == u8::MAX;
+        let end = if all == sched.all_for_kernel {
+            LockEnd::Level(level)
         } else {
             // DisableAllInterrupts or SuspendAllInterrupts began or ended.
-            self.all_changed(sched, InterruptMask::at_level(level));
+            sched.all_for_kernel = all;
+            LockEnd::AllChanged(InterruptMask::at_level(level))
+        };
+        compiler_fence(Ordering::SeqCst);
+        self.in_kernel.store(false, Ordering::Relaxed);
+        end
+    }
+
+    /// Applies the mask that ends the kernel lock ([`Preemptive::end_lock`]).
+    #[inline(always)]
+    fn apply(&self, end: LockEnd) {
+        match end {
+            LockEnd::Level(level) => self.arch.set_level(level),
+            LockEnd::AllChanged(mask) => self.all_changed(mask),
         }
     }
 
-    /// The kernel chose another job, or the running one ended. A job started by a call
-    /// that ended gives the context back to its caller ([`back_to_caller`]), which may be
-    /// the kernel's choice. Otherwise the switch to the kernel's choice: by a call where
-    /// the job may start so ([`callable`], [`Arch::may_call_job`]; its task returned, the
-    /// bookkeeping done), else the switch exception requested. `may_call`: what
-    /// [`Arch::may_call_job`] answered, for a job that goes on (asked here for the caller
-    /// of a job that ended).
+    /// The kernel chose another job for a job that goes on, in a task's code
+    /// ([`Arch::may_call_job`]): the new job by a call where it may start so
+    /// ([`callable`]; its task returned, the bookkeeping done), else the switch exception
+    /// requested ([`NO_CALL`] returned).
     #[inline(never)]
-    fn switch_or_call(&self, sched: &mut Sched, may_call: bool) -> u8 {
-        let may_call = if sched.ended {
-            if back_to_caller(sched) && sched.next == sched.current {
-                return NO_CALL;
-            }
-            self.arch.may_call_job()
-        } else {
-            may_call
-        };
-        if may_call && callable(sched) {
+    fn switch_or_call(&self, sched: &mut Sched) -> u8 {
+        if callable(sched) {
             start_by_call(sched);
             return sched.current;
         }
         self.arch.request_switch();
         NO_CALL
+    }
+
+    /// [`Sched::called_from`] of `slot`, read through a raw pointer (no reference to the
+    /// tables, which an interrupt may be using), 0 for a slot out of range.
+    fn called_from_raw(&self, slot: u8) -> u8 {
+        let slot = usize::from(slot);
+        if slot >= MAX_TASKS {
+            return 0;
+        }
+        // SAFETY: a one-byte read inside the table (checked above), through a raw pointer:
+        // no reference is made; an interrupt that writes it has ended before this context
+        // runs again (one core), and the caller's own slot changes only at its job's end.
+        unsafe {
+            core::ptr::addr_of!((*self.sched.get()).called_from)
+                .cast::<u8>()
+                .add(slot)
+                .read()
+        }
     }
 
     /// A job started by a call ([`start_by_call`]), with the kernel lock ended: the
@@ -927,7 +960,7 @@ impl<K: OsKernel, A: Arch> Preemptive<K, A> {
         // SAFETY: a read of the caller's own slot, which no kernel call changes but the
         // job's end (before this point) or this job's start; no reference to the tables
         // is held here.
-        if unsafe { (*self.sched.get()).was_called(usize::from(task)) } {
+        if self.called_from_raw(task) != 0 {
             self.fatal(PortFault::Board("a job returned"));
         }
     }
@@ -1017,10 +1050,8 @@ impl<K: OsKernel, A: Arch> Preemptive<K, A> {
     /// kernel still holds slips through).
     #[cold]
     #[inline(never)]
-    fn all_changed(&self, sched: &mut Sched, mask: InterruptMask) {
-        let all = mask == InterruptMask::All;
-        sched.all_for_kernel = all;
-        if all {
+    fn all_changed(&self, mask: InterruptMask) {
+        if mask == InterruptMask::All {
             self.arch.disable_all();
             self.arch.set_mask(mask);
         } else {

@@ -1028,8 +1028,10 @@ fn a_job_starts_by_the_switch_where_a_call_may_not_start_it() {
 }
 
 /// A called job that lets in a task with its own stack is switched away as every job
-/// is, and resumed; a called job that chains itself gives the context back to its caller
-/// and its new job starts by a call from there.
+/// is, and resumed; a called job that chains itself gives the context back to its caller,
+/// and its new job starts by the switch, below the ended job's frames, never by a call
+/// from them (chaining itself again and again would nest without end). Its end gives the
+/// context back to the caller where the switch saved it.
 #[test]
 fn a_called_job_is_preempted_resumed_and_chained_as_any_job() {
     let port = started();
@@ -1045,22 +1047,38 @@ fn a_called_job_is_preempted_resumed_and_chained_as_any_job() {
         "High resumes"
     );
     assert_eq!(sched(&port).current(), HIGH.0);
+    // (On the CPU the switch runs inside the end, before it returns.)
+    port.end_job(|os| os.chain_task(HIGH)).expect("ChainTask");
+    assert!(port.arch().switch.get(), "the new job by the switch");
+    let chained = sched(&port);
+    assert_eq!(chained.current(), LOW.0, "the context is Low's again");
+    assert_eq!(chained.caller_of(usize::from(HIGH.0)), None);
+    let frames = port.arch().frames.borrow().len();
+    let top = take_switch(&port, SHARED.1 - 300);
+    assert!(
+        top < SHARED.1 - 300,
+        "High's new job below the ended one's frames"
+    );
+    assert_eq!(port.arch().frames.borrow().len(), frames + 1);
+    assert_eq!(sched(&port).current(), HIGH.0);
+    // Chained again: once more by the switch, at the same place (the stack does not grow).
     let end = ends(|| {
         let _ = port.end_job(|os| os.chain_task(HIGH));
     });
+    assert_eq!(end, End::JobOver, "a job the switch started waits for it");
+    assert_eq!(take_switch(&port, top - 40), top);
+    let end = ends(|| {
+        let _ = port.end_job(|os| os.terminate_task());
+    });
+    assert_eq!(end, End::JobOver);
     assert_eq!(
-        end,
-        End::Called(HIGH.0),
-        "the new job, called from Low's context"
+        take_switch(&port, top - 40),
+        SHARED.1 - 300,
+        "Low where it was saved"
     );
-    assert!(!port.arch().switch.get());
-    let during = sched(&port);
-    assert_eq!(during.current(), HIGH.0);
-    assert_eq!(during.caller_of(usize::from(HIGH.0)), Some(LOW.0));
-    port.end_job(|os| os.terminate_task())
-        .expect("TerminateTask");
     assert_eq!(sched(&port).current(), LOW.0);
     assert_eq!(port.inspect(|os| os.running()), Some(LOW));
+    assert!(port.inspect(|os| os.hooks().errors()).is_empty());
 }
 
 /// A called job whose end lets in a job of a task above its caller (here by chaining
