@@ -886,7 +886,8 @@ impl<P: Port<Kernel = Kernel>, B: Board> Ecu<P, B> {
         if notify == Ok(true) {
             self.port.span(span::ACTIVATE_TO_FIRST_LINE, true);
             // An error here reaches ErrorHook, which counts it.
-            let _ = self.os(|os| os.activate_task(config::COM_TASK));
+            let _ = self.port.activate_task(config::COM_TASK);
+            self.dispatch();
         }
     }
 

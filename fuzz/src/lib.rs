@@ -25,6 +25,9 @@ pub fn decode_service(op: u8, a: u8, b: u8, c: u8) -> Service {
     let mask = u32::from(b % 4);
     let isr = IsrId(c % 4);
     let call = match op % 26 {
+        // The port's activation (the kernel's fast path, the service where it declines)
+        // or the service itself.
+        0 if c % 2 == 1 => return Service::FastActivate(task),
         0 => ServiceCall::ActivateTask(task),
         1 => ServiceCall::TerminateTask,
         2 => ServiceCall::ChainTask(task),

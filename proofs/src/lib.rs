@@ -273,6 +273,15 @@ fn as_port_calls(call: ServiceCall) -> Service {
     }
 }
 
+/// A call a task makes, as the port makes it: an activation by the kernel's fast path
+/// (the service where it declines), anything else as the service.
+fn as_task_port_calls(call: ServiceCall) -> Service {
+    match call {
+        ServiceCall::ActivateTask(t) => Service::FastActivate(t),
+        c => Service::Call(c),
+    }
+}
+
 impl<
         const T: usize,
         const R: usize,
@@ -305,7 +314,11 @@ impl<
                 steps.push(Service::FastRelease(r));
             }
         }
-        steps.extend(self.task_calls(os, running).into_iter().map(Service::Call));
+        steps.extend(
+            self.task_calls(os, running)
+                .into_iter()
+                .map(as_task_port_calls),
+        );
         steps
     }
 

@@ -76,6 +76,16 @@ pub unsafe trait OsKernel {
     /// [`OsKernel::masked_level`] and [`OsKernel::lock_free_resources`] in one
     /// ([`Os::port_view`]), as the port reads them at the end of every kernel call.
     fn port_view(&self) -> (u8, u32);
+    /// `ActivateTask`.
+    ///
+    /// # Errors
+    /// As the kernel's service.
+    fn activate_task(&mut self, task: TaskId) -> Result<(), OsError>;
+    /// `ActivateTask`'s fast path ([`Os::try_activate_task`]): where the activated task
+    /// preempts the running one at task level, the kernel's view after it
+    /// ([`OsKernel::port_view`]); `None` with nothing changed (the caller then makes the
+    /// full service call).
+    fn try_activate_task(&mut self, task: TaskId) -> Option<(u8, u32)>;
     /// The OS tick's fast path ([`Os::try_tick`]): the whole category-2 ISR `isr` whose
     /// body is `IncrementCounter(counter)` in one step where nothing is due; `None`, with
     /// nothing changed, where the port must run the ISR whole.
@@ -168,6 +178,14 @@ where
     #[inline(always)]
     fn port_view(&self) -> (u8, u32) {
         Os::port_view(self)
+    }
+    #[inline]
+    fn activate_task(&mut self, task: TaskId) -> Result<(), OsError> {
+        Os::activate_task(self, task)
+    }
+    #[inline(always)]
+    fn try_activate_task(&mut self, task: TaskId) -> Option<(u8, u32)> {
+        Os::try_activate_task(self, task)
     }
     #[inline(always)]
     fn try_tick(&mut self, isr: IsrId, counter: CounterId) -> Option<u8> {
@@ -264,6 +282,21 @@ pub trait Port {
     #[inline]
     fn release_resource(&self, res: ResourceId) -> Result<(), OsError> {
         self.kernel(|os| lock_in_kernel(os, res, false))
+    }
+
+    /// Activates a task (`ActivateTask`): the kernel's fast path where it applies, else
+    /// the full service; then the port carries out what the kernel decided, as after any
+    /// kernel call. A port where a switch costs less than a kernel call's end overrides
+    /// it.
+    ///
+    /// # Errors
+    /// As the kernel's service.
+    #[inline]
+    fn activate_task(&self, task: TaskId) -> Result<(), OsError> {
+        self.kernel(|os| match os.try_activate_task(task) {
+            Some(_) => Ok(()),
+            None => os.activate_task(task),
+        })
     }
 
     /// The OS tick, category-2 ISR `isr` whose whole body is `IncrementCounter(counter)`,

@@ -1034,6 +1034,17 @@ impl<K: OsKernel, A: Arch> Preemptive<K, A> {
         result
     }
 
+    /// The rest of an activation whose fast path declined, with the kernel lock taken: the
+    /// full `ActivateTask`, then the port's whole carrying-out.
+    #[cold]
+    #[inline(never)]
+    fn activate_service(&self, task: TaskId) -> Result<(), OsError> {
+        let (kernel, _) = self.tables();
+        let result = kernel.activate_task(task);
+        self.leave();
+        result
+    }
+
     /// Ends the kernel lock after a fast path: the running task, its switch state and the
     /// every-interrupt masking are as they were (the fast paths run only at task level
     /// with no interrupt lock in force), and the kernel's mask is that of processor
@@ -1238,6 +1249,37 @@ impl<K: OsKernel, A: Arch> Port for Preemptive<K, A> {
             return Ok(());
         }
         self.lock_call(res, false)
+    }
+
+    /// `ActivateTask` by the kernel's fast path where the activated task preempts the
+    /// caller at task level ([`OsKernel::try_activate_task`]): the port's part of the
+    /// switch follows at once, with the kernel's view the fast path returned (the new job
+    /// by a call where it may start so, else the switch exception), without the general
+    /// end of a kernel call. Otherwise the full service and that general end.
+    #[inline(never)]
+    fn activate_task(&self, task: TaskId) -> Result<(), OsError> {
+        let (kernel, sched) = self.enter();
+        let Some((level, lock_free)) = kernel.try_activate_task(task) else {
+            return self.activate_service(task);
+        };
+        sched.next = task.0;
+        let call = if self.arch.may_call_job() && callable(sched) {
+            start_by_call(sched);
+            task.0
+        } else {
+            self.arch.request_switch();
+            NO_CALL
+        };
+        self.lazy.set_mask(lock_free);
+        compiler_fence(Ordering::SeqCst);
+        self.in_kernel.store(false, Ordering::Relaxed);
+        // The fast path runs only with no interrupt lock in force: the kernel's mask is a
+        // level, and every-interrupt masking stays off.
+        self.arch.set_level(level);
+        if call != NO_CALL {
+            self.call_job(call);
+        }
+        Ok(())
     }
 
     fn end_job(&self, f: impl FnOnce(&mut K) -> Result<(), OsError>) -> Result<(), OsError> {

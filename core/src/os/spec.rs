@@ -295,6 +295,9 @@ pub enum Service {
     /// A whole ISR whose body is `IncrementCounter` (the OS tick), as a port runs it: the
     /// kernel's fast path ([`Os::try_tick`]), and the whole ISR where that declines.
     FastTick(IsrId, CounterId),
+    /// `ActivateTask` as a port makes it: the kernel's fast path
+    /// ([`Os::try_activate_task`]), and the full service where that declines.
+    FastActivate(TaskId),
 }
 
 impl Service {
@@ -305,6 +308,7 @@ impl Service {
             Self::FastGet(r) => Self::Call(ServiceCall::GetResource(r)),
             Self::FastRelease(r) => Self::Call(ServiceCall::ReleaseResource(r)),
             Self::FastTick(isr, c) => Self::Isr(isr, ServiceCall::IncrementCounter(c)),
+            Self::FastActivate(t) => Self::Call(ServiceCall::ActivateTask(t)),
             s => s,
         }
     }
@@ -355,17 +359,22 @@ where
             Some(_) => Ok(Returned::Nothing),
             None => call(os, service.as_osek()),
         },
+        Service::FastActivate(t) => match os.try_activate_task(t) {
+            Some(_) => Ok(Returned::Nothing),
+            None => os.activate_task(t).map(|()| Returned::Nothing),
+        },
     }
 }
 
 /// The contract of the kernel's fast paths ([`Os::try_get_resource`],
-/// [`Os::try_release_resource`], [`Os::try_tick`]), for a [`Service::FastGet`],
-/// [`Service::FastRelease`] or [`Service::FastTick`] step from `before` (any other step
-/// agrees trivially): where the fast path takes the step, it leaves exactly the state the
-/// full service (or whole ISR) leaves, that succeeds, and the level the fast path returns
-/// gives the kernel's interrupt mask, and after a lock nothing may be locked outside the
-/// kernel ([`Os::lock_free_resources`] is empty: a port need not ask); where it declines,
-/// it changed nothing. (So every rule and invariant proved of the services holds of the
+/// [`Os::try_release_resource`], [`Os::try_tick`], [`Os::try_activate_task`]), for a
+/// [`Service::FastGet`], [`Service::FastRelease`], [`Service::FastTick`] or
+/// [`Service::FastActivate`] step from `before` (any other step agrees trivially): where
+/// the fast path takes the step, it leaves exactly the state the full service (or whole
+/// ISR) leaves, that succeeds, and the level the fast path returns gives the kernel's
+/// interrupt mask (the activation's: the kernel's whole view, [`Os::port_view`]), and
+/// after a lock nothing may be locked outside the kernel ([`Os::lock_free_resources`] is
+/// empty: a port need not ask); where it declines, it changed nothing. (So every rule and invariant proved of the services holds of the
 /// fast paths.)
 ///
 /// # Errors
@@ -395,6 +404,20 @@ where
             fast.try_tick(isr, c),
             call(&mut full, service.as_osek()).map(|_| ()),
         ),
+        Service::FastActivate(t) => {
+            let view = fast.try_activate_task(t);
+            let served = full.activate_task(t);
+            return match view {
+                None if fast != *before => Err("a declined fast path changed the state"),
+                None => Ok(()),
+                Some(_) if served.is_err() => Err("the fast path took a step the service refuses"),
+                Some(_) if fast != full => Err("the fast path left another state than the service"),
+                Some(view) if view != full.port_view() => {
+                    Err("the fast path's view is not the kernel's (its mask, the locks outside it)")
+                }
+                Some(_) => Ok(()),
+            };
+        }
         _ => return Ok(()),
     };
     match taken {

@@ -64,6 +64,7 @@ pub enum Step {
     ExitIsr,
     IsrTick(u8),
     FastTick(u8),
+    FastActivate(u8),
     IsrActivate(u8, u8),
     TaskReturn,
     Query(u8),
@@ -118,6 +119,7 @@ impl Step {
             Step::ExitIsr => S::ExitIsr,
             Step::IsrTick(i) => S::Isr(isr(i), Call::IncrementCounter(CounterId(0))),
             Step::FastTick(i) => S::FastTick(isr(i), CounterId(0)),
+            Step::FastActivate(t) => S::FastActivate(TaskId(t % 6)),
             Step::IsrActivate(i, t) => S::Isr(isr(i), Call::ActivateTask(TaskId(t % 6))),
             Step::TaskReturn => S::TaskReturn,
             Step::Query(q) => S::Call(match q % 5 {

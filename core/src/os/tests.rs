@@ -1761,6 +1761,11 @@ fn every_step_stands_for_the_services_it_names() {
     assert_eq!(distinct(&Step::EnterIsr).len(), 4);
     assert_eq!(distinct(&Step::IsrTick).len(), 4);
     assert_eq!(distinct(&Step::FastTick).len(), 4);
+    assert_eq!(distinct(&Step::FastActivate).len(), 6);
+    assert_eq!(
+        Step::FastActivate(1).service().as_osek(),
+        spec::Service::Call(ServiceCall::ActivateTask(TaskId(1)))
+    );
     assert_eq!(
         Step::FastTick(0).service().as_osek(),
         spec::Service::Isr(IsrId(0), ServiceCall::IncrementCounter(CounterId(0)))
@@ -1782,7 +1787,7 @@ fn every_step_stands_for_the_services_it_names() {
 /// Random sequences of up to 64 steps keep the invariants and transition rules (a bolero
 /// test and fuzz target). Not a Kani proof: one symbolic step of any kind does not finish
 /// under Kani in 300 s (the book: `docs/src/kani.md`). Every sequence of up to 5 of these steps (each of
-/// the 4,352 services they stand for) on the small configuration is explored exhaustively
+/// the 4,358 services they stand for) on the small configuration is explored exhaustively
 /// by `cw-proofs steps` instead, and the model checker's configurations to the end.
 #[test]
 fn random_step_sequences_keep_the_invariants() {
@@ -1999,18 +2004,20 @@ two_step_proof! {
 // first one does not finish under Kani in 300 s (the book: `docs/src/kani.md`), and a marked harness that
 // does not finish proves nothing.
 
-/// Task management: ActivateTask, TerminateTask, ChainTask, Schedule, a body's return.
+/// Task management: ActivateTask (the service, and the port's by the fast path),
+/// TerminateTask, ChainTask, Schedule, a body's return.
 #[test]
 fn after_an_isr_any_task_service_keeps_the_invariants() {
     bolero::check!()
         .with_type::<(u8, u8, u8, u8)>()
         .cloned()
         .for_each(|(isr, task, kind, a)| {
-            let s = match kind % 5 {
+            let s = match kind % 6 {
                 0 => Step::Activate(a),
                 1 => Step::Terminate,
                 2 => Step::Chain(a),
                 3 => Step::Schedule,
+                4 => Step::FastActivate(a),
                 _ => Step::TaskReturn,
             };
             second_step_keeps_the_invariants(isr, task, s);
@@ -2083,6 +2090,27 @@ fn any_fast_get_agrees_with_get_resource() {
             let os = small_after_an_isr(0, u8::from(b));
             let verdict = spec::fast_path_agrees(&os, Step::FastGet(r).service());
             assert!(verdict.is_ok(), "{r}: {verdict:?}");
+        });
+}
+
+/// `ActivateTask`'s fast path agrees with the service (`spec::fast_path_agrees`) for any
+/// task id (A's second activation, B's first, invalid ones), from A or B running, holding
+/// resource 0 or not: the same state, the same result, the kernel's view; where it
+/// declines (B activating A below it, a limit, a lock held above the activated task) it
+/// changed nothing.
+#[test]
+#[cfg_attr(kani, kani::proof, kani::unwind(10))]
+fn any_fast_activation_agrees_with_activate_task() {
+    bolero::check!()
+        .with_type::<(bool, bool, u8)>()
+        .cloned()
+        .for_each(|(b, locked, t)| {
+            let mut os = small_after_an_isr(0, u8::from(b));
+            if locked {
+                assert_eq!(os.get_resource(ResourceId(0)), Ok(()));
+            }
+            let verdict = spec::fast_path_agrees(&os, Step::FastActivate(t).service());
+            assert!(verdict.is_ok(), "{t}: {verdict:?}");
         });
 }
 
@@ -2342,6 +2370,67 @@ fn ticks_at_once_stop_before_the_alarm_and_wrap_the_counter() {
 /// then refuse or carry out: a nested lock of the same resource (E_OS_ACCESS), a release
 /// of a resource not held (E_OS_NOFUNC), a release that lets a higher task in (the
 /// switch), a lock with an interrupt lock in force (E_OS_DISABLEDINT), a lock from an ISR.
+/// `ActivateTask`'s fast path takes the activation that preempts (A running activates B
+/// above it) and declines the rest, changing nothing: one that queues (A activating
+/// itself, B activating A), one above a held resource's ceiling, one of a task already
+/// active, an invalid id, one from an ISR.
+#[test]
+fn the_fast_activation_takes_the_preempting_case_and_declines_the_rest() {
+    let mut os = small_after_an_isr(0, 0);
+    assert_eq!(os.running(), Some(TaskId(0)));
+    let before = os;
+    assert_eq!(os.try_activate_task(TaskId(0)), None, "A itself: it queues");
+    assert_eq!(os.try_activate_task(TaskId(7)), None, "an invalid id");
+    assert_eq!(os, before);
+    assert_eq!(os.get_resource(ResourceId(0)), Ok(()));
+    let held = os;
+    assert_eq!(
+        os.try_activate_task(TaskId(1)),
+        None,
+        "B at the ceiling A holds"
+    );
+    assert_eq!(os, held);
+    assert_eq!(os.release_resource(ResourceId(0)), Ok(()));
+    let mut full = os;
+    assert_eq!(full.activate_task(TaskId(1)), Ok(()));
+    let view = os.try_activate_task(TaskId(1));
+    assert_eq!(os, full, "the state the service leaves");
+    assert_eq!(view, Some(full.port_view()));
+    assert_eq!(os.running(), Some(TaskId(1)));
+    let running_b = os;
+    assert_eq!(os.try_activate_task(TaskId(1)), None, "B is active");
+    assert_eq!(os.try_activate_task(TaskId(0)), None, "A is below B");
+    assert_eq!(os, running_b);
+    // B (extended) waits and A runs again: B, above A, is active still.
+    assert_eq!(os.wait_event(1), Ok(()));
+    assert_eq!(os.running(), Some(TaskId(0)));
+    let waiting_b = os;
+    assert_eq!(os.try_activate_task(TaskId(1)), None, "B waits: its limit");
+    assert_eq!(os, waiting_b);
+    assert_eq!(os.activate_task(TaskId(1)), Err(OsError::Limit));
+    // From an ISR: the switch waits for its return, the service's.
+    let mut os = small_started();
+    assert_eq!(os.enter_isr(IsrId(0)), Ok(()));
+    let in_isr = os;
+    assert_eq!(os.try_activate_task(TaskId(1)), None);
+    assert_eq!(os, in_isr);
+}
+
+/// With `PreTaskHook` or `PostTaskHook` configured, the activation's fast path declines
+/// even where the activation preempts: the hooks run around the switch, which the service
+/// makes.
+#[test]
+fn the_fast_activation_leaves_the_switch_to_the_service_where_task_hooks_run() {
+    let mut os = os();
+    assert_eq!(activate_from_isr(&mut os, TaskId(0)), Ok(()));
+    assert_eq!(os.running(), Some(TaskId(0)));
+    let before = os;
+    assert_eq!(os.try_activate_task(TaskId(2)), None);
+    assert_eq!(os, before);
+    assert_eq!(os.activate_task(TaskId(2)), Ok(()));
+    assert_eq!(os.running(), Some(TaskId(2)), "it preempts");
+}
+
 #[test]
 fn fast_lock_paths_take_the_common_case_and_decline_the_rest() {
     let mut os = small_after_an_isr(0, 0);

@@ -1113,3 +1113,34 @@ fn a_called_jobs_end_that_lets_in_another_task_saves_the_context_as_the_callers(
     assert_eq!(port.inspect(|os| os.running()), Some(LOW));
     assert!(port.inspect(|os| os.hooks().errors()).is_empty());
 }
+
+/// The port's `ActivateTask` takes the kernel's fast path where the activated task
+/// preempts at task level, and then starts the job by a call at once, leaving the kernel
+/// as the full service leaves it; where the fast path declines (the task at its
+/// activation limit), the full service refuses and reports, and nothing starts.
+#[test]
+fn the_ports_activation_takes_the_kernels_fast_path_and_then_calls_the_job() {
+    let port = started();
+    let mut reference = kernel_now(&port);
+    assert_eq!(reference.activate_task(HIGH), Ok(()));
+    port.arch().calls.set(true);
+    let end = ends(|| {
+        let _ = port.activate_task(HIGH);
+    });
+    assert_eq!(end, End::Called(HIGH.0));
+    assert_eq!(kernel_now(&port), reference, "the state the service leaves");
+    assert!(!port.in_kernel.load(Ordering::Relaxed));
+    assert_eq!(port.arch().level.get(), Some(InterruptMask::None));
+    assert_eq!(sched(&port).caller_of(usize::from(HIGH.0)), Some(LOW.0));
+    port.end_job(|os| os.terminate_task())
+        .expect("TerminateTask");
+    assert_eq!(sched(&port).current(), LOW.0);
+    // Low activating itself: at its limit, the service's E_OS_LIMIT.
+    assert_eq!(port.activate_task(LOW), Err(OsError::Limit));
+    assert!(!port.arch().switch.get());
+    assert_eq!(port.inspect(|os| os.hooks().errors()), [OsError::Limit]);
+    // Without calls (an ISR's context on the CPU), the switch exception.
+    port.arch().calls.set(false);
+    assert_eq!(port.activate_task(HIGH), Ok(()));
+    assert!(port.arch().switch.get());
+}

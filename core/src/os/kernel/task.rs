@@ -1,7 +1,7 @@
 //! Task management (OSEK OS 2.2.3 §13.2): `ActivateTask`, `TerminateTask`, `ChainTask`,
 //! `Schedule`, `GetTaskID`, `GetTaskState`.
 
-use super::{Os, NO_RES};
+use super::{Context, Os, NO_RES};
 use crate::os::call::ServiceCall;
 use crate::os::error::ServiceId;
 use crate::os::{Hooks, OsConfig, OsError, TaskId, TaskState};
@@ -56,6 +56,47 @@ where
                 Ok(())
             },
         )
+    }
+
+    /// `ActivateTask` for the common case where it preempts: the running task at task
+    /// level, with no interrupt lock in force and no hook around a switch configured,
+    /// activates a suspended task whose priority is at or above the caller's preemption
+    /// threshold. The caller goes to the head of its priority's queue and the activated
+    /// task runs: the state `ActivateTask` leaves, without its call-level table, its
+    /// error path or its general switch.
+    ///
+    /// Returns what a port reads at the end of a kernel call ([`Os::port_view`]: the new
+    /// running task's processor priority and the resources it may lock outside the
+    /// kernel); `None`, with nothing changed, in every other case, where the caller makes
+    /// the full service call, which decides, refuses and reports to `ErrorHook`. With
+    /// build-time tables (`static_tables!`) the hook test is a constant.
+    /// `spec::fast_path_agrees` states the contract (the same state as `ActivateTask`, the
+    /// same view); the harnesses and the models check it on every step that takes this
+    /// path.
+    #[inline(always)]
+    pub fn try_activate_task(&mut self, task: TaskId) -> Option<(u8, u32)> {
+        let hooks = self.cfg().hooks;
+        // (The hooks' flags in one test: either one sends the switch to the service.)
+        if self.denied & ServiceId::ActivateTask.bit() != 0
+            || !matches!(self.context, Context::Task)
+            || (hooks.pre_task | hooks.post_task)
+        {
+            return None;
+        }
+        let t = usize::from(task.0);
+        let prio = *self.cfg().priority.get(t)?;
+        // A suspended task has an activation left (every task has at least one).
+        if prio < self.preempt_at || self.activations.get(t).copied() != Some(0) {
+            return None;
+        }
+        self.activations[t] = 1;
+        // `switch_to` without its hooks: the caller to the head of its priority's queue,
+        // the new task running at its dispatch priority, its threshold; the context stays
+        // `Task`.
+        self.preempt_running();
+        self.run(t);
+        self.sync_threshold();
+        Some(self.port_view())
     }
 
     /// `TerminateTask`: ends the calling task. On success the board must stop executing it.
