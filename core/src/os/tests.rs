@@ -2366,14 +2366,10 @@ fn ticks_at_once_stop_before_the_alarm_and_wrap_the_counter() {
     assert_eq!(os.ticks_to_expiry(CounterId(1)), None);
 }
 
-/// The fast paths take the common case and decline the rest, which the full services
-/// then refuse or carry out: a nested lock of the same resource (E_OS_ACCESS), a release
-/// of a resource not held (E_OS_NOFUNC), a release that lets a higher task in (the
-/// switch), a lock with an interrupt lock in force (E_OS_DISABLEDINT), a lock from an ISR.
 /// `ActivateTask`'s fast path takes the activation that preempts (A running activates B
 /// above it) and declines the rest, changing nothing: one that queues (A activating
-/// itself, B activating A), one above a held resource's ceiling, one of a task already
-/// active, an invalid id, one from an ISR.
+/// itself, B activating A), one at or below a held resource's ceiling, one of a task
+/// already active (running, or waiting), an invalid id, one from an ISR.
 #[test]
 fn the_fast_activation_takes_the_preempting_case_and_declines_the_rest() {
     let mut os = small_after_an_isr(0, 0);
@@ -2416,6 +2412,73 @@ fn the_fast_activation_takes_the_preempting_case_and_declines_the_rest() {
     assert_eq!(os, in_isr);
 }
 
+/// The activation's fast path where the small configuration cannot take it: a caller
+/// preempted while it holds a resource (its saved priority the ceiling), a
+/// non-preemptive task activated (it runs at its dispatch priority, above every task),
+/// and the same from a task that holds the scheduler. Each step is taken by the fast
+/// path and checked against the service (`spec::fast_path_agrees`), the transition rules
+/// and every invariant (`spec::call_and_check`).
+#[test]
+fn the_fast_activation_agrees_where_a_resource_is_held_and_for_a_non_preemptive_task() {
+    static PLAIN: OsConfig<4, 1, 0, 0, 1> = match OsConfig::new(OsDescription::new(
+        [
+            TaskConfig::basic("Low", 1).uses(0b1),
+            TaskConfig::basic("Mid", 2).uses(0b1),
+            TaskConfig::basic("Np", 3).non_preemptive(),
+            TaskConfig::basic("High", 4),
+        ],
+        [],
+        [],
+        [IsrConfig::cat2("Tick", 1)],
+    )) {
+        Ok(c) => c,
+        Err(e) => panic!("{}", e.describe()),
+    };
+    let start = || {
+        let mut os = match Os::<4, 1, 0, 0, 1, 4>::new(&PLAIN) {
+            Ok(os) => os,
+            Err(e) => panic!("{e:?}"),
+        };
+        assert_eq!(os.start_os(OSDEFAULTAPPMODE), Ok(()));
+        assert_eq!(os.enter_isr(IsrId(0)), Ok(()));
+        assert_eq!(os.activate_task(TaskId(0)), Ok(()));
+        assert_eq!(os.exit_isr(), Ok(()));
+        assert_eq!(os.running(), Some(TaskId(0)));
+        os
+    };
+    let fast = |os: &mut Os<4, 1, 0, 0, 1, 4>, task: u8| {
+        let service = spec::Service::FastActivate(TaskId(task));
+        let mut probe = *os;
+        assert!(
+            probe.try_activate_task(TaskId(task)).is_some(),
+            "taken: {task}"
+        );
+        let verdict = spec::call_and_check(os, service);
+        assert!(matches!(verdict, Ok(Ok(_))), "{task}: {verdict:?}");
+        assert_eq!(os.running(), Some(TaskId(task)));
+    };
+    // Low holds resource 0 (ceiling 2, Mid's): High preempts it; Low keeps the ceiling.
+    let mut os = start();
+    assert_eq!(os.get_resource(ResourceId(0)), Ok(()));
+    fast(&mut os, 3);
+    assert_eq!(os.saved_priority(TaskId(0)), Some(2));
+    assert_eq!(os.terminate_task(), Ok(()));
+    assert_eq!(os.running(), Some(TaskId(0)));
+    // Np, non-preemptive: it runs at its dispatch priority, above High.
+    let mut os = start();
+    fast(&mut os, 2);
+    assert_eq!(os.running_priority(), os.ceiling(RES_SCHEDULER));
+    let np = os;
+    assert_eq!(os.try_activate_task(TaskId(3)), None, "nothing preempts Np");
+    assert_eq!(os, np);
+    // Low holding the scheduler: nothing preempts it either.
+    let mut os = start();
+    assert_eq!(os.get_resource(RES_SCHEDULER), Ok(()));
+    let scheduler = os;
+    assert_eq!(os.try_activate_task(TaskId(3)), None);
+    assert_eq!(os, scheduler);
+}
+
 /// With `PreTaskHook` or `PostTaskHook` configured, the activation's fast path declines
 /// even where the activation preempts: the hooks run around the switch, which the service
 /// makes.
@@ -2431,6 +2494,10 @@ fn the_fast_activation_leaves_the_switch_to_the_service_where_task_hooks_run() {
     assert_eq!(os.running(), Some(TaskId(2)), "it preempts");
 }
 
+/// The fast paths take the common case and decline the rest, which the full services
+/// then refuse or carry out: a nested lock of the same resource (E_OS_ACCESS), a release
+/// of a resource not held (E_OS_NOFUNC), a release that lets a higher task in (the
+/// switch), a lock with an interrupt lock in force (E_OS_DISABLEDINT), a lock from an ISR.
 #[test]
 fn fast_lock_paths_take_the_common_case_and_decline_the_rest() {
     let mut os = small_after_an_isr(0, 0);

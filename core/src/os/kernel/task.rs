@@ -96,6 +96,9 @@ where
         self.preempt_running();
         self.run(t);
         self.sync_threshold();
+        // As after every switch (`switched`); not in Kani builds, for the same reason.
+        #[cfg(not(kani))]
+        debug_assert!(crate::os::spec::kernel_invariants(self));
         Some(self.port_view())
     }
 
