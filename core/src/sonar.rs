@@ -550,7 +550,13 @@ mod tests {
         ] {
             let cfg = config_at(mm_per_s);
             let c = u64::from(mm_per_s);
-            for d in (0..=20_000).chain([1_000_000, 2_000_000, 600_000_000]) {
+            // Under Miri (the big-endian run) every seventh distance: the arithmetic is
+            // the same on either byte order, and the native run takes them all.
+            let stride = if cfg!(miri) { 7 } else { 1 };
+            for d in (0..=20_000)
+                .step_by(stride)
+                .chain([1_000_000, 2_000_000, 600_000_000])
+            {
                 let w = u64::from(cfg.distance_to_echo_us(d));
                 let exact = u64::from(d) * 2_000_000;
                 assert!(

@@ -67,23 +67,23 @@ pub const STAGES: &[&str] = &[
 /// defmt-print, mdBook, valgrind, QEMU, llvm, the Python venv); it takes seconds once those
 /// are there.
 const BUDGET_S: &[(&str, u32)] = &[
-    ("setup", 460),
+    ("setup", 445),
     ("fmt", 5),
-    ("clippy", 80),
-    ("test", 285),
-    ("cross", 67),
-    ("miri", 465),
-    ("model", 52),
-    ("coverage", 215),
-    ("mutants", 80),
-    ("mutation", 280),
+    ("clippy", 76),
+    ("test", 280),
+    ("cross", 63),
+    ("miri", 500),
+    ("model", 58),
+    ("coverage", 210),
+    ("mutants", 78),
+    ("mutation", 272),
     ("qemu", 100),
     ("differential", 6),
     ("interop", 15),
     ("view", 6),
-    ("docs", 160),
+    ("docs", 166),
     ("fuzz", 352),
-    ("bench", 70),
+    ("bench", 66),
 ];
 
 fn budget_s(stage: &str) -> u32 {

@@ -455,11 +455,10 @@ fn tables_of_255_pdus_are_the_limit() {
         dlc: 8,
         hth: Hth(0),
     };
-    let ids = |n: u16| -> Vec<u16> { (0..n).collect() };
     let txs_255: [TxPduConfig; 255] = core::array::from_fn(|i| tx(i as u16));
     let txs_256: [TxPduConfig; 256] = core::array::from_fn(|i| tx(i as u16));
-    let rxs_255: [u16; 255] = core::array::from_fn(|i| ids(255)[i]);
-    let rxs_256: [u16; 256] = core::array::from_fn(|i| ids(256)[i]);
+    let rxs_255: [u16; 255] = core::array::from_fn(|i| i as u16);
+    let rxs_256: [u16; 256] = core::array::from_fn(|i| i as u16);
     assert!(CanIfConfig::<255, 255>::new(txs_255, rx_table(rxs_255)).is_ok());
     assert_eq!(
         CanIfConfig::<256, 1>::new(txs_256, rx_table([1])).err(),
