@@ -155,61 +155,29 @@ mod symbols {
         dest
     }
 
-    /// The EABI's copies: `memcpy` without the result.
-    macro_rules! copies {
-        ($($name:ident),*) => {$(
+    /// The EABI's functions of one kind, each `$body` over the arguments `$args`, with
+    /// C's contract `$contract`, under each of the names.
+    macro_rules! eabi {
+        ($contract:literal, $args:tt => $body:expr; $($name:ident),*) => {$(
             /// # Safety
-            /// C's `memcpy`.
+            #[doc = $contract]
             #[no_mangle]
-            pub unsafe extern "aapcs" fn $name(dest: *mut u8, src: *const u8, n: usize) {
+            pub unsafe extern "aapcs" fn $name $args {
                 // SAFETY: C's contract, which is this function's.
-                unsafe { copy_forward(dest, src, n) };
+                unsafe { $body };
             }
         )*};
     }
-    copies!(__aeabi_memcpy, __aeabi_memcpy4, __aeabi_memcpy8);
-
-    /// The EABI's moves: `memmove` without the result.
-    macro_rules! moves {
-        ($($name:ident),*) => {$(
-            /// # Safety
-            /// C's `memmove`.
-            #[no_mangle]
-            pub unsafe extern "aapcs" fn $name(dest: *mut u8, src: *const u8, n: usize) {
-                // SAFETY: C's contract, which is this function's.
-                unsafe { copy(dest, src, n) };
-            }
-        )*};
-    }
-    moves!(__aeabi_memmove, __aeabi_memmove4, __aeabi_memmove8);
-
-    /// The EABI's fills: the length before the value.
-    macro_rules! fills {
-        ($($name:ident),*) => {$(
-            /// # Safety
-            /// C's `memset`.
-            #[no_mangle]
-            pub unsafe extern "aapcs" fn $name(dest: *mut u8, n: usize, c: i32) {
-                // SAFETY: C's contract, which is this function's.
-                unsafe { set(dest, c as u8, n) };
-            }
-        )*};
-    }
-    fills!(__aeabi_memset, __aeabi_memset4, __aeabi_memset8);
-
-    /// The EABI's clears: fills with 0.
-    macro_rules! clears {
-        ($($name:ident),*) => {$(
-            /// # Safety
-            /// C's `memset` with 0.
-            #[no_mangle]
-            pub unsafe extern "aapcs" fn $name(dest: *mut u8, n: usize) {
-                // SAFETY: C's contract, which is this function's.
-                unsafe { set(dest, 0, n) };
-            }
-        )*};
-    }
-    clears!(__aeabi_memclr, __aeabi_memclr4, __aeabi_memclr8);
+    // The copies and moves: `memcpy` and `memmove` without the result.
+    eabi!("C's `memcpy`.", (dest: *mut u8, src: *const u8, n: usize) => copy_forward(dest, src, n);
+        __aeabi_memcpy, __aeabi_memcpy4, __aeabi_memcpy8);
+    eabi!("C's `memmove`.", (dest: *mut u8, src: *const u8, n: usize) => copy(dest, src, n);
+        __aeabi_memmove, __aeabi_memmove4, __aeabi_memmove8);
+    // The fills, the length before the value, and the clears, fills with 0.
+    eabi!("C's `memset`.", (dest: *mut u8, n: usize, c: i32) => set(dest, c as u8, n);
+        __aeabi_memset, __aeabi_memset4, __aeabi_memset8);
+    eabi!("C's `memset` with 0.", (dest: *mut u8, n: usize) => set(dest, 0, n);
+        __aeabi_memclr, __aeabi_memclr4, __aeabi_memclr8);
 }
 
 pub mod spec;
