@@ -1231,7 +1231,7 @@ impl<K: OsKernel, A: Arch> Port for Preemptive<K, A> {
     /// holding nothing else, is kept outside the kernel: one store, under the kernel lock
     /// and with the ceiling's mask after it where ISRs share the resource; no kernel call
     /// (the module's rules). Otherwise the kernel call `lock_call`.
-    #[inline(never)]
+    #[inline]
     fn get_resource(&self, res: ResourceId) -> Result<(), OsError> {
         if self.lazy_get(res) {
             return Ok(());
@@ -1243,7 +1243,7 @@ impl<K: OsKernel, A: Arch> Port for Preemptive<K, A> {
     /// the kernel that no kernel call has seen is one exchange and the task's mask (no
     /// task became ready meanwhile: that takes a kernel call, which hands the lock over);
     /// otherwise the kernel call `lock_call`.
-    #[inline(never)]
+    #[inline]
     fn release_resource(&self, res: ResourceId) -> Result<(), OsError> {
         if self.lazy_release(res) {
             return Ok(());
