@@ -2,15 +2,110 @@
 //! bitmap of non-empty priorities, so that every operation is O(1): the highest ready
 //! priority is `63 - leading_zeros(bitmap)`.
 //!
-//! Each entry is one activation record (a task id). A list ends at its `tail`: the `next`
-//! link of the newest entry is never read, so appending writes no terminator. Equality and hashing look at the
-//! logical content (the sequence of tasks at each priority), not at which pool slots hold
-//! it, so two queues that will behave the same compare equal.
+//! The bitmap is kept in words of the processor's size (`usize`): one on a 64-bit host,
+//! two on a 32-bit core, where a 64-bit shift by a priority known only at run time takes
+//! a dozen instructions and a word's bit three (a load, an or, a store); the highest
+//! priority tests the upper word first ([`bits`], whose tests run both layouts).
 
 use core::hash::{Hash, Hasher};
 
 const NIL: u8 = u8::MAX;
 const LEVELS: usize = 64;
+/// Words of the bitmap.
+const WORDS: usize = LEVELS / usize::BITS as usize;
+
+/// A bitmap of the 64 priorities in words of any width that divides 64: bit `p` is bit
+/// `p % BITS` of word `p / BITS`.
+pub(crate) mod bits {
+    /// An unsigned word of a bitmap.
+    pub(crate) trait Word: Copy {
+        /// Its width.
+        const BITS: usize;
+        /// Bit `i` (below `BITS`) alone.
+        fn bit(i: usize) -> Self;
+        /// Whether any bit is set.
+        fn any(self) -> bool;
+        /// The highest set bit of a word with one set.
+        fn top(self) -> usize;
+        /// `self | other`.
+        fn or(self, other: Self) -> Self;
+        /// `self & !other`.
+        fn clear(self, other: Self) -> Self;
+        /// The word as the low bits of a `u64`.
+        fn wide(self) -> u64;
+    }
+
+    macro_rules! word {
+        ($($t:ty),*) => {$(
+            impl Word for $t {
+                const BITS: usize = <$t>::BITS as usize;
+                #[inline(always)]
+                fn bit(i: usize) -> Self {
+                    1 << (i % <Self as Word>::BITS)
+                }
+                #[inline(always)]
+                fn any(self) -> bool {
+                    self != 0
+                }
+                #[inline(always)]
+                fn top(self) -> usize {
+                    <Self as Word>::BITS - 1 - self.leading_zeros() as usize
+                }
+                #[inline(always)]
+                fn or(self, other: Self) -> Self {
+                    self | other
+                }
+                #[inline(always)]
+                fn clear(self, other: Self) -> Self {
+                    self & !other
+                }
+                #[inline(always)]
+                fn wide(self) -> u64 {
+                    self as u64
+                }
+            }
+        )*};
+    }
+    word!(u32, u64, usize);
+
+    /// Sets bit `p` (below 64; a word index past the map wraps, so the index is always
+    /// in range).
+    #[inline(always)]
+    pub(crate) fn set<W: Word, const N: usize>(map: &mut [W; N], p: usize) {
+        let word = &mut map[(p / W::BITS) % N];
+        *word = word.or(W::bit(p));
+    }
+
+    /// Clears bit `p` (below 64; as for [`set`]).
+    #[inline(always)]
+    pub(crate) fn clear<W: Word, const N: usize>(map: &mut [W; N], p: usize) {
+        let word = &mut map[(p / W::BITS) % N];
+        *word = word.clear(W::bit(p));
+    }
+
+    /// The highest set bit, the upper words first.
+    #[inline(always)]
+    pub(crate) fn highest<W: Word>(map: &[W]) -> Option<u8> {
+        let mut w = map.len();
+        while w > 0 {
+            w -= 1;
+            let word = map[w];
+            if word.any() {
+                return Some((w * W::BITS + word.top()) as u8);
+            }
+        }
+        None
+    }
+
+    /// The bitmap as one `u64`.
+    pub(crate) fn wide<W: Word>(map: &[W]) -> u64 {
+        let mut all = 0;
+        for (w, word) in map.iter().enumerate() {
+            all |= word.wide() << (w * W::BITS);
+        }
+        all
+    }
+}
 
 /// The pool is full: more records than the configuration's activations allow. The
 /// kernel's limit checks make this unreachable; it is an error value, not a panic.
@@ -19,7 +114,8 @@ pub(crate) struct QueueFull;
 
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct ReadyQueue<const Q: usize> {
-    bitmap: u64,
+    /// The non-empty priorities ([`bits`]).
+    bitmap: [usize; WORDS],
     head: [u8; LEVELS],
     tail: [u8; LEVELS],
     next: [u8; Q],
@@ -36,7 +132,7 @@ impl<const Q: usize> ReadyQueue<Q> {
             i += 1;
         }
         Self {
-            bitmap: 0,
+            bitmap: [0; WORDS],
             head: [NIL; LEVELS],
             tail: [NIL; LEVELS],
             next,
@@ -48,11 +144,7 @@ impl<const Q: usize> ReadyQueue<Q> {
     /// Highest priority with a ready entry.
     #[inline(always)]
     pub(crate) fn highest(&self) -> Option<u8> {
-        if self.bitmap == 0 {
-            None
-        } else {
-            Some(63 - self.bitmap.leading_zeros() as u8)
-        }
+        bits::highest(&self.bitmap)
     }
 
     #[inline(always)]
@@ -76,7 +168,7 @@ impl<const Q: usize> ReadyQueue<Q> {
             self.next[tail] = slot as u8;
         } else {
             self.head[p] = slot as u8;
-            self.bitmap |= 1 << p;
+            bits::set(&mut self.bitmap, p);
         }
         self.tail[p] = slot as u8;
         Ok(())
@@ -90,7 +182,7 @@ impl<const Q: usize> ReadyQueue<Q> {
         self.next[slot] = self.head[p];
         if self.head[p] == NIL {
             self.tail[p] = slot as u8;
-            self.bitmap |= 1 << p;
+            bits::set(&mut self.bitmap, p);
         }
         self.head[p] = slot as u8;
         Ok(())
@@ -108,7 +200,7 @@ impl<const Q: usize> ReadyQueue<Q> {
         if slot == usize::from(self.tail[p]) {
             self.head[p] = NIL;
             self.tail[p] = NIL;
-            self.bitmap &= !(1 << p);
+            bits::clear(&mut self.bitmap, p);
         } else {
             self.head[p] = self.next[slot];
         }
@@ -133,7 +225,7 @@ impl<const Q: usize> ReadyQueue<Q> {
     /// configuration, not by the bitmap's 64 bits (which is what lets a model checker
     /// unwind it only `Q` times).
     pub(crate) fn levels(&self) -> impl Iterator<Item = u8> + Clone {
-        let mut bits = self.bitmap;
+        let mut bits = self.bitmap();
         core::iter::from_fn(move || {
             if bits == 0 {
                 return None;
@@ -147,7 +239,7 @@ impl<const Q: usize> ReadyQueue<Q> {
 
     /// Bitmap of non-empty priorities.
     pub(crate) fn bitmap(&self) -> u64 {
-        self.bitmap
+        bits::wide(&self.bitmap)
     }
 }
 
@@ -312,7 +404,7 @@ mod tests {
         q.next[1] = 0;
         q.tail[5] = NIL - 1;
         assert_eq!(q.iter(5).take(10).collect::<Vec<_>>(), [7, 8]);
-        q.bitmap |= 0b111;
+        q.bitmap[0] |= 0b111;
         assert_eq!(q.levels().collect::<Vec<_>>(), [0, 1]);
     }
 
@@ -335,5 +427,54 @@ mod tests {
             [Some(3), Some(1), Some(2)]
         );
         assert_eq!(q.highest(), None);
+    }
+
+    /// Every set of up to two priorities in the bitmap of two 32-bit words (the Cortex-M's)
+    /// and of one 64-bit word (a 64-bit host's) is the same `u64`, with the same highest
+    /// bit, through every set and clear.
+    #[test]
+    fn bitmaps_of_either_width_agree_with_one_u64() {
+        fn check<W: bits::Word, const N: usize>(zero: [W; N]) {
+            for a in 0..64 {
+                for b in 0..64 {
+                    let mut map = zero;
+                    let mut model = 0u64;
+                    for (p, set) in [(a, true), (b, true), (a, false), (b, false)] {
+                        if set {
+                            bits::set(&mut map, p);
+                            model |= 1 << p;
+                        } else {
+                            bits::clear(&mut map, p);
+                            model &= !(1 << p);
+                        }
+                        let highest = model.checked_ilog2().map(|h| h as u8);
+                        assert_eq!((bits::wide(&map), bits::highest(&map)), (model, highest));
+                    }
+                }
+            }
+        }
+        check([0u32; 2]);
+        check([0u64; 1]);
+    }
+
+    /// Every two priorities, the same or either side of the bitmap's word boundary (31 and
+    /// 32): the bitmap holds exactly their bits, the highest is the larger, and emptying
+    /// one level leaves the other's bit.
+    #[test]
+    fn every_pair_of_priorities_is_marked_and_found() {
+        for a in 0..64u8 {
+            for b in 0..64u8 {
+                let mut q = ReadyQueue::<2>::new();
+                assert_eq!(q.push_back(a, 1), Ok(()));
+                assert_eq!(q.push_front(b, 2), Ok(()));
+                assert_eq!(q.bitmap(), (1u64 << a) | (1u64 << b), "{a} {b}");
+                assert_eq!(q.highest(), Some(a.max(b)), "{a} {b}");
+                assert_eq!(q.levels().count(), if a == b { 1 } else { 2 });
+                assert_eq!(q.pop_front(b), Some(2));
+                assert_eq!((q.bitmap(), q.highest()), (1u64 << a, Some(a)), "{a} {b}");
+                assert_eq!(q.pop_front(a), Some(1));
+                assert_eq!((q.bitmap(), q.highest()), (0, None), "{a} {b}");
+            }
+        }
     }
 }
