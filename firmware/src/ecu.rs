@@ -22,7 +22,7 @@
 //! expected); `ShutdownHook` records the status `ShutdownOS` was given. EcuM's shutdown
 //! calls `ShutdownOS`: from then on no task, ISR or alarm runs.
 
-use cw_bsp::port::{Port, Resource, TaskLocal};
+use cw_bsp::port::{Port, Resource, TaskLocal, TickPath};
 use cw_core::canif::{CanIf, RxDropped, TxPduId};
 use cw_core::cansm::{self, CanSm};
 use cw_core::com::ipdu::Com;
@@ -678,16 +678,22 @@ impl<P: Port<Kernel = Kernel>, B: Board> Ecu<P, B> {
         // (The trace's mark of the ISR's entry comes after the span: it is the measuring's,
         // not the tick's.)
         match whole {
-            None => {
+            TickPath::NothingDue => {
                 self.port.span(span::TICK_NOTHING_DUE, false);
                 self.port.isr_entered(config::SYSTICK_ISR);
             }
-            Some(Err(_)) => {
+            TickPath::Whole(Err(_)) => {
                 self.port
                     .span_end_as(span::TICK_NOTHING_DUE, span::TICK_ALARMS_DUE);
                 self.port.isr_refused(config::SYSTICK_ISR);
             }
-            Some(Ok(left)) => {
+            TickPath::AlarmsDue => {
+                self.port
+                    .span_end_as(span::TICK_NOTHING_DUE, span::TICK_ALARMS_DUE);
+                self.port.isr_entered(config::SYSTICK_ISR);
+                self.dispatch();
+            }
+            TickPath::Whole(Ok(left)) => {
                 self.port
                     .span_end_as(span::TICK_NOTHING_DUE, span::TICK_ALARMS_DUE);
                 self.port.isr_entered(config::SYSTICK_ISR);

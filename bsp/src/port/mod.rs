@@ -90,6 +90,11 @@ pub unsafe trait OsKernel {
     /// body is `IncrementCounter(counter)` in one step where nothing is due; `None`, with
     /// nothing changed, where the port must run the ISR whole.
     fn try_tick(&mut self, isr: IsrId, counter: CounterId) -> Option<u8>;
+    /// The OS tick's fast path where alarms are due ([`Os::try_tick_due`]): the whole ISR
+    /// in one step where each due alarm activates a task of its own that may be activated;
+    /// the running task may change. `None`, with nothing changed, where the port must run
+    /// the ISR whole.
+    fn try_tick_due(&mut self, isr: IsrId, counter: CounterId) -> Option<u8>;
     /// The port tells the kernel an ISR was entered.
     ///
     /// # Errors
@@ -190,6 +195,10 @@ where
     #[inline(always)]
     fn try_tick(&mut self, isr: IsrId, counter: CounterId) -> Option<u8> {
         Os::try_tick(self, isr, counter)
+    }
+    #[inline]
+    fn try_tick_due(&mut self, isr: IsrId, counter: CounterId) -> Option<u8> {
+        Os::try_tick_due(self, isr, counter)
     }
     #[inline]
     fn enter_isr(&mut self, isr: IsrId) -> Result<(), OsError> {
@@ -300,20 +309,26 @@ pub trait Port {
     }
 
     /// The OS tick, category-2 ISR `isr` whose whole body is `IncrementCounter(counter)`,
-    /// in one kernel call: the kernel's fast path where no alarm is due (`None`: the ISR's
-    /// entry, the service and its return are done), else `whole` on the kernel (the ISR's
-    /// entry, its body and its return, in order), whose result this returns. Either way
-    /// the port then carries out what the kernel decided, as after any kernel call.
+    /// in one kernel call: the kernel's fast path where no alarm is due, its fast path
+    /// where the due alarms only activate tasks (for either, the ISR's entry, the service
+    /// and its return are done), else `whole` on the kernel (the ISR's entry, its body and
+    /// its return, in order), whose result this returns. Either way the port then carries
+    /// out what the kernel decided, as after any kernel call.
     #[inline]
     fn tick_isr<R>(
         &self,
         isr: IsrId,
         counter: CounterId,
         whole: impl FnOnce(&mut Self::Kernel) -> R,
-    ) -> Option<R> {
-        self.kernel(|os| match os.try_tick(isr, counter) {
-            Some(_) => None,
-            None => Some(whole(os)),
+    ) -> TickPath<R> {
+        self.kernel(|os| {
+            if os.try_tick(isr, counter).is_some() {
+                TickPath::NothingDue
+            } else if os.try_tick_due(isr, counter).is_some() {
+                TickPath::AlarmsDue
+            } else {
+                TickPath::Whole(whole(os))
+            }
         })
     }
 
@@ -356,6 +371,18 @@ pub trait Port {
     /// there: the kernel still has the task running, so only tasks above it and ISRs run
     /// again.
     fn hang(&self) {}
+}
+
+/// The path the OS tick took ([`Port::tick_isr`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum TickPath<R> {
+    /// The kernel's fast path where nothing is due: the counter advanced.
+    NothingDue,
+    /// The kernel's fast path where alarms are due: the ISR's whole effect, its alarms'
+    /// activations and the rescheduling at its return included.
+    AlarmsDue,
+    /// The whole ISR ran: `whole`'s result.
+    Whole(R),
 }
 
 /// Data shared by tasks and ISRs, guarded by one OSEK resource.

@@ -73,7 +73,7 @@ use cw_core::os::{
 };
 
 use super::lazy::LazyLock;
-use super::{OsKernel, Port};
+use super::{OsKernel, Port, TickPath};
 
 pub mod spec;
 #[cfg(test)]
@@ -1207,24 +1207,29 @@ impl<K: OsKernel, A: Arch> Port for Preemptive<K, A> {
 
     /// The OS tick in one kernel call: under the kernel lock the kernel's fast path
     /// advances the counter where nothing is due, and the port restores the interrupted
-    /// context's mask; where it declines, `whole` runs the ISR's entry, body and return in
-    /// the same kernel lock, and the port carries out what the kernel decided (the switch
-    /// to a task an alarm activated, once the ISR returns).
+    /// context's mask. Where alarms are due, the kernel's fast path for them, or where
+    /// that declines `whole` (the ISR's entry, body and return), in the same kernel lock;
+    /// then the port carries out what the kernel decided (the switch to a task an alarm
+    /// activated, once the ISR returns).
     #[inline]
     fn tick_isr<R>(
         &self,
         isr: IsrId,
         counter: CounterId,
         whole: impl FnOnce(&mut K) -> R,
-    ) -> Option<R> {
+    ) -> TickPath<R> {
         let (kernel, _) = self.enter();
         if let Some(level) = kernel.try_tick(isr, counter) {
             self.leave_at(level);
-            return None;
+            return TickPath::NothingDue;
         }
-        let result = whole(kernel);
+        let path = if kernel.try_tick_due(isr, counter).is_some() {
+            TickPath::AlarmsDue
+        } else {
+            TickPath::Whole(whole(kernel))
+        };
         self.leave();
-        Some(result)
+        path
     }
 
     /// The lock by the stack resource policy. A task's lock of one of its own resources,

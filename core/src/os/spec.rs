@@ -293,7 +293,8 @@ pub enum Service {
     /// service where that declines.
     FastRelease(ResourceId),
     /// A whole ISR whose body is `IncrementCounter` (the OS tick), as a port runs it: the
-    /// kernel's fast path ([`Os::try_tick`]), and the whole ISR where that declines.
+    /// kernel's fast paths ([`Os::try_tick`], then [`Os::try_tick_due`]), and the whole
+    /// ISR where both decline.
     FastTick(IsrId, CounterId),
     /// `ActivateTask` as a port makes it: the kernel's fast path
     /// ([`Os::try_activate_task`]), and the full service where that declines.
@@ -357,7 +358,10 @@ where
         },
         Service::FastTick(isr, c) => match os.try_tick(isr, c) {
             Some(_) => Ok(Returned::Nothing),
-            None => call(os, service.as_osek()),
+            None => match os.try_tick_due(isr, c) {
+                Some(_) => Ok(Returned::Nothing),
+                None => call(os, service.as_osek()),
+            },
         },
         Service::FastActivate(t) => match os.try_activate_task(t) {
             Some(_) => Ok(Returned::Nothing),
@@ -367,7 +371,8 @@ where
 }
 
 /// The contract of the kernel's fast paths ([`Os::try_get_resource`],
-/// [`Os::try_release_resource`], [`Os::try_tick`], [`Os::try_activate_task`]), for a
+/// [`Os::try_release_resource`], [`Os::try_tick`] and [`Os::try_tick_due`],
+/// [`Os::try_activate_task`]), for a
 /// [`Service::FastGet`], [`Service::FastRelease`], [`Service::FastTick`] or
 /// [`Service::FastActivate`] step from `before` (any other step agrees trivially): where
 /// the fast path takes the step, it leaves exactly the state the full service (or whole
@@ -400,8 +405,10 @@ where
     let (taken, served) = match service {
         Service::FastGet(r) => (fast.try_get_resource(r), full.get_resource(r)),
         Service::FastRelease(r) => (fast.try_release_resource(r), full.release_resource(r)),
+        // The tick's two fast paths in the order a port tries them: where nothing is due,
+        // then where alarms are.
         Service::FastTick(isr, c) => (
-            fast.try_tick(isr, c),
+            fast.try_tick(isr, c).or_else(|| fast.try_tick_due(isr, c)),
             call(&mut full, service.as_osek()).map(|_| ()),
         ),
         Service::FastActivate(t) => {

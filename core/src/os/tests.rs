@@ -2263,6 +2263,195 @@ fn the_fast_tick_takes_the_ticks_where_nothing_is_due() {
     assert_eq!(os.try_tick(tick, counter), None);
 }
 
+/// The tick where alarms are due has a fast path of its own where each due alarm
+/// activates a task of its own that may be activated once more: it leaves the state the
+/// whole ISR leaves (the task an alarm activated running where it preempts, the hooks
+/// around the switch called as at the ISR's return), and declines an alarm due with
+/// another action, a task at its limit (whose `E_OS_LIMIT` the whole ISR reports), and a
+/// tick nested in another ISR.
+#[test]
+fn the_due_tick_fast_path_activates_and_declines_what_it_cannot_run() {
+    let counter = CounterId(0);
+    let agrees = |os: &TestOs| {
+        let verdict = spec::fast_path_agrees(os, spec::Service::FastTick(TICK, counter));
+        assert!(verdict.is_ok(), "{verdict:?}");
+    };
+    // Low runs and arms ActHigh one tick away: the tick activates High, which preempts.
+    let mut os = os();
+    assert_eq!(activate_from_isr(&mut os, LOW), Ok(()));
+    assert_eq!(os.running(), Some(LOW));
+    assert_eq!(os.set_rel_alarm(AlarmId(0), 1, 0), Ok(()));
+    os.hooks_mut().take();
+    agrees(&os);
+    let before = os;
+    assert_eq!(os.try_tick(TICK, counter), None);
+    assert_eq!(os, before);
+    assert_eq!(os.try_tick_due(TICK, counter), Some(5));
+    assert_eq!(os.running(), Some(HIGH));
+    assert_eq!(os.counter_value(counter), Some(1));
+    assert_eq!(
+        os.hooks_mut().take(),
+        [Seen::Post(Some(LOW)), Seen::Pre(Some(HIGH))]
+    );
+    check(&os);
+    // Armed again while High runs (its one activation taken): the tick declines, and the
+    // whole ISR reports the activation refused.
+    assert_eq!(os.set_rel_alarm(AlarmId(0), 1, 0), Ok(()));
+    agrees(&os);
+    let before = os;
+    assert_eq!(os.try_tick_due(TICK, counter), None);
+    assert_eq!(os, before);
+    assert_eq!(
+        spec::call(&mut os, spec::Service::FastTick(TICK, counter)),
+        Ok(Returned::Nothing)
+    );
+    assert!(os.hooks_mut().take().contains(&Seen::Error(
+        OsError::Limit,
+        ServiceCall::ActivateTask(HIGH),
+        Some(TICK)
+    )));
+    // An alarm that sets an event due at the same tick as ActHigh: declined.
+    assert_eq!(os.terminate_task(), Ok(()));
+    assert_eq!(os.running(), Some(LOW));
+    assert_eq!(os.set_rel_alarm(AlarmId(0), 1, 0), Ok(()));
+    assert_eq!(os.set_rel_alarm(AlarmId(1), 1, 0), Ok(()));
+    agrees(&os);
+    let before = os;
+    assert_eq!(os.try_tick_due(TICK, counter), None);
+    assert_eq!(os, before);
+    // An unknown counter or ISR: declined.
+    assert_eq!(os.try_tick_due(TICK, CounterId(1)), None);
+    assert_eq!(os.try_tick_due(IsrId(9), counter), None);
+    assert_eq!(os, before);
+    // Nested in another ISR: declined.
+    assert_eq!(os.cancel_alarm(AlarmId(1)), Ok(()));
+    assert_eq!(os.enter_isr(CAN), Ok(()));
+    assert_eq!(os.try_tick_due(TICK, counter), None);
+    assert_eq!(os.exit_isr(), Ok(()));
+    agrees(&os);
+    // From the idle loop: the task runs, and the context is a task's again.
+    let mut idle = self::os();
+    assert_eq!(activate_from_isr(&mut idle, LOW), Ok(()));
+    assert_eq!(idle.set_rel_alarm(AlarmId(0), 1, 0), Ok(()));
+    assert_eq!(idle.terminate_task(), Ok(()));
+    assert_eq!(idle.running(), None);
+    agrees(&idle);
+    assert_eq!(idle.try_tick_due(TICK, counter), Some(5));
+    assert_eq!(
+        (idle.running(), idle.context()),
+        (Some(HIGH), Context::Task)
+    );
+    check(&idle);
+}
+
+/// Any tick from a task of the test configuration (hooks around every switch) with any of
+/// its three alarms (an activation, an event, a callback) armed one or two ticks away,
+/// the activated task already active or not: the tick's fast paths agree with the whole
+/// ISR, the one for due alarms where only the activation is due.
+#[test]
+#[cfg_attr(kani, kani::proof, kani::unwind(10))]
+fn any_due_tick_agrees_with_the_whole_isr() {
+    bolero::check!()
+        .with_type::<(u8, [u8; 3])>()
+        .cloned()
+        .for_each(|(from, delays)| {
+            let mut os = self::os();
+            let start = [LOW, MID, HIGH, NP][usize::from(from % 4)];
+            assert_eq!(activate_from_isr(&mut os, start), Ok(()));
+            if from & 4 != 0 {
+                let _ = os.activate_task(HIGH);
+            }
+            for (alarm, delay) in delays.iter().enumerate() {
+                if delay % 3 != 0 {
+                    let _ = os.set_rel_alarm(AlarmId(alarm as u8), TickType::from(delay % 3), 0);
+                }
+            }
+            let verdict = spec::fast_path_agrees(&os, spec::Service::FastTick(TICK, CounterId(0)));
+            assert!(verdict.is_ok(), "{verdict:?}");
+        });
+}
+
+/// Two alarms due at one tick that activate the same task: declined (the second
+/// activation depends on the first), and the whole ISR runs them.
+#[test]
+fn the_due_tick_fast_path_declines_one_task_activated_twice() {
+    static TWICE: OsConfig<2, 0, 1, 2, 1> = match OsConfig::new(OsDescription::new(
+        [
+            TaskConfig::basic("Idle", 1).autostart(),
+            TaskConfig::basic("T", 2).activations(2),
+        ],
+        [COUNTER],
+        [
+            AlarmConfig::new("a", CounterId(0), AlarmAction::ActivateTask(TaskId(1))),
+            AlarmConfig::new("b", CounterId(0), AlarmAction::ActivateTask(TaskId(1))),
+        ],
+        [IsrConfig::cat2("Tick", 1)],
+    )) {
+        Ok(c) => c,
+        Err(e) => panic!("{}", e.describe()),
+    };
+    let Ok(mut os) = Os::<2, 0, 1, 2, 1, 3>::new(&TWICE) else {
+        panic!("test configuration refused");
+    };
+    let (tick, counter) = (IsrId(0), CounterId(0));
+    assert_eq!(os.start_os(OSDEFAULTAPPMODE), Ok(()));
+    assert_eq!(os.set_rel_alarm(AlarmId(0), 1, 0), Ok(()));
+    assert_eq!(os.set_rel_alarm(AlarmId(1), 1, 0), Ok(()));
+    let before = os;
+    assert_eq!(os.try_tick_due(tick, counter), None);
+    assert_eq!(os, before);
+    assert_eq!(
+        spec::call(&mut os, spec::Service::FastTick(tick, counter)),
+        Ok(Returned::Nothing)
+    );
+    assert_eq!(os.running(), Some(TaskId(1)));
+    assert_eq!(os.activation_count(TaskId(1)), 2);
+    let verdict = spec::fast_path_agrees(&before, spec::Service::FastTick(tick, counter));
+    assert!(verdict.is_ok(), "{verdict:?}");
+    // One of them alone: taken.
+    let mut one = before;
+    assert_eq!(one.cancel_alarm(AlarmId(1)), Ok(()));
+    assert_eq!(one.try_tick_due(tick, counter), Some(2));
+    assert_eq!(one.running(), Some(TaskId(1)));
+}
+
+/// A due alarm of a task numbered 32 or above sends the tick to the whole ISR (the fast
+/// path tells the due alarms' tasks apart in 32 bits), which activates it.
+#[test]
+fn the_due_tick_fast_path_declines_a_task_above_31() {
+    static MANY: std::sync::LazyLock<OsConfig<33, 0, 1, 1, 1>> = std::sync::LazyLock::new(|| {
+        let mut tasks = [TaskConfig::basic("T", 1); 33];
+        tasks[0] = TaskConfig::basic("Idle", 1).autostart();
+        match OsConfig::new(OsDescription::new(
+            tasks,
+            [COUNTER],
+            [AlarmConfig::new(
+                "a",
+                CounterId(0),
+                AlarmAction::ActivateTask(TaskId(32)),
+            )],
+            [IsrConfig::cat2("Tick", 1)],
+        )) {
+            Ok(c) => c,
+            Err(e) => panic!("{}", e.describe()),
+        }
+    });
+    let Ok(mut os) = Os::<33, 0, 1, 1, 1, 33>::new(&*MANY) else {
+        panic!("test configuration refused");
+    };
+    let (tick, counter) = (IsrId(0), CounterId(0));
+    assert_eq!(os.start_os(OSDEFAULTAPPMODE), Ok(()));
+    assert_eq!(os.set_rel_alarm(AlarmId(0), 1, 0), Ok(()));
+    let before = os;
+    assert_eq!(os.try_tick_due(tick, counter), None);
+    assert_eq!(os, before);
+    assert_eq!(
+        spec::call(&mut os, spec::Service::FastTick(tick, counter)),
+        Ok(Returned::Nothing)
+    );
+    assert_eq!(os.activation_count(TaskId(32)), 1);
+}
+
 /// The tick's fast path is taken while a task holds a resource it shares with an ISR
 /// below the tick (the ECU's send under `RES_COM`, interrupted by `SysTickIsr`): the mask
 /// is then that ISR's level, below the tick's, so the tick is admitted, and the state is

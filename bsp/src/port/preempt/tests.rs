@@ -17,7 +17,7 @@ use cw_core::os::{
 use super::spec;
 use super::{check, Arch, InterruptMask, PortFault, Preemptive, Refusal, IDLE, MAX_TASKS};
 use crate::port::lazy::check_any_steps;
-use crate::port::Port;
+use crate::port::{Port, TickPath};
 
 const LOW: TaskId = TaskId(0);
 const HIGH: TaskId = TaskId(1);
@@ -495,20 +495,27 @@ fn the_tick_is_one_kernel_call_by_the_fast_path_or_whole() {
         os.exit_isr()
     };
     // Nothing due: the kernel's fast path, the task's mask restored, no switch.
-    assert_eq!(port.tick_isr(tick, counter, whole), None);
+    assert_eq!(port.tick_isr(tick, counter, whole), TickPath::NothingDue);
     assert_eq!(port.arch().level.get(), Some(InterruptMask::None));
     assert!(!port.arch().switch.get());
     assert_eq!(port.kernel(|os| os.get_counter_value(counter)), Ok(1));
-    // An alarm due: the ISR whole in the same kernel call; the task the alarm activated
-    // is switched to once the ISR has returned.
+    // An alarm due that activates a task: the kernel's fast path for it in the same
+    // kernel call; the task the alarm activated is switched to once the ISR has returned.
     port.kernel(|os| os.set_rel_alarm(AlarmId(0), 1, 0))
         .expect("SetRelAlarm");
-    assert_eq!(port.tick_isr(tick, counter, whole), Some(Ok(())));
+    assert_eq!(port.tick_isr(tick, counter, whole), TickPath::AlarmsDue);
     assert_eq!(port.kernel(|os| os.get_counter_value(counter)), Ok(2));
     assert_eq!(port.inspect(|os| os.running()), Some(HIGH));
     assert!(port.arch().switch.get());
     assert_eq!(port.arch().level.get(), Some(InterruptMask::None));
     assert_eq!(port.inspect(|os| os.hooks().errors()), []);
+    // Due again while that task holds its one activation: the ISR whole, which reports
+    // the activation refused.
+    port.kernel(|os| os.set_rel_alarm(AlarmId(0), 1, 0))
+        .expect("SetRelAlarm");
+    assert_eq!(port.tick_isr(tick, counter, whole), TickPath::Whole(Ok(())));
+    assert_eq!(port.kernel(|os| os.get_counter_value(counter)), Ok(3));
+    assert_eq!(port.inspect(|os| os.hooks().errors()), [OsError::Limit]);
 }
 
 #[test]

@@ -362,26 +362,66 @@ where
             || ServiceCall::IncrementCounter(counter),
             |os| {
                 let c = Self::counter_index(counter)?;
-                let max = os.cfg().counters[c].max_allowed_value;
-                let value = os.counter_value[c];
-                os.counter_value[c] = if value >= max { 0 } else { value + 1 };
-                let head = os.counter_head[c] as usize;
-                if head >= A {
-                    return Ok(());
+                if os.advance(c) {
+                    os.reschedule();
                 }
-                // The head's delta is at least 1 between ticks; were it 0, the alarm would be
-                // due now, which is what happens.
-                let delta = os.alarm_delta[head];
-                if delta > 1 {
-                    os.alarm_delta[head] = delta - 1;
-                    return Ok(());
-                }
-                os.alarm_delta[head] = 0;
-                os.expire(c);
-                os.reschedule();
                 Ok(())
             },
         )
+    }
+
+    /// One tick of counter `c` (an index in range): the value advanced, and every alarm
+    /// due at this tick run ([`Os::expire`]). Whether any was due.
+    #[inline]
+    pub(super) fn advance(&mut self, c: usize) -> bool {
+        let max = self.cfg().counters[c].max_allowed_value;
+        let value = self.counter_value[c];
+        self.counter_value[c] = if value >= max { 0 } else { value + 1 };
+        let head = self.counter_head[c] as usize;
+        if head >= A {
+            return false;
+        }
+        // The head's delta is at least 1 between ticks; were it 0, the alarm would be
+        // due now, which is what happens.
+        let delta = self.alarm_delta[head];
+        if delta > 1 {
+            self.alarm_delta[head] = delta - 1;
+            return false;
+        }
+        self.alarm_delta[head] = 0;
+        self.expire(c);
+        true
+    }
+
+    /// Whether every alarm of counter `c` due at its next tick activates a task that may
+    /// be activated once more, each a task of its own (so that none of the activations
+    /// fails, nor depends on another): then the tick runs no `ErrorHook`, no callback and
+    /// no `SetEvent`. `false` where none is due.
+    #[inline(always)]
+    pub(super) fn due_alarms_only_activate(&self, c: usize) -> bool {
+        let mut a = usize::from(self.counter_head.get(c).copied().unwrap_or(NONE));
+        // The head is due at the next tick with a delta of 1, the alarms behind it at the
+        // same tick with deltas of 0.
+        let mut due: TickType = 1;
+        // (32 bits: a 64-bit shift by a task known at run time is a dozen instructions on
+        // a 32-bit core; a due alarm of a task above 31 sends the tick to the whole ISR.)
+        let mut tasks = 0u32;
+        for _ in 0..A {
+            if a >= A || self.alarm_delta[a] != due {
+                break;
+            }
+            let AlarmAction::ActivateTask(task) = self.cfg().alarms[a].action else {
+                return false;
+            };
+            let t = usize::from(task.0);
+            if t >= T || t >= 32 || tasks & (1 << t) != 0 || self.activation_left(t).is_err() {
+                return false;
+            }
+            tasks |= 1 << t;
+            due = 0;
+            a = usize::from(self.alarm_next[a]);
+        }
+        tasks != 0
     }
 
     /// Pops and runs every alarm of counter `c` that is due now.

@@ -196,6 +196,44 @@ where
         Some(masked)
     }
 
+    /// The OS tick where alarms are due, for the common case: as [`Os::try_tick`] (the
+    /// category-2 ISR `isr`, whose whole body is `IncrementCounter(counter)`, interrupts a
+    /// task or the idle loop at task level, above the processor priority), where every
+    /// alarm due at this tick activates a task that may be activated once more, each a
+    /// task of its own. Then the ISR runs no `ErrorHook`, callback or `SetEvent`, and its
+    /// entry, the service and its return together advance the counter, run the due
+    /// alarms (each re-armed where cyclic, its task activated) and reschedule at the
+    /// ISR's return: this does that, in one step, without the ISR's frame, its context's
+    /// call-level and mask bookkeeping, and the service's.
+    ///
+    /// Returns the processor priority whose mask is the kernel's now, as
+    /// [`Os::try_tick`] does; the running task may have changed (a port carries that out as
+    /// after any kernel call). `None`, with nothing changed, in every other case, where the
+    /// port runs the ISR whole. The contract is `spec::fast_path_agrees`.
+    #[inline]
+    pub fn try_tick_due(&mut self, isr: IsrId, counter: CounterId) -> Option<u8> {
+        if self.isr_depth != 0 {
+            return None;
+        }
+        let config = self.cfg().isrs.get(isr.0 as usize)?;
+        if !matches!(config.category, IsrCategory::Two)
+            || ISR_LEVEL_BASE + config.priority <= self.masked_level()
+        {
+            return None;
+        }
+        let c = counter.0 as usize;
+        if c >= C || !self.due_alarms_only_activate(c) {
+            return None;
+        }
+        // The ISR's entry and return leave the context, the locks and the ISR's (empty)
+        // slot as they found them; what is left is the service's tick and the return's
+        // rescheduling point, from the interrupted context (a task's or the idle loop's).
+        self.advance(c);
+        self.reschedule();
+        self.sync_task_context();
+        Some(self.masked_level())
+    }
+
     /// The frame of ISR `isr` entered now at processor priority `level`: no resources
     /// held, the locks in force and the context it interrupts.
     #[inline(always)]
