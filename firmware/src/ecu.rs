@@ -661,8 +661,9 @@ impl<P: Port<Kernel = Kernel>, B: Board> Ecu<P, B> {
     /// `SysTickIsr`, every 1 ms: the system counter advances and due alarms activate tasks.
     /// An alarm that cannot activate its task (a period overrun, which the paper's Table 1
     /// would show as a missed period) reaches `ErrorHook`. One kernel call: the kernel's
-    /// fast path where nothing is due, else the ISR's entry, `IncrementCounter` and its
-    /// return under the same kernel lock.
+    /// fast path where nothing is due, its fast path where the due alarms only activate
+    /// tasks that may be activated, else the ISR's entry, `IncrementCounter` and its
+    /// return under the same kernel lock (`Port::tick_isr`).
     pub fn tick(&self) {
         // One span from the ISR's first line, filed by the path the kernel took (so that
         // telling the two apart costs the tick nothing).

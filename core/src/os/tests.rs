@@ -857,9 +857,13 @@ fn shutdown_calls_the_hook_and_stops_everything() {
 #[test]
 fn shutdown_inside_post_task_hook_ends_every_way_out_of_a_task() {
     type Leave = fn(&mut TestOs) -> Result<(), OsError>;
-    let ways: [(&str, TaskId, Leave); 5] = [
+    let ways: [(&str, TaskId, Leave); 6] = [
         ("TerminateTask", LOW, |os| os.terminate_task()),
         ("preempted", LOW, |os| os.activate_task(HIGH)),
+        // Preempted at an ISR's return: the switch is the return's.
+        ("preempted at an ISR's return", LOW, |os| {
+            in_isr(os, CAN, |os| os.activate_task(HIGH))
+        }),
         ("ChainTask", LOW, |os| os.chain_task(HIGH)),
         ("WaitEvent", MID, |os| os.wait_event(1)),
         ("return", LOW, |os| os.task_returned()),
@@ -2344,10 +2348,11 @@ fn the_due_tick_fast_path_activates_and_declines_what_it_cannot_run() {
     check(&idle);
 }
 
-/// Any tick from a task of the test configuration (hooks around every switch) with any of
-/// its three alarms (an activation, an event, a callback) armed one or two ticks away,
-/// the activated task already active or not: the tick's fast paths agree with the whole
-/// ISR, the one for due alarms where only the activation is due.
+/// Any tick from a task of the test configuration (hooks around every switch, which may
+/// fail a call and shut the OS down) with any of its three alarms (an activation, an
+/// event, a callback) armed one or two ticks away, the activated task already active or
+/// not: the tick's fast paths agree with the whole ISR, the one for due alarms where only
+/// the activation is due.
 #[test]
 #[cfg_attr(kani, kani::proof, kani::unwind(10))]
 fn any_due_tick_agrees_with_the_whole_isr() {
@@ -2360,6 +2365,12 @@ fn any_due_tick_agrees_with_the_whole_isr() {
             assert_eq!(activate_from_isr(&mut os, start), Ok(()));
             if from & 4 != 0 {
                 let _ = os.activate_task(HIGH);
+            }
+            // The hooks around the switch at the tick's return may fail a call, and
+            // `ErrorHook` may shut the OS down there.
+            os.hooks_mut().fail_inside_post_task_hook = from & 8 != 0;
+            if from & 16 != 0 {
+                os.hooks_mut().shutdown_on_error = Some(OsError::CallLevel);
             }
             for (alarm, delay) in delays.iter().enumerate() {
                 if delay % 3 != 0 {

@@ -283,6 +283,11 @@ where
         self.context = frame.interrupted;
         if self.isr_depth == 0 && matches!(self.context, Context::Task | Context::Idle) {
             self.reschedule();
+            // A hook around the switch may have shut the OS down (`ErrorHook` after a
+            // refused call in `PostTaskHook`): its context and masks stand.
+            if self.is_shut_down() {
+                return Ok(());
+            }
             self.context = if self.running == NONE {
                 Context::Idle
             } else {
