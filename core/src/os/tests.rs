@@ -217,6 +217,24 @@ fn check(os: &TestOs) {
     assert!(spec::kernel_invariants(os), "invariants: {os:?}");
 }
 
+/// The kernel of a test's own configuration `cfg`, started in the default mode.
+fn started<
+    const T: usize,
+    const R: usize,
+    const C: usize,
+    const A: usize,
+    const I: usize,
+    const Q: usize,
+>(
+    cfg: &'static OsConfig<T, R, C, A, I>,
+) -> Os<T, R, C, A, I, Q> {
+    let Ok(mut os) = Os::<T, R, C, A, I, Q>::new(cfg) else {
+        panic!("test configuration refused");
+    };
+    assert_eq!(os.start_os(OSDEFAULTAPPMODE), Ok(()));
+    os
+}
+
 #[test]
 fn derived_configuration() {
     assert_eq!(CFG.resource_ceiling(0), Some(3));
@@ -1636,11 +1654,8 @@ fn alarms_follow_their_own_counter() {
         Ok(c) => c,
         Err(e) => panic!("{}", e.describe()),
     };
-    let Ok(mut os) = Os::<2, 0, 2, 2, 1, 2>::new(&TWO) else {
-        panic!("test configuration refused");
-    };
+    let mut os: Os<2, 0, 2, 2, 1, 2> = started(&TWO);
     let (first, second) = (AlarmId(0), AlarmId(1));
-    assert_eq!(os.start_os(OSDEFAULTAPPMODE), Ok(()));
     assert_eq!(os.enter_isr(IsrId(0)), Ok(()));
     assert_eq!(
         os.get_alarm_base(second),
@@ -2174,10 +2189,7 @@ fn a_resource_an_isr_shares_may_be_locked_outside_the_kernel_at_its_ceiling() {
         Ok(c) => c,
         Err(e) => panic!("{}", e.describe()),
     };
-    let Ok(mut os) = Os::<1, 1, 0, 0, 1, 1>::new(&SHARED) else {
-        panic!("test configuration refused");
-    };
-    assert_eq!(os.start_os(OSDEFAULTAPPMODE), Ok(()));
+    let mut os: Os<1, 1, 0, 0, 1, 1> = started(&SHARED);
     assert_eq!(os.lock_free_resources(), 0b1);
     assert_eq!(os.interrupt_mask(), InterruptMask::None);
     let verdict = spec::lock_pair_leaves_no_trace(&os, R0);
@@ -2401,11 +2413,8 @@ fn the_due_tick_fast_path_declines_one_task_activated_twice() {
         Ok(c) => c,
         Err(e) => panic!("{}", e.describe()),
     };
-    let Ok(mut os) = Os::<2, 0, 1, 2, 1, 3>::new(&TWICE) else {
-        panic!("test configuration refused");
-    };
+    let mut os: Os<2, 0, 1, 2, 1, 3> = started(&TWICE);
     let (tick, counter) = (IsrId(0), CounterId(0));
-    assert_eq!(os.start_os(OSDEFAULTAPPMODE), Ok(()));
     assert_eq!(os.set_rel_alarm(AlarmId(0), 1, 0), Ok(()));
     assert_eq!(os.set_rel_alarm(AlarmId(1), 1, 0), Ok(()));
     let before = os;
@@ -2447,11 +2456,8 @@ fn the_due_tick_fast_path_declines_a_task_above_31() {
             Err(e) => panic!("{}", e.describe()),
         }
     });
-    let Ok(mut os) = Os::<33, 0, 1, 1, 1, 33>::new(&*MANY) else {
-        panic!("test configuration refused");
-    };
+    let mut os: Os<33, 0, 1, 1, 1, 33> = started(&MANY);
     let (tick, counter) = (IsrId(0), CounterId(0));
-    assert_eq!(os.start_os(OSDEFAULTAPPMODE), Ok(()));
     assert_eq!(os.set_rel_alarm(AlarmId(0), 1, 0), Ok(()));
     let before = os;
     assert_eq!(os.try_tick_due(tick, counter), None);
@@ -2485,11 +2491,8 @@ fn the_fast_tick_is_taken_under_a_lower_isrs_ceiling() {
         Ok(c) => c,
         Err(e) => panic!("{}", e.describe()),
     };
-    let Ok(mut os) = Os::<1, 1, 1, 1, 2, 1>::new(&SHARED) else {
-        panic!("test configuration refused");
-    };
+    let mut os: Os<1, 1, 1, 1, 2, 1> = started(&SHARED);
     let (tick, counter) = (IsrId(1), CounterId(0));
-    assert_eq!(os.start_os(OSDEFAULTAPPMODE), Ok(()));
     assert_eq!(os.running(), Some(TaskId(0)));
     assert_eq!(os.get_resource(R0), Ok(()));
     let can_level = SHARED.isr_level(0);
