@@ -438,11 +438,14 @@ where
             }
             let cycle = self.alarm_cycle[a];
             self.counter_head[c] = self.alarm_next[a];
-            self.alarm_next[a] = NONE;
-            self.alarm_active[a] = false;
-            self.alarm_cycle[a] = 0;
             if cycle != 0 {
+                // Back in the list `cycle` ticks on: `arm` writes its link, delta, flag
+                // and cycle.
                 self.arm(a, c, cycle, cycle);
+            } else {
+                // Disarmed, as `disarm` leaves it (its delta is 0 already, its cycle 0).
+                self.alarm_next[a] = NONE;
+                self.alarm_active[a] = false;
             }
             match self.cfg().alarms[a].action {
                 AlarmAction::ActivateTask(task) => {
