@@ -2394,6 +2394,29 @@ fn any_due_tick_agrees_with_the_whole_isr() {
         });
 }
 
+/// The tick's fast path where alarms are due declines at `os` and changes nothing, and
+/// the tick as a port runs it (`FastTick`: the whole ISR) succeeds.
+fn declined_then_whole<
+    const T: usize,
+    const R: usize,
+    const C: usize,
+    const A: usize,
+    const I: usize,
+    const Q: usize,
+>(
+    os: &mut Os<T, R, C, A, I, Q>,
+    tick: IsrId,
+    counter: CounterId,
+) {
+    let before = *os;
+    assert_eq!(os.try_tick_due(tick, counter), None);
+    assert_eq!(*os, before);
+    assert_eq!(
+        spec::call(os, spec::Service::FastTick(tick, counter)),
+        Ok(Returned::Nothing)
+    );
+}
+
 /// Two alarms due at one tick that activate the same task: declined (the second
 /// activation depends on the first), and the whole ISR runs them.
 #[test]
@@ -2418,12 +2441,7 @@ fn the_due_tick_fast_path_declines_one_task_activated_twice() {
     assert_eq!(os.set_rel_alarm(AlarmId(0), 1, 0), Ok(()));
     assert_eq!(os.set_rel_alarm(AlarmId(1), 1, 0), Ok(()));
     let before = os;
-    assert_eq!(os.try_tick_due(tick, counter), None);
-    assert_eq!(os, before);
-    assert_eq!(
-        spec::call(&mut os, spec::Service::FastTick(tick, counter)),
-        Ok(Returned::Nothing)
-    );
+    declined_then_whole(&mut os, tick, counter);
     assert_eq!(os.running(), Some(TaskId(1)));
     assert_eq!(os.activation_count(TaskId(1)), 2);
     let verdict = spec::fast_path_agrees(&before, spec::Service::FastTick(tick, counter));
@@ -2459,13 +2477,7 @@ fn the_due_tick_fast_path_declines_a_task_above_31() {
     let mut os: Os<33, 0, 1, 1, 1, 33> = started(&MANY);
     let (tick, counter) = (IsrId(0), CounterId(0));
     assert_eq!(os.set_rel_alarm(AlarmId(0), 1, 0), Ok(()));
-    let before = os;
-    assert_eq!(os.try_tick_due(tick, counter), None);
-    assert_eq!(os, before);
-    assert_eq!(
-        spec::call(&mut os, spec::Service::FastTick(tick, counter)),
-        Ok(Returned::Nothing)
-    );
+    declined_then_whole(&mut os, tick, counter);
     assert_eq!(os.activation_count(TaskId(32)), 1);
 }
 

@@ -147,24 +147,11 @@ where
     /// where nothing happens one by one (`spec::ticks_agree` is the contract).
     #[inline(always)]
     pub fn try_ticks(&mut self, isr: IsrId, counter: CounterId, ticks: u64) -> Option<u8> {
-        // At task level only: nested in another ISR, the ticks' frames would go above it.
-        // (Of the contexts at task level, only a task and the idle loop admit a category-2
-        // ISR: the mask test below declines the hooks, and before and after the run.)
-        if ticks == 0 || self.isr_depth != 0 {
+        if ticks == 0 {
             return None;
         }
+        let masked = self.admits_tick(isr)?;
         let cfg = self.cfg();
-        let config = cfg.isrs.get(isr.0 as usize)?;
-        let level = ISR_LEVEL_BASE + config.priority;
-        // (A category-2 ISR may call `IncrementCounter` in both dialects: `callevel`
-        // asserts it when it builds its table.)
-        if !matches!(config.category, IsrCategory::Two) {
-            return None;
-        }
-        let masked = self.masked_level();
-        if level <= masked {
-            return None;
-        }
         let c = counter.0 as usize;
         let max = cfg.counters.get(c)?.max_allowed_value;
         let head = usize::from(*self.counter_head.get(c)?);
@@ -212,15 +199,7 @@ where
     /// port runs the ISR whole. The contract is `spec::fast_path_agrees`.
     #[inline]
     pub fn try_tick_due(&mut self, isr: IsrId, counter: CounterId) -> Option<u8> {
-        if self.isr_depth != 0 {
-            return None;
-        }
-        let config = self.cfg().isrs.get(isr.0 as usize)?;
-        if !matches!(config.category, IsrCategory::Two)
-            || ISR_LEVEL_BASE + config.priority <= self.masked_level()
-        {
-            return None;
-        }
+        self.admits_tick(isr)?;
         let c = counter.0 as usize;
         if c >= C || !self.due_alarms_only_activate(c) {
             return None;
@@ -232,6 +211,23 @@ where
         self.reschedule();
         self.sync_task_context();
         Some(self.masked_level())
+    }
+
+    /// Whether the tick's fast paths may stand for the whole ISR `isr`: a category-2 ISR
+    /// (which may call `IncrementCounter` in both dialects: `callevel` asserts it when it
+    /// builds its table) at task level (nested in another ISR, its frame would go above
+    /// it; of the contexts at task level only a task and the idle loop admit a category-2
+    /// ISR: the mask test declines the hooks, and before and after the run), above the
+    /// processor priority. The kernel's masked level where it may, `None` otherwise.
+    #[inline(always)]
+    fn admits_tick(&self, isr: IsrId) -> Option<u8> {
+        if self.isr_depth != 0 {
+            return None;
+        }
+        let config = self.cfg().isrs.get(isr.0 as usize)?;
+        let masked = self.masked_level();
+        (matches!(config.category, IsrCategory::Two) && ISR_LEVEL_BASE + config.priority > masked)
+            .then_some(masked)
     }
 
     /// The frame of ISR `isr` entered now at processor priority `level`: no resources
