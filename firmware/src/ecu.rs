@@ -358,9 +358,9 @@ struct ObstaclePart {
 /// The whole ECU on a port `P` and a board `B`.
 pub struct Ecu<P, B: Board> {
     port: P,
-    com: Resource<ComStack<B::Can>>,
-    rte: Resource<Rte>,
-    leds: Resource<LedOutputs<B>>,
+    com: Resource<ComStack<B::Can>, { config::RES_COM.0 }>,
+    rte: Resource<Rte, { config::RES_RTE.0 }>,
+    leds: Resource<LedOutputs<B>, { config::RES_LEDS.0 }>,
     sonar: TaskLocal<SonarPart<B>>,
     obstacle: TaskLocal<ObstaclePart>,
     modes: TaskLocal<ModePart<B>>,
@@ -382,17 +382,14 @@ impl<P: Port<Kernel = Kernel>, B: Board> Ecu<P, B> {
     pub fn new(port: P, parts: BoardParts<B>, sensor: SonarConfig) -> Self {
         Self {
             port,
-            com: Resource::new(config::RES_COM, ComStack::new(parts.can)),
-            rte: Resource::new(config::RES_RTE, Rte::new()),
-            leds: Resource::new(
-                config::RES_LEDS,
-                LedOutputs {
-                    pins: parts.leds,
-                    red: LedActuator::new(LedColor::Red),
-                    yellow: LedActuator::new(LedColor::Yellow),
-                    pin_faults: 0,
-                },
-            ),
+            com: Resource::new(ComStack::new(parts.can)),
+            rte: Resource::new(Rte::new()),
+            leds: Resource::new(LedOutputs {
+                pins: parts.leds,
+                red: LedActuator::new(LedColor::Red),
+                yellow: LedActuator::new(LedColor::Yellow),
+                pin_faults: 0,
+            }),
             sonar: TaskLocal::new(SonarPart {
                 io: parts.sonar,
                 swc: UltraSonic::new(sensor),

@@ -43,10 +43,10 @@ pub(crate) mod word {
         ResourceId(((lazy & RES) as u8).wrapping_sub(1))
     }
 
-    /// Whether `lazy` is a lock of `res`, handed over (`handed`) or not.
-    pub const fn holds(lazy: u32, res: ResourceId, handed: bool) -> bool {
+    /// Whether `lazy` is a lock of `res` handed over (to any owner).
+    pub const fn handed_of(lazy: u32, res: ResourceId) -> bool {
         // (The owner's bits cleared: one instruction on the Cortex-M.)
-        lazy & !(RES << OWNER_SHIFT) == unhanded(res) | if handed { HANDED } else { 0 }
+        lazy & !(RES << OWNER_SHIFT) == unhanded(res) | HANDED
     }
 
     /// Whether `lazy` was handed over for task slot `owner`.
@@ -64,9 +64,17 @@ pub(crate) struct LazyLock {
     word: AtomicU32,
     /// The resources the running task may lock outside the kernel, one bit each: the
     /// kernel's answer at the end of the last kernel call, 0 after a lock by the kernel's
-    /// fast path (the caller then holds a resource).
+    /// fast path (the caller then holds a resource). During a kernel call of the
+    /// preemptive port, [`IN_KERNEL`] alone: the port's re-entrance flag, and no resource
+    /// (a hook's lock goes to the kernel), in the word the lock outside the kernel tests
+    /// anyway.
     mask: AtomicU32,
 }
+
+/// The bit of the mask that says a kernel call is under way ([`LazyLock::begin_kernel`]);
+/// never a resource's (the kernel's answer is stored without it: resource 31 is always
+/// locked by the kernel).
+pub(crate) const IN_KERNEL: u32 = 1 << 31;
 
 impl LazyLock {
     /// No lock, and no resource the running task may lock outside the kernel (until the
@@ -79,11 +87,12 @@ impl LazyLock {
     }
 
     /// Whether the running task may lock `res` outside the kernel now: the kernel's last
-    /// answer names it and no other lock is kept so. (The port adds that no kernel call
-    /// is under way.)
+    /// answer names it and no other lock is kept so. During a kernel call of the
+    /// preemptive port the answer is [`IN_KERNEL`] alone, which names no resource (bit 31
+    /// is never a resource's, whatever `res` is).
     #[inline(always)]
     pub(crate) fn may_take(&self, res: ResourceId) -> bool {
-        let mask = self.mask.load(Ordering::Relaxed);
+        let mask = self.mask.load(Ordering::Relaxed) & !IN_KERNEL;
         mask.checked_shr(u32::from(res.0)).unwrap_or(0) & 1 != 0
             && self.word.load(Ordering::Relaxed) == 0
     }
@@ -94,21 +103,15 @@ impl LazyLock {
         self.word.store(word::unhanded(res), Ordering::Relaxed);
     }
 
-    /// The word, where it holds a lock of `res` that no kernel call has seen: what
-    /// [`LazyLock::clear`] takes back.
+    /// The release of a lock of `res` that no kernel call has seen: one exchange of the
+    /// word from that lock (which is [`word::unhanded`]: the owner's bits come with the
+    /// hand-over) back to 0. It fails, with nothing done, where the word holds anything
+    /// else: no lock, another, or this one handed over by a kernel call (an ISR's)
+    /// meanwhile; the caller then releases by the kernel. `false`: nothing done.
     #[inline(always)]
-    pub(crate) fn unhanded_of(&self, res: ResourceId) -> Option<u32> {
-        let lazy = self.word.load(Ordering::Relaxed);
-        word::holds(lazy, res, false).then_some(lazy)
-    }
-
-    /// The release of a lock no kernel call has seen: one exchange of `lazy` (what
-    /// [`LazyLock::unhanded_of`] found) back to 0, which fails where a kernel call (an
-    /// ISR's) handed the lock over meanwhile. `false`: nothing done.
-    #[inline(always)]
-    pub(crate) fn clear(&self, lazy: u32) -> bool {
+    pub(crate) fn clear(&self, res: ResourceId) -> bool {
         self.word
-            .compare_exchange(lazy, 0, Ordering::Relaxed, Ordering::Relaxed)
+            .compare_exchange(word::unhanded(res), 0, Ordering::Relaxed, Ordering::Relaxed)
             .is_ok()
     }
 
@@ -119,7 +122,7 @@ impl LazyLock {
     #[cfg(feature = "host")]
     #[inline(always)]
     pub(crate) fn clear_alone(&self, res: ResourceId) -> bool {
-        if self.unhanded_of(res).is_none() {
+        if self.word.load(Ordering::Relaxed) != word::unhanded(res) {
             return false;
         }
         self.word.store(0, Ordering::Relaxed);
@@ -152,8 +155,9 @@ impl LazyLock {
         true
     }
 
-    /// The lock is no longer kept (the kernel refused it at its hand-over).
-    #[cfg(feature = "host")]
+    /// The lock is no longer kept: the kernel refused it at its hand-over (the host
+    /// port), or the OS stopped on a fault with no kernel call to hand it to (the
+    /// preemptive port).
     pub(crate) fn drop_lock(&self) {
         self.word.store(0, Ordering::Relaxed);
     }
@@ -162,7 +166,7 @@ impl LazyLock {
     /// over, the word is free again.
     #[inline(always)]
     pub(crate) fn released(&self, res: ResourceId) {
-        if word::holds(self.word.load(Ordering::Relaxed), res, true) {
+        if word::handed_of(self.word.load(Ordering::Relaxed), res) {
             self.word.store(0, Ordering::Relaxed);
         }
     }
@@ -176,10 +180,31 @@ impl LazyLock {
     }
 
     /// The kernel's answer at the end of a kernel call ([`OsKernel::lock_free_resources`],
-    /// or 0 where the caller holds a resource).
+    /// or 0 where the caller holds a resource); in the preemptive port, the kernel call's
+    /// end too ([`IN_KERNEL`] cleared with the same store).
     #[inline(always)]
     pub(crate) fn set_mask(&self, lock_free: u32) {
-        self.mask.store(lock_free, Ordering::Relaxed);
+        self.mask.store(lock_free & !IN_KERNEL, Ordering::Relaxed);
+    }
+
+    /// A kernel call begins (the preemptive port, under its kernel lock): the mask becomes
+    /// [`IN_KERNEL`] alone, and the one before is returned, for a call that leaves the
+    /// kernel's answer as it was ([`LazyLock::set_mask`] with it at the end). `None`,
+    /// with nothing changed, where a kernel call is under way already.
+    #[inline(always)]
+    pub(crate) fn begin_kernel(&self) -> Option<u32> {
+        let before = self.mask.load(Ordering::Relaxed);
+        if before & IN_KERNEL != 0 {
+            return None;
+        }
+        self.mask.store(IN_KERNEL, Ordering::Relaxed);
+        Some(before)
+    }
+
+    /// Whether a kernel call is under way ([`LazyLock::begin_kernel`]).
+    #[inline(always)]
+    pub(crate) fn in_kernel(&self) -> bool {
+        self.mask.load(Ordering::Relaxed) & IN_KERNEL != 0
     }
 
     /// The kernel's last answer.

@@ -392,28 +392,34 @@ pub enum TickPath<R> {
 /// ceiling (derived by the configuration from every task and ISR that declares it) keeps
 /// them from even running meanwhile. A task holding a resource an ISR shares masks that
 /// ISR.
-pub struct Resource<T> {
-    id: ResourceId,
+///
+/// The resource's id is a constant of the type (`ID`, a [`ResourceId`]'s number): the
+/// port's lock of it then folds to the tests and stores of that one resource, with no
+/// load of the id, no bounds check on its tables and no shift by a variable (the lock
+/// outside the kernel, [`Port::get_resource`]).
+pub struct Resource<T, const ID: u8> {
     data: UnsafeCell<T>,
 }
 
 // SAFETY: the data is reached only through `lock` (a `&mut` for the holder of the OSEK
 // resource, which the kernel grants to one task or ISR at a time; see `OsKernel`) or
 // `get_mut` (exclusive by `&mut self`).
-unsafe impl<T: Send> Sync for Resource<T> {}
+unsafe impl<T: Send, const ID: u8> Sync for Resource<T, ID> {}
 
-impl<T> Resource<T> {
-    /// The data, guarded by resource `id`.
-    pub const fn new(id: ResourceId, data: T) -> Self {
+impl<T, const ID: u8> Resource<T, ID> {
+    /// The resource's id.
+    pub const ID: ResourceId = ResourceId(ID);
+
+    /// The data, guarded by resource [`Resource::ID`].
+    pub const fn new(data: T) -> Self {
         Self {
-            id,
             data: UnsafeCell::new(data),
         }
     }
 
     /// The resource's id.
     pub const fn id(&self) -> ResourceId {
-        self.id
+        Self::ID
     }
 
     /// Runs `f` with the data while holding the resource (`GetResource`, `f`,
@@ -425,14 +431,14 @@ impl<T> Resource<T> {
     /// take it, `E_OS_CALLEVEL`, `E_OS_DISABLEDINT`.
     #[inline]
     pub fn lock<P: Port, R>(&self, port: &P, f: impl FnOnce(&mut T) -> R) -> Result<R, OsError> {
-        port.get_resource(self.id)?;
+        port.get_resource(Self::ID)?;
         // SAFETY: GetResource succeeded, so the kernel records this task or ISR as the
         // owner and refuses the resource to every other one until the release below
         // (`OsKernel`'s contract); `f` cannot keep the reference past its return.
         let result = f(unsafe { &mut *self.data.get() });
         // The release cannot fail: the caller owns the resource and took none after it
         // that it still holds (`f` returned, so every lock inside it was released).
-        let _ = port.release_resource(self.id);
+        let _ = port.release_resource(Self::ID);
         Ok(result)
     }
 

@@ -65,7 +65,7 @@
 //!   resumes).
 
 use core::cell::UnsafeCell;
-use core::sync::atomic::{compiler_fence, AtomicBool, AtomicU8, Ordering};
+use core::sync::atomic::{compiler_fence, AtomicU8, Ordering};
 
 use cw_core::os::{
     CounterId, InterruptMask, IsrConfig, IsrId, OsError, ResourceId, TaskConfig, TaskId, TaskKind,
@@ -561,11 +561,11 @@ pub fn back_to_caller(s: &mut Sched) -> bool {
 pub struct Preemptive<K, A> {
     kernel: UnsafeCell<K>,
     sched: UnsafeCell<Sched>,
-    /// A kernel call is under way: a second one would alias the kernel. Outside `sched`
-    /// so that the check itself takes no reference to the tables.
-    in_kernel: AtomicBool,
     /// A task's lock kept outside the kernel and the resources the running task may lock
-    /// so (the module's rules).
+    /// so (the module's rules); with them the flag that a kernel call is under way (a
+    /// second one would alias the kernel), outside `sched` so that the check itself takes
+    /// no reference to the tables, and in the word the lock outside the kernel tests
+    /// anyway ([`LazyLock::begin_kernel`]).
     lazy: LazyLock,
     /// The mask a lock kept outside the kernel applies, per resource: the
     /// [`Arch::level_value`] of its ceiling ([`OsKernel::ceiling`]) where that is an
@@ -577,8 +577,10 @@ pub struct Preemptive<K, A> {
 }
 
 /// The resources a lock may be kept outside the kernel for: one bit each of the kernel's
-/// answer ([`OsKernel::lock_free_resources`]).
-const LAZY_RESOURCES: usize = 32;
+/// answer ([`OsKernel::lock_free_resources`]), bit 31 being the kernel call's flag
+/// ([`IN_KERNEL`](super::lazy::IN_KERNEL)).
+const LAZY_RESOURCES: usize = 31;
+const _: () = assert!(LAZY_RESOURCES <= super::lazy::IN_KERNEL.trailing_zeros() as usize);
 
 /// The processor priority a task returns to when it releases a lock kept outside the
 /// kernel: the task held nothing and had no interrupt lock when it took the lock, so it
@@ -587,9 +589,10 @@ const LAZY_RESOURCES: usize = 32;
 const TASK_LEVEL: u8 = 0;
 
 // SAFETY: the kernel and the tables are reached only with the kernel lock taken (every
-// ISR that may call the OS and the task switch masked, on a single core) and the
-// `in_kernel` flag set by a swap that refuses a second entry; the fault paths that take
-// them without the flag never return to the context they interrupted.
+// ISR that may call the OS and the task switch masked, on a single core) and the kernel
+// call's flag (`LazyLock::begin_kernel`) set by a test and a store that refuse a second
+// entry; the fault paths that take them without the flag never return to the context
+// they interrupted.
 unsafe impl<K: Send, A: Sync> Sync for Preemptive<K, A> {}
 
 impl<K: OsKernel, A: Arch> Preemptive<K, A> {
@@ -598,7 +601,6 @@ impl<K: OsKernel, A: Arch> Preemptive<K, A> {
         Self {
             kernel: UnsafeCell::new(kernel),
             sched: UnsafeCell::new(Sched::new()),
-            in_kernel: AtomicBool::new(false),
             lazy: LazyLock::new(),
             lazy_levels: [const { AtomicU8::new(0) }; LAZY_RESOURCES],
             arch,
@@ -626,7 +628,7 @@ impl<K: OsKernel, A: Arch> Preemptive<K, A> {
     fn masked<R>(&self, f: impl FnOnce(&K, &mut Sched) -> R) -> R {
         let masked = self.arch.all_masked();
         self.arch.disable_all();
-        if self.in_kernel.load(Ordering::Relaxed) {
+        if self.lazy.in_kernel() {
             self.fatal(PortFault::KernelReentered);
         }
         // SAFETY: every interrupt is masked and no kernel call is under way: the only
@@ -737,36 +739,49 @@ impl<K: OsKernel, A: Arch> Preemptive<K, A> {
         result
     }
 
-    /// The kernel lock taken: the kernel and the tables. Not generic over the call, so a
-    /// size-optimised image keeps one copy (a speed-optimised one inlines it).
-    #[inline]
+    /// The kernel lock taken: the kernel and the tables ([`Preemptive::enter_saving`]).
+    #[inline(always)]
     #[allow(clippy::mut_from_ref)]
     fn enter(&self) -> (&mut K, &mut Sched) {
+        let (kernel, sched, _) = self.enter_saving();
+        (kernel, sched)
+    }
+
+    /// The kernel lock taken: the kernel, the tables, and the kernel's answer from before
+    /// the call (which resources the running task may lock outside the kernel; 0 where a
+    /// lock kept outside the kernel was handed over now, since the task holds a resource),
+    /// for a call that leaves it as it was ([`Preemptive::leave_at`] with it). Not generic
+    /// over the call, so a size-optimised image keeps one copy (a speed-optimised one
+    /// inlines it).
+    #[inline]
+    #[allow(clippy::mut_from_ref)]
+    fn enter_saving(&self) -> (&mut K, &mut Sched, u32) {
         self.arch.lock_os();
         // A plain load and store (one core; the lock holds every ISR that may call the OS):
         // a category-1 ISR calling the OS during a kernel call finds the flag set.
-        if self.in_kernel.load(Ordering::Relaxed) {
-            self.reentered();
-        }
-        self.in_kernel.store(true, Ordering::Relaxed);
+        let Some(mut lock_free) = self.lazy.begin_kernel() else {
+            self.reentered()
+        };
         compiler_fence(Ordering::SeqCst);
         let (kernel, sched) = self.tables();
         if let Some(lazy) = self.lazy.to_hand_over() {
             self.hand_over(kernel, lazy);
+            lock_free = 0;
         }
-        (kernel, sched)
+        (kernel, sched, lock_free)
     }
 
-    /// The kernel and the tables, in a kernel call (the kernel lock taken, `in_kernel`
-    /// on): the references of [`Preemptive::enter`], taken again by the call's end, which
-    /// must not be given them as arguments (a job it starts by a call makes kernel calls
-    /// of its own, and takes them again).
+    /// The kernel and the tables, in a kernel call (the kernel lock taken, the kernel
+    /// call's flag on): the references of [`Preemptive::enter`], taken again by the
+    /// call's end, which must not be given them as arguments (a job it starts by a call
+    /// makes kernel calls of its own, and takes them again).
     #[inline(always)]
     #[allow(clippy::mut_from_ref)]
     fn tables(&self) -> (&mut K, &mut Sched) {
         // SAFETY: the kernel lock masks every ISR that may call the OS and the switch, and
-        // the caller turned `in_kernel` on: the only references until `leave` turns it off
-        // (each caller takes them once, and the earlier ones are not used after).
+        // the caller turned the kernel call's flag on: the only references until the
+        // call's end turns it off (each caller takes them once, and the earlier ones are
+        // not used after).
         unsafe { (&mut *self.kernel.get(), &mut *self.sched.get()) }
     }
 
@@ -789,7 +804,9 @@ impl<K: OsKernel, A: Arch> Preemptive<K, A> {
     /// ([`Preemptive::hand_over`]). `false`: nothing done.
     #[inline(always)]
     fn lazy_get(&self, res: ResourceId) -> bool {
-        if !self.lazy.may_take(res) || self.in_kernel.load(Ordering::Relaxed) {
+        // (During a kernel call the kernel's answer is `IN_KERNEL` alone, which names no
+        // resource.)
+        if !self.lazy.may_take(res) {
             return false;
         }
         let Some(level) = self.lazy_levels.get(usize::from(res.0)) else {
@@ -827,13 +844,10 @@ impl<K: OsKernel, A: Arch> Preemptive<K, A> {
     /// the task's mask again. `false`: nothing done.
     #[inline(always)]
     fn lazy_release(&self, res: ResourceId) -> bool {
-        let Some(lazy) = self.lazy.unhanded_of(res) else {
-            return false;
-        };
         // The resource's data is left before the release.
         compiler_fence(Ordering::SeqCst);
         self.arch.may_interrupt();
-        if !self.lazy.clear(lazy) {
+        if !self.lazy.clear(res) {
             return false;
         }
         // (An ISR between the exchange and the mask finds a task that holds nothing, and
@@ -895,7 +909,6 @@ impl<K: OsKernel, A: Arch> Preemptive<K, A> {
     #[inline(always)]
     fn end_lock(&self, kernel: &K, sched: &mut Sched) -> LockEnd {
         let (level, lock_free) = kernel.port_view();
-        self.lazy.set_mask(lock_free);
         let all = level == u8::MAX;
         let end = if all == sched.all_for_kernel {
             LockEnd::Level(level)
@@ -905,7 +918,8 @@ impl<K: OsKernel, A: Arch> Preemptive<K, A> {
             LockEnd::AllChanged(InterruptMask::at_level(level))
         };
         compiler_fence(Ordering::SeqCst);
-        self.in_kernel.store(false, Ordering::Relaxed);
+        // The answer, and the kernel call's end with it.
+        self.lazy.set_mask(lock_free);
         end
     }
 
@@ -978,16 +992,16 @@ impl<K: OsKernel, A: Arch> Preemptive<K, A> {
         };
         match fast {
             Some(level) => {
-                if take {
+                let lock_free = if take {
                     // The caller holds a resource now: nothing may be locked outside the
                     // kernel (`spec::fast_path_agrees`), no need to ask.
-                    self.lazy.set_mask(0);
+                    0
                 } else {
                     self.lazy.released(res);
                     // (The caller holds one fewer.)
-                    self.ask_lock_free(kernel);
-                }
-                self.leave_at(level);
+                    kernel.lock_free_resources()
+                };
+                self.leave_at(level, lock_free);
                 Ok(())
             }
             None => self.lock_service(res, take),
@@ -1005,13 +1019,6 @@ impl<K: OsKernel, A: Arch> Preemptive<K, A> {
     #[inline(never)]
     fn lock_call(&self, res: ResourceId, take: bool) -> Result<(), OsError> {
         self.lock_step(res, take)
-    }
-
-    /// At the end of a kernel call: which resources the running task may lock outside the
-    /// kernel now ([`OsKernel::lock_free_resources`]).
-    #[inline(always)]
-    fn ask_lock_free(&self, kernel: &K) {
-        self.lazy.set_mask(kernel.lock_free_resources());
     }
 
     /// The rest of a lock's kernel call whose fast path declined, with the kernel lock
@@ -1047,12 +1054,13 @@ impl<K: OsKernel, A: Arch> Preemptive<K, A> {
 
     /// Ends the kernel lock after a fast path: the running task, its switch state and the
     /// every-interrupt masking are as they were (the fast paths run only at task level
-    /// with no interrupt lock in force), and the kernel's mask is that of processor
-    /// priority `level`.
+    /// with no interrupt lock in force), the kernel's mask is that of processor priority
+    /// `level` and its answer `lock_free` ([`OsKernel::lock_free_resources`]), stored
+    /// with the kernel call's end.
     #[inline(always)]
-    fn leave_at(&self, level: u8) {
+    fn leave_at(&self, level: u8, lock_free: u32) {
         compiler_fence(Ordering::SeqCst);
-        self.in_kernel.store(false, Ordering::Relaxed);
+        self.lazy.set_mask(lock_free);
         self.arch.set_level(level);
     }
 
@@ -1078,8 +1086,8 @@ impl<K: OsKernel, A: Arch> Preemptive<K, A> {
     fn stopping(&self, sched: &mut Sched) {
         self.arch.disable_all();
         let first = !core::mem::replace(&mut sched.stopped, true);
+        // No resource outside the kernel, and the kernel call's end.
         self.lazy.set_mask(0);
-        self.in_kernel.store(false, Ordering::Relaxed);
         if first {
             self.arch.stopped();
         }
@@ -1137,10 +1145,12 @@ impl<K: OsKernel, A: Arch> Preemptive<K, A> {
         let (kernel, sched) = unsafe { (&mut *self.kernel.get(), &mut *self.sched.get()) };
         kernel.shutdown_on_fault(OsError::StackFault);
         sched.stopped = true;
+        // A lock kept outside the kernel has no kernel to go to now (a stopped kernel
+        // refuses the hand-over): it goes. No resource outside the kernel from here, and
+        // the abandoned call's flag goes with the same store: the application's end may
+        // still read the kernel (its hooks' record), which a stopped OS serves.
+        self.lazy.drop_lock();
         self.lazy.set_mask(0);
-        // The abandoned call's flag goes: the application's end may still read the
-        // kernel (its hooks' record), which a stopped OS serves.
-        self.in_kernel.store(false, Ordering::Release);
         self.arch.stopped()
     }
 
@@ -1218,9 +1228,11 @@ impl<K: OsKernel, A: Arch> Port for Preemptive<K, A> {
         counter: CounterId,
         whole: impl FnOnce(&mut K) -> R,
     ) -> TickPath<R> {
-        let (kernel, _) = self.enter();
+        let (kernel, _, lock_free) = self.enter_saving();
         if let Some(level) = kernel.try_tick(isr, counter) {
-            self.leave_at(level);
+            // (A tick changes nothing for the interrupted task: the kernel's answer is the
+            // one from before the call, 0 if the call took a lock over.)
+            self.leave_at(level, lock_free);
             return TickPath::NothingDue;
         }
         let path = if kernel.try_tick_due(isr, counter).is_some() {
@@ -1275,9 +1287,9 @@ impl<K: OsKernel, A: Arch> Port for Preemptive<K, A> {
             self.arch.request_switch();
             NO_CALL
         };
-        self.lazy.set_mask(lock_free);
         compiler_fence(Ordering::SeqCst);
-        self.in_kernel.store(false, Ordering::Relaxed);
+        // The kernel's answer, and the kernel call's end with it.
+        self.lazy.set_mask(lock_free);
         // The fast path runs only with no interrupt lock in force: the kernel's mask is a
         // level, and every-interrupt masking stays off.
         self.arch.set_level(level);

@@ -3,7 +3,6 @@
 
 extern crate std;
 
-use core::sync::atomic::Ordering;
 use std::cell::{Cell, RefCell};
 use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::vec::Vec;
@@ -663,6 +662,54 @@ fn the_next_kernel_call_hands_the_lock_to_the_kernel_before_anything_else() {
 }
 
 #[test]
+fn a_tick_with_nothing_due_takes_the_lock_over_and_its_answer_says_so() {
+    let port = started();
+    let (tick, counter, tasks_only) = (IsrId(0), CounterId(0), ResourceId(1));
+    let whole = |os: &mut Kernel| {
+        os.enter_isr(tick)?;
+        let _ = os.increment_counter(counter);
+        os.exit_isr()
+    };
+    assert_eq!(port.get_resource(tasks_only), Ok(()));
+    assert_eq!(port.lazy.mask(), 0b11, "the answer from before the lock");
+    // The tick's fast path hands the lock to the kernel first: the task holds a resource
+    // now, so the answer it leaves is 0, not the one it found.
+    assert_eq!(port.tick_isr(tick, counter, whole), TickPath::NothingDue);
+    assert!(!port.lazy.in_kernel());
+    assert_eq!(port.lazy.mask(), 0);
+    assert_eq!(kernel_now(&port).resource_owner(tasks_only), Some(LOW));
+    // Another lock goes to the kernel: the same resource is refused there, the other one
+    // is taken by the kernel.
+    assert_eq!(port.get_resource(tasks_only), Err(OsError::Access));
+    assert_eq!(port.get_resource(ResourceId(0)), Ok(()));
+    assert_eq!(port.release_resource(ResourceId(0)), Ok(()));
+    assert_eq!(port.release_resource(tasks_only), Ok(()));
+    assert_eq!(port.lazy.word(), 0);
+    assert_eq!(port.lazy.mask(), 0b11, "the task holds nothing again");
+    assert_eq!(kernel_now(&port).resource_owner(tasks_only), None);
+}
+
+#[test]
+fn a_stack_fault_while_a_lock_is_kept_outside_the_kernel_still_shuts_down_cleanly() {
+    let port = started();
+    let tasks_only = ResourceId(1);
+    assert_eq!(port.get_resource(tasks_only), Ok(()));
+    let end = ends(|| port.stack_fault(None));
+    assert_eq!(end, End::Stopped, "ShutdownOS, not a refused hand-over");
+    // The lock went with the OS: the application's end reads the kernel without a
+    // hand-over the stopped kernel would refuse (a fatal port fault).
+    assert_eq!(port.lazy.word(), 0);
+    assert_eq!(
+        port.inspect(|os| os.hooks().shutdown),
+        Some(OsError::StackFault.status())
+    );
+    assert_eq!(
+        *port.arch().reports.borrow(),
+        [PortFault::StackOverflow(None)]
+    );
+}
+
+#[test]
 fn a_nested_lock_of_the_same_resource_is_refused_by_the_kernel_as_ever() {
     let port = started();
     let tasks_only = ResourceId(1);
@@ -716,9 +763,16 @@ fn isrs_hooks_and_tasks_under_an_interrupt_lock_lock_through_the_kernel() {
     assert_eq!(port.lazy.word(), 0);
     port.kernel(|os| os.resume_os_interrupts()).expect("resume");
     // Inside a kernel call (a hook's lock would be one): never outside the kernel.
-    port.in_kernel.store(true, Ordering::Relaxed);
+    // The kernel call's flag is in the word the lock tests: the kernel's answer is
+    // `IN_KERNEL` alone meanwhile, and a second call is refused.
+    let before = port.lazy.begin_kernel().expect("no kernel call under way");
+    assert_eq!(before, 0b11);
+    assert!(port.lazy.in_kernel());
+    assert_eq!(port.lazy.begin_kernel(), None);
     assert!(!port.lazy_get(ResourceId(1)));
-    port.in_kernel.store(false, Ordering::Relaxed);
+    assert_eq!(port.lazy.word(), 0);
+    port.lazy.set_mask(before);
+    assert!(!port.lazy.in_kernel());
     assert!(port.lazy_get(ResourceId(1)));
     assert!(port.lazy_release(ResourceId(1)));
 }
@@ -979,10 +1033,7 @@ fn a_job_let_in_by_a_job_on_the_shared_stack_starts_by_a_call_and_returns_to_it(
     let before = sched(&port);
     high_called(&port);
     assert!(!port.arch().switch.get(), "no switch exception");
-    assert!(
-        !port.in_kernel.load(Ordering::Relaxed),
-        "the kernel lock ended"
-    );
+    assert!(!port.lazy.in_kernel(), "the kernel lock ended");
     assert_eq!(port.arch().level.get(), Some(InterruptMask::None));
     assert_eq!(port.inspect(|os| os.running()), Some(HIGH));
     let during = sched(&port);
@@ -1136,7 +1187,7 @@ fn the_ports_activation_takes_the_kernels_fast_path_and_then_calls_the_job() {
     });
     assert_eq!(end, End::Called(HIGH.0));
     assert_eq!(kernel_now(&port), reference, "the state the service leaves");
-    assert!(!port.in_kernel.load(Ordering::Relaxed));
+    assert!(!port.lazy.in_kernel());
     assert_eq!(port.arch().level.get(), Some(InterruptMask::None));
     assert_eq!(sched(&port).caller_of(usize::from(HIGH.0)), Some(LOW.0));
     port.end_job(|os| os.terminate_task())
