@@ -112,11 +112,13 @@ pub trait Board {
 
 /// Faults a test board injects into the tasks.
 pub trait TaskFaults {
-    /// Whether this board injects faults at all (`false`: the ECU does not even read the
-    /// time for [`TaskFaults::hangs`] at each job's start).
+    /// Whether this board injects faults at all (`false`: the ECU does not even ask
+    /// [`TaskFaults::hangs`] at each job's start).
     const INJECTS: bool = true;
-    /// Whether the job of `task` that starts at `now_ms` hangs at its first line.
-    fn hangs(&self, task: TaskId, now_ms: u64) -> bool;
+    /// Whether the job of `task` that starts now hangs at its first line; `now_ms` reads
+    /// the time, which a board asks for only where a fault names `task` (a job start
+    /// pays for the clock only when it may hang).
+    fn hangs(&self, task: TaskId, now_ms: impl FnOnce() -> u64) -> bool;
 }
 
 /// A board that injects no fault.
@@ -126,7 +128,7 @@ pub struct NoFaults;
 impl TaskFaults for NoFaults {
     const INJECTS: bool = false;
     #[inline(always)]
-    fn hangs(&self, _task: TaskId, _now_ms: u64) -> bool {
+    fn hangs(&self, _task: TaskId, _now_ms: impl FnOnce() -> u64) -> bool {
         false
     }
 }
@@ -167,11 +169,26 @@ impl<const N: usize> Stalls<N> {
 }
 
 impl<const N: usize> TaskFaults for Stalls<N> {
-    fn hangs(&self, task: TaskId, now_ms: u64) -> bool {
+    #[inline(always)]
+    fn hangs(&self, task: TaskId, now_ms: impl FnOnce() -> u64) -> bool {
+        // A scenario without stalls (the common case) pays one test at a job's start.
+        if self.len == 0 {
+            return false;
+        }
+        self.first_stall(task).is_some_and(|from| now_ms() >= from)
+    }
+}
+
+impl<const N: usize> Stalls<N> {
+    /// When the first stall of `task` begins, if a stall names it.
+    #[inline(never)]
+    fn first_stall(&self, task: TaskId) -> Option<u64> {
         self.stalls
             .iter()
             .take(self.len)
-            .any(|&(at, t)| t == task && now_ms >= at)
+            .filter(|&&(_, t)| t == task)
+            .map(|&(at, _)| at)
+            .min()
     }
 }
 
@@ -260,4 +277,43 @@ pub struct BoardParts<B: Board> {
     pub watchdog: B::Watchdog,
     /// The faults the board injects.
     pub faults: B::Faults,
+}
+
+#[cfg(test)]
+mod tests {
+    use core::cell::Cell;
+
+    use super::{Stalls, TaskFaults};
+    use cw_core::os::TaskId;
+
+    #[test]
+    fn a_stall_hangs_its_task_from_its_time_on_and_reads_the_clock_only_for_it() {
+        let stalls = Stalls::<4> {
+            stalls: [
+                (100, TaskId(2)),
+                (50, TaskId(2)),
+                (0, TaskId(0)),
+                (0, TaskId(0)),
+            ],
+            len: 2,
+        };
+        let reads = Cell::new(0);
+        let reads = &reads;
+        let at = |now: u64| {
+            move || {
+                reads.set(reads.get() + 1);
+                now
+            }
+        };
+        // A task no stall names: no hang, and no clock read (the slots past `len` are not
+        // stalls, task 0's among them).
+        assert!(!stalls.hangs(TaskId(0), at(1_000)));
+        assert!(!stalls.hangs(TaskId(1), at(1_000)));
+        assert_eq!(reads.get(), 0);
+        // Task 2: from the earlier of its two stalls on.
+        assert!(!stalls.hangs(TaskId(2), at(49)));
+        assert!(stalls.hangs(TaskId(2), at(50)));
+        assert!(stalls.hangs(TaskId(2), at(100)));
+        assert_eq!(reads.get(), 3, "one read per start of a task a stall names");
+    }
 }

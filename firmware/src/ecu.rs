@@ -567,7 +567,7 @@ impl<P: Port<Kernel = Kernel>, B: Board> Ecu<P, B> {
             self.port.span(span::ACTIVATE_TO_FIRST_LINE, false);
         }
         self.port.job_started(task);
-        if <B::Faults as TaskFaults>::INJECTS && self.faults.hangs(task, self.port.now_ms()) {
+        if <B::Faults as TaskFaults>::INJECTS && self.faults.hangs(task, || self.port.now_ms()) {
             // A fault the board injects: the job hangs here, never ending (the port keeps
             // it running at its priority); it reports no alive indication.
             self.port.hang();

@@ -256,6 +256,17 @@ predicate! {
 }
 
 predicate! {
+    /// The preemption threshold the kernel keeps is the one its state defines: no task
+    /// preempts in an ISR, before `StartOS` or after `ShutdownOS`; any ready task
+    /// preempts the idle loop; one above the running task's priority preempts it. The
+    /// fast paths test it without computing it (`ActivateTask`'s, and the tick's where
+    /// alarms are due at its rescheduling point).
+    pub fn threshold_synced(os) -> bool {
+        os.preemption_threshold() == os.threshold()
+    }
+}
+
+predicate! {
     /// All of the above.
     pub fn kernel_invariants(os) -> bool {
         running_is_highest_ready(os)
@@ -267,6 +278,7 @@ predicate! {
             && free_isr_slots_empty(os)
             && context_consistent(os)
             && port_view_agrees(os)
+            && threshold_synced(os)
     }
 }
 

@@ -1311,6 +1311,22 @@ fn an_isr_inside_a_hook_returns_to_the_hook() {
     check(&os);
 }
 
+/// A category-1 ISR inside `PreTaskHook` raised the preemption threshold at its entry; its
+/// return to the hook puts back the task's, so the task that then runs is preempted by a
+/// higher-priority activation at once (it kept the raised threshold, and ran on past the
+/// higher task it activated, before).
+#[test]
+fn after_an_isr_inside_a_hook_a_higher_activation_preempts_at_once() {
+    let mut os = os();
+    os.hooks_mut().fast_isr_in_pre_task_hook = true;
+    assert_eq!(activate_from_isr(&mut os, LOW), Ok(()));
+    os.hooks_mut().fast_isr_in_pre_task_hook = false;
+    check(&os);
+    assert_eq!(os.activate_task(HIGH), Ok(()));
+    assert_eq!(os.running(), Some(HIGH));
+    check(&os);
+}
+
 /// The board's fault path: `ShutdownOS` with the fault's status, `ShutdownHook` told it.
 #[test]
 fn a_fault_shuts_the_os_down_with_its_status() {

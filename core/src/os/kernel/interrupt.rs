@@ -207,9 +207,10 @@ where
         // The ISR's entry and return leave the context, the locks and the ISR's (empty)
         // slot as they found them; what is left is the service's tick and the return's
         // rescheduling point, from the interrupted context (a task's or the idle loop's).
+        // The tick changes only the ready queue: the threshold of that context is in sync
+        // (`spec::threshold_synced`), and a switch syncs the context.
         self.advance(c);
-        self.reschedule();
-        self.sync_task_context();
+        self.reschedule_in_sync();
         Some(self.masked_level())
     }
 
@@ -289,6 +290,12 @@ where
             } else {
                 Context::Task
             };
+        } else if self.isr_depth == 0 {
+            // Back in a hook (which a category-1 ISR may interrupt): no rescheduling point,
+            // but the threshold the entry raised is the one the state defines again, as it
+            // was before the ISR (`spec::threshold_synced`); the task level after the hook
+            // relies on it.
+            self.sync_threshold();
         }
         self.sync_denied();
         Ok(())

@@ -712,6 +712,16 @@ where
     #[inline(always)]
     fn reschedule(&mut self) {
         self.sync_threshold();
+        self.reschedule_in_sync();
+    }
+
+    /// [`Os::reschedule`] where the threshold is in sync already
+    /// (`spec::threshold_synced`): a step that changed neither the context nor the running
+    /// task's priority, only the ready queue (the tick's fast path where alarms are due).
+    /// A switch syncs the threshold and the context itself.
+    #[inline(always)]
+    pub(super) fn reschedule_in_sync(&mut self) {
+        debug_assert_eq!(self.preempt_at, self.threshold());
         let Some(top) = self.ready.highest() else {
             return;
         };
@@ -720,9 +730,15 @@ where
         }
     }
 
+    /// The preemption threshold the kernel keeps (the priority a task must reach to
+    /// preempt), for `spec::threshold_synced`.
+    pub(crate) const fn preemption_threshold(&self) -> u8 {
+        self.preempt_at
+    }
+
     /// The value `preempt_at` must hold.
     #[inline(always)]
-    const fn threshold(&self) -> u8 {
+    pub(crate) const fn threshold(&self) -> u8 {
         if self.isr_depth != 0 || !matches!(self.phase, Phase::Running) {
             u8::MAX
         } else if self.running == NONE {
