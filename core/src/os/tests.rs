@@ -84,6 +84,8 @@ struct Recorder {
     leave_lock_in_hooks: bool,
     /// Make PreTaskHook take the category-1 ISR `Fast` (which a hook does not mask).
     fast_isr_in_pre_task_hook: bool,
+    /// Make ErrorHook take the category-1 ISR `Fast`.
+    fast_isr_in_error_hook: bool,
 }
 
 impl Recorder {
@@ -104,6 +106,7 @@ impl Recorder {
             exit_isr_in_error_hook: self.exit_isr_in_error_hook,
             leave_lock_in_hooks: self.leave_lock_in_hooks,
             fast_isr_in_pre_task_hook: self.fast_isr_in_pre_task_hook,
+            fast_isr_in_error_hook: self.fast_isr_in_error_hook,
             ..Self::default()
         };
         out
@@ -119,6 +122,8 @@ impl Hooks<TestOs> for Recorder {
     }
     fn shutdown_hook(os: &mut TestOs, error: StatusType) {
         os.hooks_mut().push(Seen::Shutdown(error));
+        // The threshold is in sync inside the hook too: no task preempts any more.
+        assert!(spec::threshold_synced(os), "{os:?}");
     }
     fn pre_task_hook(os: &mut TestOs) {
         let id = os.get_task_id().unwrap_or(None);
@@ -151,6 +156,12 @@ impl Hooks<TestOs> for Recorder {
         let call = os.error_call().unwrap_or(ServiceCall::HookMissingEnd);
         let isr = os.get_isr_id().unwrap_or(None);
         os.hooks_mut().push(Seen::Error(error, call, isr));
+        assert!(spec::threshold_synced(os), "{os:?}");
+        if os.hooks().fast_isr_in_error_hook {
+            let taken = os.enter_isr(FAST);
+            let exit = os.exit_isr();
+            os.hooks_mut().push(Seen::ExitIsr(taken.and(exit)));
+        }
         if os.hooks().fail_inside_error_hook {
             let _ = os.activate_task(TaskId(0));
         }
@@ -1054,6 +1065,21 @@ fn locks_left_by_hooks_are_undone() {
     check(&os);
 }
 
+#[test]
+fn after_an_isr_inside_error_hook_a_higher_activation_preempts_at_once() {
+    let mut os = os();
+    assert_eq!(activate_from_isr(&mut os, LOW), Ok(()));
+    os.hooks_mut().fast_isr_in_error_hook = true;
+    // A refused call of the task's: ErrorHook, which the category-1 ISR interrupts.
+    assert_eq!(os.activate_task(TaskId(9)), Err(OsError::Id));
+    os.hooks_mut().fast_isr_in_error_hook = false;
+    assert!(os.hooks_mut().take().contains(&Seen::ExitIsr(Ok(()))));
+    check(&os);
+    assert_eq!(os.activate_task(HIGH), Ok(()));
+    assert_eq!(os.running(), Some(HIGH));
+    check(&os);
+}
+
 /// The resources each task may lock outside the kernel, as the configuration derives
 /// them (built at run time here, so that the derivation is measured): a task's own
 /// resources, those an ISR shares too among them (the port masks the ISRs itself); none
@@ -1314,7 +1340,7 @@ fn an_isr_inside_a_hook_returns_to_the_hook() {
 /// A category-1 ISR inside `PreTaskHook` raised the preemption threshold at its entry; its
 /// return to the hook puts back the task's, so the task that then runs is preempted by a
 /// higher-priority activation at once (it kept the raised threshold, and ran on past the
-/// higher task it activated, before).
+/// higher task it activated, before). The same inside `ErrorHook`, below.
 #[test]
 fn after_an_isr_inside_a_hook_a_higher_activation_preempts_at_once() {
     let mut os = os();

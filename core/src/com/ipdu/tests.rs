@@ -1401,7 +1401,8 @@ fn a_refused_transmission_keeps_the_update_bits_and_starts_no_mdt() {
 }
 
 /// Triggered transfer properties without repetition send once and never repeat, even on
-/// an I-PDU configured with repetitions; with repetition they repeat.
+/// an I-PDU configured with repetitions; with repetition they repeat. The transmission
+/// files nothing on the timer wheel (no repetition left to wake the I-PDU for).
 #[test]
 fn triggered_without_repetition_sends_once() {
     static ONCE: ComConfig<8, 1, 0, 2> = match ComConfig::new(
@@ -1453,6 +1454,10 @@ fn triggered_without_repetition_sends_once() {
                 true
             }),
             Ok(())
+        );
+        assert_eq!(
+            com.tx_wheel.list[0], UNFILED,
+            "signal {signal:?}: nothing filed"
         );
         for _ in 0..10 {
             com.main_function_tx(|_, _| {

@@ -111,6 +111,8 @@ where
             return;
         }
         self.phase = Phase::ShuttingDown;
+        // No task preempts from here (`spec::threshold_synced`, inside ShutdownHook too).
+        self.sync_threshold();
         if self.cfg().hooks.shutdown {
             self.call_hook(Context::ShutdownHook, |os| H::shutdown_hook(os, error));
         }
@@ -148,6 +150,9 @@ where
             self.set_locks(Locks::default());
         }
         self.release_all_of_task(t);
+        // The task's priority is its own again, and so is its threshold, inside the hooks
+        // below too (`spec::threshold_synced`).
+        self.sync_threshold();
         self.report(
             ServiceCall::TaskMissingEnd(crate::os::TaskId(t as u8)),
             OsError::MissingEnd,

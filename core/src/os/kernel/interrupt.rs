@@ -210,6 +210,7 @@ where
         // The tick changes only the ready queue: the threshold of that context is in sync
         // (`spec::threshold_synced`), and a switch syncs the context.
         self.advance(c);
+        debug_assert_eq!(self.preempt_at, self.threshold());
         self.reschedule_in_sync();
         Some(self.masked_level())
     }

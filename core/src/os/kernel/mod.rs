@@ -721,7 +721,6 @@ where
     /// A switch syncs the threshold and the context itself.
     #[inline(always)]
     pub(super) fn reschedule_in_sync(&mut self) {
-        debug_assert_eq!(self.preempt_at, self.threshold());
         let Some(top) = self.ready.highest() else {
             return;
         };
