@@ -136,21 +136,46 @@ fn basepri_at_level(level: u8) -> u8 {
 }
 
 /// The kernel lock's BASEPRI: the highest category-2 ISR's NVIC priority, set at start
-/// (until then the lowest level that still holds PendSV).
+/// (until then the lowest level that still holds PendSV); read by the switch exception
+/// (`PendSV`, in assembly) and the rare masks. The kernel calls read the port's own copy
+/// ([`CortexM`]); [`start`] sets both.
 #[no_mangle]
-static CW_PORT_OS_LEVEL: AtomicU8 = AtomicU8::new(0xE0);
+static CW_PORT_OS_LEVEL: AtomicU8 = AtomicU8::new(INITIAL_OS_LEVEL);
 use CW_PORT_OS_LEVEL as OS_LEVEL;
 
+/// The kernel lock's BASEPRI before [`start`] sets it.
+const INITIAL_OS_LEVEL: u8 = 0xE0;
+
 /// The Cortex-M CPU under the preemptive port.
-#[derive(Debug, Clone, Copy, Default)]
-pub struct CortexM;
+#[derive(Debug, Default)]
+pub struct CortexM {
+    /// The kernel lock's BASEPRI, as [`CW_PORT_OS_LEVEL`] holds it: inside the port, so
+    /// that every kernel call loads it at an offset from the port it already has in a
+    /// register (one instruction) instead of from a global's address (three).
+    os_level: AtomicU8,
+}
+
+impl CortexM {
+    /// The CPU, its kernel lock at the level before start.
+    pub const fn new() -> Self {
+        Self {
+            os_level: AtomicU8::new(INITIAL_OS_LEVEL),
+        }
+    }
+
+    /// The kernel lock's BASEPRI: both copies (before start).
+    fn set_os_level(&self, value: u8) {
+        self.os_level.store(value, Ordering::Relaxed);
+        OS_LEVEL.store(value, Ordering::Relaxed);
+    }
+}
 
 /// The preemptive port on a Cortex-M.
 pub type CortexMPort<K> = Preemptive<K, CortexM>;
 
 /// The port of `kernel` on this CPU.
 pub const fn port<K: OsKernel>(kernel: K) -> CortexMPort<K> {
-    Preemptive::new(kernel, CortexM)
+    Preemptive::new(kernel, CortexM::new())
 }
 
 impl Arch for CortexM {
@@ -161,7 +186,7 @@ impl Arch for CortexM {
     #[inline(always)]
     fn lock_os(&self) {
         // `basepri_max::write` ends with an ISB: the lock holds from the next instruction.
-        basepri_max::write(OS_LEVEL.load(Ordering::Relaxed));
+        basepri_max::write(self.os_level.load(Ordering::Relaxed));
     }
 
     #[inline(always)]
@@ -676,7 +701,7 @@ pub fn start<K: OsKernel>(app: &'static dyn App, port: &'static CortexMPort<K>) 
             .max()
             .unwrap_or(1)
     });
-    OS_LEVEL.store(nvic_priority(os_priority), Ordering::Relaxed);
+    port.arch().set_os_level(nvic_priority(os_priority));
     // SAFETY: the shared stack's array, which nothing uses yet.
     unsafe { paint(basic_bottom, basic_top) };
     let own = port.own_stacks();

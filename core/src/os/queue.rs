@@ -2,6 +2,17 @@
 //! bitmap of non-empty priorities, so that every operation is O(1): the highest ready
 //! priority is `63 - leading_zeros(bitmap)`.
 //!
+//! The head of a priority may be held outside the pool, in that priority's `front` slot:
+//! a preempted task goes there ([`ReadyQueue::push_front`]), one store and the bitmap's
+//! bit instead of a record taken from the pool and linked in. The kernel finds the slot
+//! free whenever it preempts a task: a preempted task is the head of its priority, so no
+//! task is dispatched at that priority, and none is preempted there, before it resumes.
+//! (The kernel's tests, the OSEK conformance suite, the exhaustive step sequences and the
+//! models never take the other way, which a build that stops there showed.) Where the
+//! slot is taken, its task moves to the pool's head first and the order is the same.
+//! Every reading of the queue (its entries per priority, equality, the hash) sees the slot
+//! as the head: where a record is kept is not part of the queue's state.
+//!
 //! The bitmap is kept in words of the processor's size (`usize`): one on a 64-bit host,
 //! two on a 32-bit core, where a 64-bit shift by a priority known only at run time takes
 //! a dozen instructions and a word's bit three (a load, an or, a store); the highest
@@ -10,6 +21,10 @@
 use core::hash::{Hash, Hasher};
 
 const NIL: u8 = u8::MAX;
+/// The index of a priority's list head in [`ReadyQueue`]'s `ends`.
+const HEAD: usize = 0;
+/// The index of a priority's `front` slot in [`ReadyQueue`]'s `ends`.
+const FRONT: usize = 1;
 const LEVELS: usize = 64;
 /// Words of the bitmap.
 const WORDS: usize = LEVELS / usize::BITS as usize;
@@ -116,7 +131,12 @@ pub(crate) struct QueueFull;
 pub(crate) struct ReadyQueue<const Q: usize> {
     /// The non-empty priorities ([`bits`]).
     bitmap: [usize; WORDS],
-    head: [u8; LEVELS],
+    /// Per priority, the head of the pool's list (`[HEAD]`: a slot of the pool, or `NIL`)
+    /// and the `front` slot (`[FRONT]`: the priority's head when that is held outside the
+    /// pool, a preempted task, or `NIL`), which the pool's list follows. One halfword per
+    /// priority, so that `pop_front` tests both with one load and one compare
+    /// ([`ReadyQueue::pool_head`]).
+    ends: [[u8; 2]; LEVELS],
     tail: [u8; LEVELS],
     next: [u8; Q],
     task: [u8; Q],
@@ -133,7 +153,7 @@ impl<const Q: usize> ReadyQueue<Q> {
         }
         Self {
             bitmap: [0; WORDS],
-            head: [NIL; LEVELS],
+            ends: [[NIL; 2]; LEVELS],
             tail: [NIL; LEVELS],
             next,
             task: [0; Q],
@@ -167,46 +187,98 @@ impl<const Q: usize> ReadyQueue<Q> {
         if tail < Q {
             self.next[tail] = slot as u8;
         } else {
-            self.head[p] = slot as u8;
+            self.ends[p][HEAD] = slot as u8;
             bits::set(&mut self.bitmap, p);
         }
         self.tail[p] = slot as u8;
         Ok(())
     }
 
-    /// Inserts an entry at the head of `prio` (oldest): a preempted task.
+    /// Inserts an entry at the head of `prio` (oldest): a preempted task. Into the
+    /// priority's `front` slot where that is free (the kernel's case, see the module),
+    /// with no record of the pool; otherwise the task in the slot moves to the pool's
+    /// head first. (A task numbered `NIL`, never the kernel's, goes to the pool's head.)
     #[inline]
     pub(crate) fn push_front(&mut self, prio: u8, task: u8) -> Result<(), QueueFull> {
-        let slot = self.alloc(task)?;
         let p = (prio & 63) as usize;
-        self.next[slot] = self.head[p];
-        if self.head[p] == NIL {
-            self.tail[p] = slot as u8;
-            bits::set(&mut self.bitmap, p);
+        if self.ends[p][FRONT] != NIL || task == NIL {
+            return self.push_front_pooled(p, task);
         }
-        self.head[p] = slot as u8;
+        self.ends[p][FRONT] = task;
+        bits::set(&mut self.bitmap, p);
         Ok(())
     }
 
-    /// Removes and returns the oldest entry of `prio`.
+    /// [`ReadyQueue::push_front`] where the `front` slot is taken (or `task` cannot be
+    /// held there): the slot's task to the pool's head, then `task` into the slot (or to
+    /// the pool's head before it). `QueueFull` where the pool has no room, with the
+    /// entries as they were (the slot's task may have moved to the pool's head, which is
+    /// the same place in the order).
+    #[cold]
+    fn push_front_pooled(&mut self, p: usize, task: u8) -> Result<(), QueueFull> {
+        let front = self.ends[p][FRONT];
+        if front != NIL {
+            self.link_front(p, front)?;
+            self.ends[p][FRONT] = NIL;
+        }
+        if task == NIL {
+            return self.link_front(p, task);
+        }
+        self.ends[p][FRONT] = task;
+        Ok(())
+    }
+
+    /// A record of the pool for `task` at the head of priority `p`'s list.
+    fn link_front(&mut self, p: usize, task: u8) -> Result<(), QueueFull> {
+        let slot = self.alloc(task)?;
+        self.next[slot] = self.ends[p][HEAD];
+        if self.ends[p][HEAD] == NIL {
+            self.tail[p] = slot as u8;
+        }
+        self.ends[p][HEAD] = slot as u8;
+        bits::set(&mut self.bitmap, p);
+        Ok(())
+    }
+
+    /// Removes and returns the oldest entry of `prio`: the `front` slot's task if there
+    /// is one, else the head of the pool's list.
     #[inline]
     pub(crate) fn pop_front(&mut self, prio: u8) -> Option<u8> {
         let p = (prio & 63) as usize;
-        let slot = self.head[p] as usize;
-        if slot >= Q {
-            return None;
-        }
+        let Some(slot) = self.pool_head(p) else {
+            let front = self.ends[p][FRONT];
+            if front == NIL {
+                return None;
+            }
+            self.ends[p][FRONT] = NIL;
+            if self.ends[p][HEAD] == NIL {
+                bits::clear(&mut self.bitmap, p);
+            }
+            return Some(front);
+        };
         let task = self.task[slot];
         if slot == usize::from(self.tail[p]) {
-            self.head[p] = NIL;
+            self.ends[p][HEAD] = NIL;
             self.tail[p] = NIL;
             bits::clear(&mut self.bitmap, p);
         } else {
-            self.head[p] = self.next[slot];
+            self.ends[p][HEAD] = self.next[slot];
         }
         self.next[slot] = self.free;
         self.free = slot as u8;
         Some(task)
+    }
+
+    /// The head of priority `p`'s list in the pool where that is the priority's head (its
+    /// `front` slot free and the list not empty): `ends[p]` read as one little-endian
+    /// halfword is `0xFF00 + head` exactly then (the slot `NIL` is `0xFF`), so that minus
+    /// `0xFF00`, wrapping in 32 bits, is below `Q` exactly then (a `front` slot taken
+    /// leaves the halfword below `0xFF00`, and the difference at least `2^32 - 0xFF00`).
+    #[inline(always)]
+    fn pool_head(&self, p: usize) -> Option<usize> {
+        let ends = u32::from(u16::from_le_bytes(self.ends[p]));
+        let slot = ends.wrapping_sub(u32::from(NIL) << 8) as usize;
+        (slot < Q).then_some(slot)
     }
 
     /// The tasks queued at `prio`, oldest first.
@@ -214,16 +286,20 @@ impl<const Q: usize> ReadyQueue<Q> {
         let p = (prio & 63) as usize;
         Iter {
             queue: self,
-            slot: self.head[p],
+            front: self.ends[p][FRONT],
+            slot: self.ends[p][HEAD],
             last: self.tail[p],
             left: Q,
         }
     }
 
-    /// The priorities with ready entries, lowest first. Each holds at least one of the
-    /// pool's `Q` records, so there are at most `Q` of them: the walk is bounded by the
-    /// configuration, not by the bitmap's 64 bits (which is what lets a model checker
-    /// unwind it only `Q` times).
+    /// The priorities with ready entries, lowest first. The kernel's pool has a record for
+    /// every activation there can be at once (`Q`), and each such priority holds at least
+    /// one activation (in the pool or in its `front` slot), so there are at most `Q` of
+    /// them: the walk is bounded by the configuration, not by the bitmap's 64 bits (which
+    /// is what lets a model checker unwind it only `Q` times). (Outside the kernel, a
+    /// queue with more `front` slots taken than that is walked over its `Q` lowest
+    /// priorities, here and in the comparison and hash that use this.)
     pub(crate) fn levels(&self) -> impl Iterator<Item = u8> + Clone {
         let mut bits = self.bitmap();
         core::iter::from_fn(move || {
@@ -248,6 +324,8 @@ impl<const Q: usize> ReadyQueue<Q> {
 #[derive(Clone)]
 pub(crate) struct Iter<'a, const Q: usize> {
     queue: &'a ReadyQueue<Q>,
+    /// The `front` slot's task, not yet given (`NIL`: none, or given).
+    front: u8,
     slot: u8,
     last: u8,
     left: usize,
@@ -256,6 +334,11 @@ pub(crate) struct Iter<'a, const Q: usize> {
 impl<const Q: usize> Iterator for Iter<'_, Q> {
     type Item = u8;
     fn next(&mut self) -> Option<u8> {
+        if self.front != NIL {
+            let task = self.front;
+            self.front = NIL;
+            return Some(task);
+        }
         // The count goes down before anything else is looked at, so that it falls by one
         // on every call whatever the links hold.
         if self.left == 0 {
@@ -308,15 +391,108 @@ mod tests {
         q.iter(prio).collect()
     }
 
-    /// A queue without room refuses every entry and stays empty.
+    /// A queue without a pool refuses every entry the pool must hold (any at a tail, a
+    /// second at a head) and stays as it was; a preempted task needs no record of the pool.
     #[test]
-    fn a_queue_of_no_entries_refuses_every_push() {
+    fn a_queue_of_no_entries_refuses_every_record_of_the_pool() {
         let mut q = ReadyQueue::<0>::new();
         assert_eq!(q.push_back(1, 0), Err(QueueFull));
-        assert_eq!(q.push_front(1, 0), Err(QueueFull));
+        assert_eq!(q.push_front(1, NIL), Err(QueueFull));
+        assert_eq!(q, ReadyQueue::<0>::new());
         assert_eq!(q.highest(), None);
         assert_eq!(q.pop_front(1), None);
+        assert_eq!(q.push_front(1, 0), Ok(()));
+        let one = q;
+        assert_eq!(q.push_front(1, 2), Err(QueueFull));
+        assert_eq!(q.push_back(1, 2), Err(QueueFull));
+        assert!(q == one);
+        assert_eq!((q.highest(), tasks(&q, 1)), (Some(1), [0].to_vec()));
+        assert_eq!(q.pop_front(1), Some(0));
         assert_eq!(q, ReadyQueue::<0>::new());
+    }
+
+    /// Two tasks put at one priority's head in turn (never the kernel's case): the second
+    /// is the head, the first next, then the older entries; also for a task numbered
+    /// `NIL`, which the `front` slot cannot hold.
+    #[test]
+    fn a_second_task_at_the_head_goes_before_the_first() {
+        let mut q = ReadyQueue::<4>::new();
+        assert_eq!(q.push_back(7, 1), Ok(()));
+        assert_eq!(q.push_front(7, 2), Ok(()));
+        assert_eq!(q.push_front(7, 3), Ok(()));
+        assert_eq!(tasks(&q, 7), [3, 2, 1]);
+        assert_eq!(q.push_front(7, NIL), Ok(()));
+        assert_eq!(tasks(&q, 7), [NIL, 3, 2, 1]);
+        // The pool is full now, its four records in the list; the slot, free, takes a
+        // head, and the next head needs a record.
+        assert_eq!(q.push_front(7, 4), Ok(()));
+        assert_eq!(q.push_front(7, 5), Err(QueueFull));
+        assert_eq!(tasks(&q, 7), [4, NIL, 3, 2, 1]);
+        let popped: Vec<_> = core::iter::from_fn(|| q.pop_front(7)).collect();
+        assert_eq!(popped, [4, NIL, 3, 2, 1]);
+        assert_eq!((q.bitmap(), q.highest()), (0, None));
+        // A preempted task alone at its priority, the pool's list after it.
+        assert_eq!(q.push_front(9, 5), Ok(()));
+        assert_eq!(q.push_back(9, 6), Ok(()));
+        assert_eq!(q.pop_front(9), Some(5));
+        assert_eq!((q.highest(), tasks(&q, 9)), (Some(9), [6].to_vec()));
+        assert_eq!(q.pop_front(9), Some(6));
+        assert_eq!((q.bitmap(), q.highest()), (0, None));
+    }
+
+    /// Any sequence of up to 48 operations (a task at a tail, at a head, the oldest taken;
+    /// any priority, any task) against a model of one FIFO per priority: the same entries
+    /// in the same order at every priority, the same bitmap and highest priority; a record
+    /// is refused only when the entries fill the pool, and a refusal changes nothing. A
+    /// test and fuzz target; the kernel's Kani proofs take the queue through the kernel.
+    #[test]
+    fn any_operations_keep_one_fifo_per_priority() {
+        use std::collections::VecDeque;
+        bolero::check!()
+            .with_type::<Vec<(u8, u8, u8)>>()
+            .for_each(|ops| {
+                let mut q = ReadyQueue::<6>::new();
+                let mut model: Vec<VecDeque<u8>> = (0..64).map(|_| VecDeque::new()).collect();
+                for &(kind, prio, task) in ops.iter().take(48) {
+                    let p = usize::from(prio & 63);
+                    let entries: usize = model.iter().map(VecDeque::len).sum();
+                    let before = q;
+                    match kind % 3 {
+                        0 | 1 => {
+                            let pushed = if kind % 3 == 0 {
+                                q.push_back(prio, task)
+                            } else {
+                                q.push_front(prio, task)
+                            };
+                            match pushed {
+                                Ok(()) if kind % 3 == 0 => model[p].push_back(task),
+                                Ok(()) => model[p].push_front(task),
+                                Err(QueueFull) => {
+                                    assert!(entries >= 6, "refused with {entries} entries");
+                                    // (Every priority: this queue may hold more levels than
+                                    // the `Q` the comparison walks, which the kernel's never
+                                    // does.)
+                                    assert!(
+                                        q.bitmap() == before.bitmap()
+                                            && (0..64).all(|l| q.iter(l).eq(before.iter(l))),
+                                        "a refusal changed the queue"
+                                    );
+                                }
+                            }
+                        }
+                        _ => assert_eq!(q.pop_front(prio), model[p].pop_front()),
+                    }
+                    let mut bitmap = 0u64;
+                    for (level, fifo) in (0u8..).zip(&model) {
+                        assert!(q.iter(level).eq(fifo.iter().copied()), "priority {level}");
+                        if !fifo.is_empty() {
+                            bitmap |= 1 << level;
+                        }
+                    }
+                    assert_eq!(q.bitmap(), bitmap);
+                    assert_eq!(q.highest(), bitmap.checked_ilog2().map(|h| h as u8));
+                }
+            });
     }
 
     /// Equal (and hashed alike) exactly when every priority holds the same tasks in the
@@ -357,26 +533,31 @@ mod tests {
         assert!(a != ReadyQueue::<8>::new());
     }
 
-    /// A pool of `Q` records takes exactly `Q` (from either end), refuses the next one
-    /// with `QueueFull` and stays as it was; at the largest pool a `u8` slot can address
-    /// (255) too.
+    /// A pool of `Q` records takes exactly `Q` at the tails and refuses the next one with
+    /// `QueueFull`, the entries as they were; a head takes no record where its priority's
+    /// `front` slot is free, and one where it is not (refused on the full pool); at the
+    /// largest pool a `u8` slot can address (255) too.
     fn full_pool_refuses_the_next_record<const Q: usize>() {
         let mut q = ReadyQueue::<Q>::new();
         for i in 0..Q {
             let (prio, task) = ((i % 64) as u8, (i % 251) as u8);
-            let pushed = if i % 2 == 0 {
-                q.push_back(prio, task)
-            } else {
-                q.push_front(prio, task)
-            };
-            assert_eq!(pushed, Ok(()), "record {i} of {Q}");
+            assert_eq!(q.push_back(prio, task), Ok(()), "record {i} of {Q}");
         }
         let full = q;
         assert_eq!(q.push_back(0, 1), Err(QueueFull));
-        assert_eq!(q.push_front(63, 1), Err(QueueFull));
         assert!(q == full);
+        // Heads in the free slots of every priority: no record of the pool.
+        for p in 0..64u8 {
+            assert_eq!(q.push_front(p, 252), Ok(()), "priority {p}");
+        }
+        let heads = q;
+        assert_eq!(q.push_front(63, 1), Err(QueueFull));
+        assert!(q == heads);
         let popped: usize = (0..64u8)
-            .map(|p| core::iter::from_fn(|| q.pop_front(p)).count())
+            .map(|p| {
+                assert_eq!(q.pop_front(p), Some(252), "priority {p}");
+                core::iter::from_fn(|| q.pop_front(p)).count()
+            })
             .sum();
         assert_eq!(popped, Q);
         assert_eq!((q.bitmap(), q.highest()), (0, None));
