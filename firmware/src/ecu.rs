@@ -358,9 +358,17 @@ struct ObstaclePart {
 /// The whole ECU on a port `P` and a board `B`.
 pub struct Ecu<P, B: Board> {
     port: P,
-    com: Resource<ComStack<B::Can>, { config::RES_COM.0 }>,
-    rte: Resource<Rte, { config::RES_RTE.0 }>,
-    leds: Resource<LedOutputs<B>, { config::RES_LEDS.0 }>,
+    com: Resource<
+        ComStack<B::Can>,
+        { config::RES_COM.0 },
+        { config::OS.isr_shared(config::RES_COM) },
+    >,
+    rte: Resource<Rte, { config::RES_RTE.0 }, { config::OS.isr_shared(config::RES_RTE) }>,
+    leds: Resource<
+        LedOutputs<B>,
+        { config::RES_LEDS.0 },
+        { config::OS.isr_shared(config::RES_LEDS) },
+    >,
     sonar: TaskLocal<SonarPart<B>>,
     obstacle: TaskLocal<ObstaclePart>,
     modes: TaskLocal<ModePart<B>>,

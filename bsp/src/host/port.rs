@@ -163,8 +163,9 @@ impl<K: OsKernel> Port for HostPort<K> {
     /// Otherwise the kernel's fast path, or the service.
     #[inline]
     fn get_resource(&self, res: ResourceId) -> Result<(), OsError> {
-        if self.lazy.may_take(res) && self.kernel.try_borrow_mut().is_ok() {
-            self.lazy.take(res);
+        if self.lazy.may_take_either(res) && self.kernel.try_borrow_mut().is_ok() {
+            // (No mask on the host: a lock of either kind is the one that masks nothing.)
+            self.lazy.take(res, false);
             return Ok(());
         }
         self.lock_call(res, true)

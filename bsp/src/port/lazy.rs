@@ -9,23 +9,28 @@
 
 use core::sync::atomic::{AtomicU32, Ordering};
 
-use cw_core::os::ResourceId;
+use cw_core::os::{lock_free_bit, ResourceId};
 
 use super::OsKernel;
 
 /// The word's layout, one place for it: the resource + 1 (bits 0-7; 0: no lock), the
-/// task + 1 once handed over (bits 8-15), and [`HANDED`](word::HANDED).
+/// task + 1 once handed over (bits 8-15), [`HANDED`](word::HANDED) and
+/// [`MASKED`](word::MASKED).
 pub(crate) mod word {
     use cw_core::os::ResourceId;
 
     /// The bit that says the kernel holds the lock for the task.
     pub const HANDED: u32 = 1 << 16;
+    /// The bit that says the lock masks the ISRs up to the resource's ceiling (an ISR
+    /// shares it): its release must unmask them, and a release of the other kind finds
+    /// another word and goes to the kernel.
+    pub const MASKED: u32 = 1 << 17;
     const RES: u32 = 0xFF;
     const OWNER_SHIFT: u32 = 8;
 
-    /// A lock of `res` that no kernel call has seen.
-    pub const fn unhanded(res: ResourceId) -> u32 {
-        res.0 as u32 + 1
+    /// A lock of `res` that no kernel call has seen, masking ISRs or not.
+    pub const fn unhanded(res: ResourceId, masked: bool) -> u32 {
+        (res.0 as u32 + 1) | if masked { MASKED } else { 0 }
     }
 
     /// `lazy`, handed to the kernel for task slot `owner`.
@@ -43,10 +48,10 @@ pub(crate) mod word {
         ResourceId(((lazy & RES) as u8).wrapping_sub(1))
     }
 
-    /// Whether `lazy` is a lock of `res` handed over (to any owner).
+    /// Whether `lazy` is a lock of `res` handed over (to any owner, of either kind).
     pub const fn handed_of(lazy: u32, res: ResourceId) -> bool {
-        // (The owner's bits cleared: one instruction on the Cortex-M.)
-        lazy & !(RES << OWNER_SHIFT) == unhanded(res) | HANDED
+        // (The owner's bits and the kind cleared: one instruction on the Cortex-M.)
+        lazy & !(RES << OWNER_SHIFT | MASKED) == unhanded(res, false) | HANDED
     }
 
     /// Whether `lazy` was handed over for task slot `owner`.
@@ -86,43 +91,63 @@ impl LazyLock {
         }
     }
 
-    /// Whether the running task may lock `res` outside the kernel now: the kernel's last
-    /// answer names it and no other lock is kept so. During a kernel call of the
-    /// preemptive port the answer is [`IN_KERNEL`] alone, which names no resource (bit 31
-    /// is never a resource's, whatever `res` is).
+    /// Whether the running task may lock `res` outside the kernel now, with the lock of
+    /// the kind `masked` says (masking the ISRs up to the ceiling, or nothing): the
+    /// kernel's last answer names it by that kind's bit ([`lock_free_bit`], which a
+    /// constant `res` folds to a constant) and no other lock is kept so. During a kernel
+    /// call of the preemptive port the answer is [`IN_KERNEL`] alone, which names no
+    /// resource (and so a resource whose bit would be that one, the sixteenth of the ISRs'
+    /// kind, is always locked by the kernel).
     #[inline(always)]
-    pub(crate) fn may_take(&self, res: ResourceId) -> bool {
+    pub(crate) fn may_take(&self, res: ResourceId, masked: bool) -> bool {
         let mask = self.mask.load(Ordering::Relaxed) & !IN_KERNEL;
-        mask.checked_shr(u32::from(res.0)).unwrap_or(0) & 1 != 0
-            && self.word.load(Ordering::Relaxed) == 0
+        mask & lock_free_bit(res, masked) != 0 && self.word.load(Ordering::Relaxed) == 0
     }
 
-    /// The lock of `res`, one store (where [`LazyLock::may_take`] allowed it).
+    /// Whether the running task may lock `res` outside the kernel now with a lock of
+    /// either kind (the host port, which masks nothing).
+    #[cfg(feature = "host")]
     #[inline(always)]
-    pub(crate) fn take(&self, res: ResourceId) {
-        self.word.store(word::unhanded(res), Ordering::Relaxed);
+    pub(crate) fn may_take_either(&self, res: ResourceId) -> bool {
+        let either = lock_free_bit(res, false) | lock_free_bit(res, true);
+        let mask = self.mask.load(Ordering::Relaxed) & !IN_KERNEL;
+        mask & either != 0 && self.word.load(Ordering::Relaxed) == 0
     }
 
-    /// The release of a lock of `res` that no kernel call has seen: one exchange of the
-    /// word from that lock (which is [`word::unhanded`]: the owner's bits come with the
-    /// hand-over) back to 0. It fails, with nothing done, where the word holds anything
-    /// else: no lock, another, or this one handed over by a kernel call (an ISR's)
-    /// meanwhile; the caller then releases by the kernel. `false`: nothing done.
+    /// The lock of `res` of the kind `masked` says, one store (where
+    /// [`LazyLock::may_take`] allowed it).
     #[inline(always)]
-    pub(crate) fn clear(&self, res: ResourceId) -> bool {
+    pub(crate) fn take(&self, res: ResourceId, masked: bool) {
         self.word
-            .compare_exchange(word::unhanded(res), 0, Ordering::Relaxed, Ordering::Relaxed)
+            .store(word::unhanded(res, masked), Ordering::Relaxed);
+    }
+
+    /// The release of a lock of `res` of the kind `masked` says that no kernel call has
+    /// seen: one exchange of the word from that lock (which is [`word::unhanded`]: the
+    /// owner's bits come with the hand-over) back to 0. It fails, with nothing done, where
+    /// the word holds anything else: no lock, another, the other kind, or this one handed
+    /// over by a kernel call (an ISR's) meanwhile; the caller then releases by the kernel.
+    /// `false`: nothing done.
+    #[inline(always)]
+    pub(crate) fn clear(&self, res: ResourceId, masked: bool) -> bool {
+        self.word
+            .compare_exchange(
+                word::unhanded(res, masked),
+                0,
+                Ordering::Relaxed,
+                Ordering::Relaxed,
+            )
             .is_ok()
     }
 
     /// The release of a lock of `res` that no kernel call has seen, where nothing can come
-    /// between the test and the store (the host port: no interrupt comes inside a job):
-    /// the word back to 0, without the exchange a CPU needs (a locked instruction on the
-    /// host). `false`: nothing done.
+    /// between the test and the store (the host port: no interrupt comes inside a job,
+    /// and its locks are all of the kind that masks nothing): the word back to 0, without
+    /// the exchange a CPU needs (a locked instruction on the host). `false`: nothing done.
     #[cfg(feature = "host")]
     #[inline(always)]
     pub(crate) fn clear_alone(&self, res: ResourceId) -> bool {
-        if self.word.load(Ordering::Relaxed) != word::unhanded(res) {
+        if self.word.load(Ordering::Relaxed) != word::unhanded(res, false) {
             return false;
         }
         self.word.store(0, Ordering::Relaxed);

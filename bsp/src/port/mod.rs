@@ -293,6 +293,32 @@ pub trait Port {
         self.kernel(|os| lock_in_kernel(os, res, false))
     }
 
+    /// [`Port::get_resource`] of a resource whose kind is known when the image is built:
+    /// `isr_shared` says whether an ISR shares it (its ceiling at interrupt level), which
+    /// a port's lock outside the kernel then need not look up ([`Resource`] calls this).
+    /// Where the kind given is not the resource's, the lock is the kernel's, as correct as
+    /// ever.
+    ///
+    /// # Errors
+    /// As the kernel's service.
+    #[inline]
+    fn get_resource_of_kind<const ISR_SHARED: bool>(&self, res: ResourceId) -> Result<(), OsError> {
+        self.get_resource(res)
+    }
+
+    /// [`Port::release_resource`] of a lock [`Port::get_resource_of_kind`] took, with the
+    /// same kind.
+    ///
+    /// # Errors
+    /// As the kernel's service.
+    #[inline]
+    fn release_resource_of_kind<const ISR_SHARED: bool>(
+        &self,
+        res: ResourceId,
+    ) -> Result<(), OsError> {
+        self.release_resource(res)
+    }
+
     /// Activates a task (`ActivateTask`): the kernel's fast path where it applies, else
     /// the full service; then the port carries out what the kernel decided, as after any
     /// kernel call. A port where a switch costs less than a kernel call's end overrides
@@ -396,17 +422,21 @@ pub enum TickPath<R> {
 /// The resource's id is a constant of the type (`ID`, a [`ResourceId`]'s number): the
 /// port's lock of it then folds to the tests and stores of that one resource, with no
 /// load of the id, no bounds check on its tables and no shift by a variable (the lock
-/// outside the kernel, [`Port::get_resource`]).
-pub struct Resource<T, const ID: u8> {
+/// outside the kernel, [`Port::get_resource`]). So is whether an ISR shares it
+/// (`ISR_SHARED`, from the configuration: [`cw_core::os::OsConfig::isr_shared`]): a lock
+/// of a resource only tasks share then masks nothing with no table to look up, and its
+/// release has no mask to put back ([`Port::get_resource_of_kind`]). Where `ISR_SHARED`
+/// is not the resource's kind, its locks go to the kernel: slower, never wrong.
+pub struct Resource<T, const ID: u8, const ISR_SHARED: bool> {
     data: UnsafeCell<T>,
 }
 
 // SAFETY: the data is reached only through `lock` (a `&mut` for the holder of the OSEK
 // resource, which the kernel grants to one task or ISR at a time; see `OsKernel`) or
 // `get_mut` (exclusive by `&mut self`).
-unsafe impl<T: Send, const ID: u8> Sync for Resource<T, ID> {}
+unsafe impl<T: Send, const ID: u8, const ISR_SHARED: bool> Sync for Resource<T, ID, ISR_SHARED> {}
 
-impl<T, const ID: u8> Resource<T, ID> {
+impl<T, const ID: u8, const ISR_SHARED: bool> Resource<T, ID, ISR_SHARED> {
     /// The resource's id.
     pub const ID: ResourceId = ResourceId(ID);
 
@@ -431,14 +461,14 @@ impl<T, const ID: u8> Resource<T, ID> {
     /// take it, `E_OS_CALLEVEL`, `E_OS_DISABLEDINT`.
     #[inline]
     pub fn lock<P: Port, R>(&self, port: &P, f: impl FnOnce(&mut T) -> R) -> Result<R, OsError> {
-        port.get_resource(Self::ID)?;
+        port.get_resource_of_kind::<ISR_SHARED>(Self::ID)?;
         // SAFETY: GetResource succeeded, so the kernel records this task or ISR as the
         // owner and refuses the resource to every other one until the release below
         // (`OsKernel`'s contract); `f` cannot keep the reference past its return.
         let result = f(unsafe { &mut *self.data.get() });
         // The release cannot fail: the caller owns the resource and took none after it
         // that it still holds (`f` returned, so every lock inside it was released).
-        let _ = port.release_resource(Self::ID);
+        let _ = port.release_resource_of_kind::<ISR_SHARED>(Self::ID);
         Ok(result)
     }
 

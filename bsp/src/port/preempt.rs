@@ -576,11 +576,15 @@ pub struct Preemptive<K, A> {
     arch: A,
 }
 
-/// The resources a lock may be kept outside the kernel for: one bit each of the kernel's
-/// answer ([`OsKernel::lock_free_resources`]), bit 31 being the kernel call's flag
-/// ([`IN_KERNEL`](super::lazy::IN_KERNEL)).
-const LAZY_RESOURCES: usize = 31;
-const _: () = assert!(LAZY_RESOURCES <= super::lazy::IN_KERNEL.trailing_zeros() as usize);
+/// The resources a lock may be kept outside the kernel for
+/// ([`cw_core::os::LOCK_FREE_RESOURCES`]), each with its bits in the kernel's answer
+/// ([`OsKernel::lock_free_resources`]); the last one's lock that masks ISRs never, its bit
+/// being the kernel call's flag ([`IN_KERNEL`](super::lazy::IN_KERNEL)).
+const LAZY_RESOURCES: usize = cw_core::os::LOCK_FREE_RESOURCES as usize;
+const _: () = assert!(
+    cw_core::os::lock_free_bit(ResourceId(LAZY_RESOURCES as u8 - 1), true)
+        == super::lazy::IN_KERNEL
+);
 
 /// The processor priority a task returns to when it releases a lock kept outside the
 /// kernel: the task held nothing and had no interrupt lock when it took the lock, so it
@@ -796,40 +800,46 @@ impl<K: OsKernel, A: Arch> Preemptive<K, A> {
     }
 
     /// `GetResource` outside the kernel, where the module's rules allow it: the running
-    /// task may lock `res` so and no other lock is kept outside the kernel
-    /// ([`LazyLock::may_take`]), and no kernel call is under way (a hook's lock goes to
-    /// the kernel). Then one store where no ISR uses the resource; where ISRs share it, the
-    /// store under the kernel lock and then the mask of the resource's ceiling: no kernel
-    /// call either way. The kernel hears of the lock at the next kernel call
+    /// task may lock `res` so, by a lock of the kind `masked` says, and no other lock is
+    /// kept outside the kernel ([`LazyLock::may_take`]), and no kernel call is under way (a
+    /// hook's lock goes to the kernel). The kernel's answer names a resource no ISR shares
+    /// by the kind that masks nothing: one store. One that ISRs share it names by the other
+    /// kind: the store under the kernel lock and then the mask of the resource's ceiling.
+    /// No kernel call either way. The kernel hears of the lock at the next kernel call
     /// ([`Preemptive::hand_over`]). `false`: nothing done.
     #[inline(always)]
-    fn lazy_get(&self, res: ResourceId) -> bool {
+    fn lazy_get(&self, res: ResourceId, masked: bool) -> bool {
         // (During a kernel call the kernel's answer is `IN_KERNEL` alone, which names no
         // resource.)
-        if !self.lazy.may_take(res) {
+        if !self.lazy.may_take(res, masked) {
             return false;
         }
-        let Some(level) = self.lazy_levels.get(usize::from(res.0)) else {
-            return false;
-        };
-        let value = level.load(Ordering::Relaxed);
-        // (An ISR between the test and the store, or the kernel lock, finds nothing to
-        // hand over, and a task it lets in ends, or waits holding nothing, before this one
-        // goes on: the word is 0 again and the mask the task's.)
-        self.arch.may_interrupt();
-        if value == 0 {
-            // A ceiling at a task's level: no ISR uses the resource, and an ISR that finds
-            // the word ends with the mask of the task at that ceiling, which masks nothing.
-            self.lazy.take(res);
+        if !masked {
+            // (An ISR between the test and the store finds nothing to hand over, and a
+            // task it lets in ends, or waits holding nothing, before this one goes on: the
+            // word is 0 again and the mask the task's.) No ISR uses the resource, and an
+            // ISR that finds the word ends with the mask of the task at its ceiling, a
+            // task's level, which masks nothing.
+            self.arch.may_interrupt();
+            self.lazy.take(res, false);
         } else {
-            // The store under the kernel lock: an ISR that finds the word finds the
-            // ceiling's mask in force, which it keeps (the kernel it hands the lock to
-            // masks as much). Without it an ISR above the ceiling, between the ceiling's
-            // mask and the store, would end by putting back the mask of a task that holds
-            // nothing.
+            let Some(level) = self.lazy_levels.get(usize::from(res.0)) else {
+                return false;
+            };
+            let value = level.load(Ordering::Relaxed);
+            if value == 0 {
+                // (Not computed yet: the port has not started, and no task runs.)
+                return false;
+            }
+            // (An ISR between the test and the kernel lock: as above.) The store under the
+            // kernel lock: an ISR that finds the word finds the ceiling's mask in force,
+            // which it keeps (the kernel it hands the lock to masks as much). Without it
+            // an ISR above the ceiling, between the ceiling's mask and the store, would end
+            // by putting back the mask of a task that holds nothing.
+            self.arch.may_interrupt();
             self.arch.lock_os();
             self.arch.may_interrupt();
-            self.lazy.take(res);
+            self.lazy.take(res, true);
             self.arch.may_interrupt();
             self.arch.set_level_value(value);
         }
@@ -838,22 +848,25 @@ impl<K: OsKernel, A: Arch> Preemptive<K, A> {
         true
     }
 
-    /// `ReleaseResource` of a lock kept outside the kernel that the kernel has not been
-    /// handed: one exchange back to 0, which fails if a kernel call (an ISR's) handed it
-    /// over meanwhile (then, as for every lock handed over, the kernel releases it), and
-    /// the task's mask again. `false`: nothing done.
+    /// `ReleaseResource` of a lock of the kind `masked` says, kept outside the kernel and
+    /// not handed to it: one exchange back to 0, which fails if a kernel call (an ISR's)
+    /// handed it over meanwhile (then, as for every lock handed over, the kernel releases
+    /// it), or the lock is of the other kind; then, for a lock that masked ISRs, the
+    /// task's mask again. `false`: nothing done.
     #[inline(always)]
-    fn lazy_release(&self, res: ResourceId) -> bool {
+    fn lazy_release(&self, res: ResourceId, masked: bool) -> bool {
         // The resource's data is left before the release.
         compiler_fence(Ordering::SeqCst);
         self.arch.may_interrupt();
-        if !self.lazy.clear(res) {
+        if !self.lazy.clear(res, masked) {
             return false;
         }
-        // (An ISR between the exchange and the mask finds a task that holds nothing, and
-        // ends with the task's mask, which this puts back too.)
-        self.arch.may_interrupt();
-        self.arch.set_level(TASK_LEVEL);
+        if masked {
+            // (An ISR between the exchange and the mask finds a task that holds nothing,
+            // and ends with the task's mask, which this puts back too.)
+            self.arch.may_interrupt();
+            self.arch.set_level(TASK_LEVEL);
+        }
         true
     }
 
@@ -1250,19 +1263,43 @@ impl<K: OsKernel, A: Arch> Port for Preemptive<K, A> {
     /// (the module's rules). Otherwise the kernel call `lock_call`.
     #[inline]
     fn get_resource(&self, res: ResourceId) -> Result<(), OsError> {
-        if self.lazy_get(res) {
+        if self.lazy_get(res, false) || self.lazy_get(res, true) {
             return Ok(());
         }
         self.lock_call(res, true)
     }
 
     /// The release, as [`Preemptive::get_resource`] takes the lock: a lock kept outside
-    /// the kernel that no kernel call has seen is one exchange and the task's mask (no
-    /// task became ready meanwhile: that takes a kernel call, which hands the lock over);
-    /// otherwise the kernel call `lock_call`.
+    /// the kernel that no kernel call has seen is one exchange, and the task's mask again
+    /// where the lock masked ISRs (no task became ready meanwhile: that takes a kernel
+    /// call, which hands the lock over); otherwise the kernel call `lock_call`.
     #[inline]
     fn release_resource(&self, res: ResourceId) -> Result<(), OsError> {
-        if self.lazy_release(res) {
+        if self.lazy_release(res, false) || self.lazy_release(res, true) {
+            return Ok(());
+        }
+        self.lock_call(res, false)
+    }
+
+    /// [`Preemptive::get_resource`] with the kind of lock outside the kernel known when
+    /// the image is built: only that kind is tried (where the resource is of the other
+    /// kind, the kernel's answer never names it so, and the lock goes to the kernel).
+    #[inline]
+    fn get_resource_of_kind<const ISR_SHARED: bool>(&self, res: ResourceId) -> Result<(), OsError> {
+        if self.lazy_get(res, ISR_SHARED) {
+            return Ok(());
+        }
+        self.lock_call(res, true)
+    }
+
+    /// [`Preemptive::release_resource`] of a lock [`Preemptive::get_resource_of_kind`]
+    /// took: one exchange, and no mask to put back where the lock masks nothing.
+    #[inline]
+    fn release_resource_of_kind<const ISR_SHARED: bool>(
+        &self,
+        res: ResourceId,
+    ) -> Result<(), OsError> {
+        if self.lazy_release(res, ISR_SHARED) {
             return Ok(());
         }
         self.lock_call(res, false)

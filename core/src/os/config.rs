@@ -27,6 +27,25 @@ pub const ISR_LEVEL_BASE: u8 = MAX_PRIORITY + 1;
 pub const MAX_TASKS: usize = 64;
 /// Most user resources one configuration may hold (besides `RES_SCHEDULER`).
 pub const MAX_RESOURCES: usize = 32;
+/// Resources below this one may be locked outside the kernel: the kernel's answer
+/// ([`lock_free_bit`]) has one bit for each kind of such a lock.
+pub const LOCK_FREE_RESOURCES: u8 = 16;
+
+/// The bit of the kernel's answer to which resources the running task may lock outside
+/// the kernel ([`Os::lock_free_resources`](crate::os::Os::lock_free_resources)) that names
+/// resource `res`: bit `res` where no ISR shares it (its ceiling at a task's level: the
+/// lock masks no interrupt), bit `16 + res` where one does (`masks_isrs`: the lock masks
+/// the ISRs up to the ceiling). So a port that tests a constant resource's first bit
+/// knows, without a table, that the lock masks nothing. 0 from [`LOCK_FREE_RESOURCES`] on:
+/// the answer never names those.
+pub const fn lock_free_bit(res: super::ResourceId, masks_isrs: bool) -> u32 {
+    if res.0 >= LOCK_FREE_RESOURCES {
+        return 0;
+    }
+    let shift = if masks_isrs { LOCK_FREE_RESOURCES } else { 0 };
+    1 << (res.0 + shift)
+}
+
 /// Most alarm callbacks (callback ids are `0 .. MAX_CALLBACKS`).
 pub const MAX_CALLBACKS: u8 = 32;
 /// Most alarms or counters one configuration may hold.
@@ -807,7 +826,8 @@ impl<const T: usize, const R: usize, const C: usize, const A: usize, const I: us
                 if d.tasks[t].resources & (1 << r) != 0
                     && matches!(d.tasks[t].preemption, Preemption::Full)
                 {
-                    lock_free_resources[t] |= 1 << r;
+                    lock_free_resources[t] |=
+                        lock_free_bit(super::ResourceId(r as u8), ceilings[r] >= ISR_LEVEL_BASE);
                 }
                 r += 1;
             }
@@ -981,11 +1001,23 @@ impl<const T: usize, const R: usize, const C: usize, const A: usize, const I: us
         }
     }
 
-    /// The user resources task `index` declares, one bit each (the first 32): those an
-    /// ISR shares too (a ceiling at interrupt level) among them; none for a task that is
-    /// not fully preemptive, or an unknown index. What a port may let the task lock
-    /// outside the kernel ([`Os::lock_free_resources`](crate::os::Os::lock_free_resources)),
-    /// masking the ISRs at or below the ceiling itself.
+    /// Whether an ISR shares user resource `res` (its ceiling at interrupt level): the
+    /// kind of its lock outside the kernel ([`lock_free_bit`]). A `const fn`, so that the
+    /// data a resource guards can carry it in its type, read from the configuration when
+    /// the image is built. `false` for an unknown resource.
+    pub const fn isr_shared(&self, res: super::ResourceId) -> bool {
+        match self.resource_ceiling(res.0 as usize) {
+            Some(ceiling) => ceiling >= ISR_LEVEL_BASE,
+            None => false,
+        }
+    }
+
+    /// The user resources task `index` declares, one bit each ([`lock_free_bit`]: the
+    /// first [`LOCK_FREE_RESOURCES`], those an ISR shares too, a ceiling at interrupt
+    /// level, in the upper half); none for a task that is not fully preemptive, or an
+    /// unknown index. What a port may let the task lock outside the kernel
+    /// ([`Os::lock_free_resources`](crate::os::Os::lock_free_resources)), masking the ISRs
+    /// at or below the ceiling itself where an ISR shares the resource.
     pub const fn lock_free_resources(&self, index: usize) -> u32 {
         if index < T {
             self.lock_free_resources[index]

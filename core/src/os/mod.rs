@@ -96,11 +96,12 @@ pub mod steps;
 
 pub use call::{Returned, ServiceCall};
 pub use callevel::Context;
+pub use config::lock_free_bit;
 pub use config::{
     AlarmAction, AlarmAutostart, AlarmConfig, ConfigError, ConformanceClass, CounterConfig,
     Dialect, HookSet, IsrCategory, IsrConfig, OsConfig, OsDescription, Preemption, Status,
-    TaskConfig, TaskKind, ISR_LEVEL_BASE, MAX_APP_MODES, MAX_ISRS, MAX_ISR_PRIORITY, MAX_PRIORITY,
-    MAX_RESOURCES, MAX_TASKS,
+    TaskConfig, TaskKind, ISR_LEVEL_BASE, LOCK_FREE_RESOURCES, MAX_APP_MODES, MAX_ISRS,
+    MAX_ISR_PRIORITY, MAX_PRIORITY, MAX_RESOURCES, MAX_TASKS,
 };
 pub use error::{status_name, OsError, ServiceId, StatusType, E_OK};
 pub use hooks::{Hooks, NoHooks};

@@ -457,8 +457,10 @@ where
 }
 
 /// The contract a port relies on when it keeps a task's lock outside the kernel until
-/// the task's next kernel call ([`Os::lock_free_resources`]): where that names `res`, it
-/// is a user resource the running task declares, the running task is at task level with
+/// the task's next kernel call ([`Os::lock_free_resources`]): where that names `res`, by
+/// the bit of the kind of lock its ceiling makes ([`crate::os::lock_free_bit`]: masking
+/// nothing below interrupt level, else masking the ISRs up to the ceiling), it is a user
+/// resource the running task declares, the running task is at task level with
 /// nothing held and no interrupt lock, so that the kernel masks no interrupt; the lock's
 /// fast path takes it and masks what the resource's ceiling ([`Os::ceiling`]) masks (the
 /// ISRs that share it and those below: the mask the port applies itself), the
@@ -487,11 +489,19 @@ where
     K: Tables<OsConfig<T, R, C, A, I>>,
     H: Hooks<Os<T, R, C, A, I, Q, K, H>>,
 {
-    let named = 1u32
-        .checked_shl(u32::from(res.0))
-        .is_some_and(|bit| before.lock_free_resources() & bit != 0);
-    if !named {
+    let answer = before.lock_free_resources();
+    let unmasked_bit = answer & crate::os::lock_free_bit(res, false) != 0;
+    let masked_bit = answer & crate::os::lock_free_bit(res, true) != 0;
+    if !unmasked_bit && !masked_bit {
         return Ok(());
+    }
+    // The bit says which kind of lock: one that masks nothing exactly where the ceiling
+    // is a task's level (a port takes that one with no table of ceilings).
+    let isr_ceiling = before
+        .ceiling(res)
+        .is_some_and(|c| c >= crate::os::ISR_LEVEL_BASE);
+    if unmasked_bit == masked_bit || masked_bit != isr_ceiling {
+        return Err("the answer names the resource as the other kind of lock than its ceiling");
     }
     // What the mask names, by the definitions: the running task at task level, holding
     // nothing, no interrupt lock, masking nothing; `res` one of its own resources.

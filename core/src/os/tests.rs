@@ -1103,11 +1103,48 @@ fn lock_free_resources_are_a_preemptive_tasks_own() {
     let Ok(cfg) = std::hint::black_box(OsConfig::<3, 3, 0, 0, 2>::new(description)) else {
         panic!("the configuration is valid")
     };
+    // Resource 2, which the ISRs share, in the upper half: its lock masks them.
     assert_eq!(cfg.lock_free_resources(0), 0b011);
-    assert_eq!(cfg.lock_free_resources(1), 0b110);
+    assert_eq!(cfg.lock_free_resources(1), 0b010 | 1 << (16 + 2));
     assert_eq!(cfg.lock_free_resources(2), 0);
     assert_eq!(cfg.lock_free_resources(3), 0);
     assert_eq!(cfg.resource_ceiling(2), Some(ISR_LEVEL_BASE + 2));
+    // The kind a resource's type carries, from the same ceilings.
+    let kinds = [0, 1, 2, 3].map(|r| cfg.isr_shared(ResourceId(r)));
+    assert_eq!(kinds, [false, false, true, false]);
+}
+
+/// The answer's bit of a resource says which kind of lock it is: bit `r` for one that
+/// masks nothing, bit `16 + r` for one that masks ISRs; none from resource 16 on, where a
+/// task's lock always goes through the kernel.
+#[test]
+fn the_lock_free_bit_says_the_kind_of_lock() {
+    for r in 0..=u8::MAX {
+        let (unmasked, masked) = (
+            crate::os::lock_free_bit(ResourceId(r), false),
+            crate::os::lock_free_bit(ResourceId(r), true),
+        );
+        if r < crate::os::LOCK_FREE_RESOURCES {
+            assert_eq!((unmasked, masked), (1 << r, 1 << (16 + r)), "{r}");
+        } else {
+            assert_eq!((unmasked, masked), (0, 0), "{r}");
+        }
+    }
+    // A task's resources from 16 on are never named, of either kind.
+    let description = OsDescription::new(
+        [TaskConfig::basic("A", 1).uses(1 << 16 | 1 << 17 | 1)],
+        [],
+        [],
+        [IsrConfig::cat2("I", 0).uses(1 << 17)],
+    );
+    let Ok(cfg) = std::hint::black_box(OsConfig::<1, 18, 0, 0, 1>::new(description)) else {
+        panic!("the configuration is valid")
+    };
+    assert_eq!(cfg.lock_free_resources(0), 0b1);
+    // An ISR of priority 0 makes the lowest interrupt-level ceiling: shared all the same.
+    assert_eq!(cfg.resource_ceiling(17), Some(ISR_LEVEL_BASE));
+    assert!(cfg.isr_shared(ResourceId(17)));
+    assert!(!cfg.isr_shared(ResourceId(16)));
 }
 
 /// A ready queue of more than 255 records cannot be indexed by the kernel's `u8` links;
@@ -2232,7 +2269,7 @@ fn a_resource_an_isr_shares_may_be_locked_outside_the_kernel_at_its_ceiling() {
         Err(e) => panic!("{}", e.describe()),
     };
     let mut os: Os<1, 1, 0, 0, 1, 1> = started(&SHARED);
-    assert_eq!(os.lock_free_resources(), 0b1);
+    assert_eq!(os.lock_free_resources(), 1 << 16);
     assert_eq!(os.interrupt_mask(), InterruptMask::None);
     let verdict = spec::lock_pair_leaves_no_trace(&os, R0);
     assert!(verdict.is_ok(), "{verdict:?}");

@@ -574,6 +574,28 @@ fn long_schedules_keep_the_stacks_apart() {
         .for_each(|steps| assert!(spec::stacks_stay_apart(steps)));
 }
 
+/// [`Port::get_resource_of_kind`] with the kind known only when the test runs.
+fn get_of_kind(port: &TestPort, res: ResourceId, isr_shared: bool) -> Result<(), OsError> {
+    if isr_shared {
+        port.get_resource_of_kind::<true>(res)
+    } else {
+        port.get_resource_of_kind::<false>(res)
+    }
+}
+
+/// [`Port::release_resource_of_kind`] with the kind known only when the test runs.
+fn release_of_kind(port: &TestPort, res: ResourceId, isr_shared: bool) -> Result<(), OsError> {
+    if isr_shared {
+        port.release_resource_of_kind::<true>(res)
+    } else {
+        port.release_resource_of_kind::<false>(res)
+    }
+}
+
+/// Low's answer: resource 0, which the ISR shares, by the lock that masks it (bit
+/// 16), resource 1, which only tasks share, by the lock that masks nothing (bit 1).
+const LOW_ANSWER: u32 = 1 << 16 | 1 << 1;
+
 /// The kernel as the port leaves it, with a lock kept outside the kernel handed over as
 /// the next kernel call would: what every kernel call sees.
 fn kernel_view(port: &TestPort) -> Kernel {
@@ -640,6 +662,60 @@ fn a_tasks_lock_outside_the_kernel_is_a_store_and_a_pair_leaves_the_kernel_untou
     assert_eq!(port.arch().level.get(), Some(InterruptMask::None));
 }
 
+/// A lock of a kind known when the image is built ([`Port::get_resource_of_kind`]) tries
+/// that kind alone: a resource only tasks share is one store and its release one exchange,
+/// neither touching the mask; one an ISR shares masks it and puts the task's mask back.
+/// Where the kind given is not the resource's, the lock and release are the kernel's; a
+/// lock of one kind released as the other goes to the kernel, which is handed the lock
+/// first. Every way leaves the kernel as it was.
+#[test]
+fn a_lock_of_a_known_kind_tries_that_kind_alone() {
+    use crate::port::lazy::word;
+    let port = started();
+    let (shared, tasks_only) = (ResourceId(0), ResourceId(1));
+    let before = kernel_now(&port);
+    // A mask the model would not set: the pair that masks nothing leaves it alone.
+    let untouched = Some(InterruptMask::UpTo(5));
+    port.arch().level.set(untouched);
+    assert_eq!(get_of_kind(&port, tasks_only, false), Ok(()));
+    assert_eq!(port.lazy.word(), word::unhanded(tasks_only, false));
+    assert!(kernel_now(&port) == before, "the kernel was not called");
+    assert_eq!(kernel_view(&port).resource_owner(tasks_only), Some(LOW));
+    assert_eq!(release_of_kind(&port, tasks_only, false), Ok(()));
+    assert_eq!(port.lazy.word(), 0);
+    assert_eq!(
+        port.arch().level.get(),
+        untouched,
+        "no mask set or put back"
+    );
+    assert!(kernel_now(&port) == before, "the pair left no trace");
+    port.arch().level.set(Some(InterruptMask::None));
+    // The ISRs' kind: the ceiling's mask, then the task's.
+    assert_eq!(get_of_kind(&port, shared, true), Ok(()));
+    assert_eq!(port.lazy.word(), word::unhanded(shared, true));
+    assert_eq!(port.arch().level.get(), Some(InterruptMask::UpTo(1)));
+    assert_eq!(release_of_kind(&port, shared, true), Ok(()));
+    assert_eq!(port.arch().level.get(), Some(InterruptMask::None));
+    assert!(kernel_now(&port) == before, "the pair left no trace");
+    // Kinds that are not the resources': the kernel's locks.
+    for (res, kind) in [(shared, false), (tasks_only, true)] {
+        assert_eq!(get_of_kind(&port, res, kind), Ok(()));
+        assert_eq!(port.lazy.word(), 0, "{res:?}");
+        assert_eq!(kernel_now(&port).resource_owner(res), Some(LOW));
+        assert_eq!(release_of_kind(&port, res, kind), Ok(()));
+        assert!(kernel_now(&port) == before, "{res:?} released");
+        assert_eq!(port.arch().level.get(), Some(InterruptMask::None));
+    }
+    // A lock of one kind released as the other: through the kernel, handed the lock.
+    let os_errors = kernel_now(&port).hooks().errors().len();
+    assert_eq!(get_of_kind(&port, shared, true), Ok(()));
+    assert_eq!(release_of_kind(&port, shared, false), Ok(()));
+    assert_eq!(port.lazy.word(), 0);
+    assert!(kernel_now(&port) == before, "released by the kernel");
+    assert_eq!(port.arch().level.get(), Some(InterruptMask::None));
+    assert_eq!(kernel_now(&port).hooks().errors().len(), os_errors);
+}
+
 #[test]
 fn the_next_kernel_call_hands_the_lock_to_the_kernel_before_anything_else() {
     let port = started();
@@ -671,7 +747,11 @@ fn a_tick_with_nothing_due_takes_the_lock_over_and_its_answer_says_so() {
         os.exit_isr()
     };
     assert_eq!(port.get_resource(tasks_only), Ok(()));
-    assert_eq!(port.lazy.mask(), 0b11, "the answer from before the lock");
+    assert_eq!(
+        port.lazy.mask(),
+        LOW_ANSWER,
+        "the answer from before the lock"
+    );
     // The tick's fast path hands the lock to the kernel first: the task holds a resource
     // now, so the answer it leaves is 0, not the one it found.
     assert_eq!(port.tick_isr(tick, counter, whole), TickPath::NothingDue);
@@ -685,7 +765,7 @@ fn a_tick_with_nothing_due_takes_the_lock_over_and_its_answer_says_so() {
     assert_eq!(port.release_resource(ResourceId(0)), Ok(()));
     assert_eq!(port.release_resource(tasks_only), Ok(()));
     assert_eq!(port.lazy.word(), 0);
-    assert_eq!(port.lazy.mask(), 0b11, "the task holds nothing again");
+    assert_eq!(port.lazy.mask(), LOW_ANSWER, "the task holds nothing again");
     assert_eq!(kernel_now(&port).resource_owner(tasks_only), None);
 }
 
@@ -754,7 +834,7 @@ fn isrs_hooks_and_tasks_under_an_interrupt_lock_lock_through_the_kernel() {
     assert_eq!(port.release_resource(ResourceId(0)), Ok(()));
     port.kernel(|os| os.exit_isr()).expect("exit");
     // Back in Low, which may again.
-    assert_eq!(port.lazy.mask(), 0b11);
+    assert_eq!(port.lazy.mask(), LOW_ANSWER);
     // Under SuspendOSInterrupts: the kernel refuses the lock (E_OS_CALLEVEL in AUTOSAR).
     port.kernel(|os| os.suspend_os_interrupts())
         .expect("suspend");
@@ -766,21 +846,24 @@ fn isrs_hooks_and_tasks_under_an_interrupt_lock_lock_through_the_kernel() {
     // The kernel call's flag is in the word the lock tests: the kernel's answer is
     // `IN_KERNEL` alone meanwhile, and a second call is refused.
     let before = port.lazy.begin_kernel().expect("no kernel call under way");
-    assert_eq!(before, 0b11);
+    assert_eq!(before, LOW_ANSWER);
     assert!(port.lazy.in_kernel());
     assert_eq!(port.lazy.begin_kernel(), None);
-    assert!(!port.lazy_get(ResourceId(1)));
+    assert!(!port.lazy_get(ResourceId(1), false));
     assert_eq!(port.lazy.word(), 0);
     port.lazy.set_mask(before);
     assert!(!port.lazy.in_kernel());
-    assert!(port.lazy_get(ResourceId(1)));
-    assert!(port.lazy_release(ResourceId(1)));
+    assert!(port.lazy_get(ResourceId(1), false));
+    assert!(port.lazy_release(ResourceId(1), false));
 }
 
-/// One step of [`any_locks_and_calls_leave_the_kernel_as_kernel_calls_would`].
+/// One step of [`any_locks_and_calls_leave_the_kernel_as_kernel_calls_would`]: a lock or
+/// release by the port's general calls or by those of a kind (either kind, so also the
+/// resource's other one: the kernel's then), an ISR, or a kernel call.
 fn lock_step_on_both(port: &TestPort, reference: &mut Kernel, op: u8) {
-    let res = ResourceId(op / 4 % 3);
-    match op % 4 {
+    let res = ResourceId(op / 6 % 3);
+    let isr_shared = op / 18 % 2 == 1;
+    match op % 6 {
         0 => assert_eq!(
             port.get_resource(res),
             reference.get_resource(res),
@@ -791,7 +874,17 @@ fn lock_step_on_both(port: &TestPort, reference: &mut Kernel, op: u8) {
             reference.release_resource(res),
             "release {res:?}"
         ),
-        2 => {
+        2 => assert_eq!(
+            get_of_kind(port, res, isr_shared),
+            reference.get_resource(res),
+            "get {res:?} of kind {isr_shared}"
+        ),
+        3 => assert_eq!(
+            release_of_kind(port, res, isr_shared),
+            reference.release_resource(res),
+            "release {res:?} of kind {isr_shared}"
+        ),
+        4 => {
             // An ISR that enters (where the mask lets it) and returns.
             let entered = port.kernel(|os| os.enter_isr(IsrId(0)));
             assert_eq!(entered, reference.enter_isr(IsrId(0)), "ISR entry");
@@ -923,7 +1016,8 @@ fn take_pending(model: &Model, point: bool) {
 }
 
 /// Any sequence of locks and releases of either resource (the one Low shares with `Tick`,
-/// the one it shares with High), kernel calls of the task, and interrupts (`Tick`, which
+/// the one it shares with High; by the general calls or by those of the resource's kind),
+/// kernel calls of the task, and interrupts (`Tick`, which
 /// locks the resource it shares; `Can`, which activates High) arriving at any point the
 /// mask admits, between any two stores of a lock kept outside the kernel or of its release:
 /// no ISR is let in whose resource the task holds, after every step the mask in force is
@@ -942,10 +1036,14 @@ fn any_interrupt_between_the_stores_of_a_lock_outside_the_kernel() {
             match op % 5 {
                 0 | 1 => {
                     let take = op % 5 == 0;
-                    let result = if take {
-                        port.get_resource(res)
-                    } else {
-                        port.release_resource(res)
+                    // By the general calls, or by those of the resource's kind (the
+                    // firmware's `Resource`): resource 0 is the tick's too.
+                    let kind = (op / 10 % 2 == 1).then_some(res.0 == 0);
+                    let result = match (take, kind) {
+                        (true, None) => port.get_resource(res),
+                        (false, None) => port.release_resource(res),
+                        (true, Some(isr_shared)) => get_of_kind(port, res, isr_shared),
+                        (false, Some(isr_shared)) => release_of_kind(port, res, isr_shared),
                     };
                     // The interrupt taken inside the call, where the kernel saw it.
                     let inside = PENDING.get().and_then(|p| p.taken.map(|l| (p.tick, l)));

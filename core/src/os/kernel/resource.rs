@@ -236,7 +236,8 @@ where
         )
     }
 
-    /// The resources the running task may take now as if nothing else ran, one bit each:
+    /// The resources the running task may take now as if nothing else ran, one bit each
+    /// ([`crate::os::lock_free_bit`]: the bit says whether the lock masks ISRs):
     /// at task level (not in a hook, an ISR, before start or after shutdown), with no
     /// interrupt lock in force and no resource taken, those of
     /// [`OsConfig::lock_free_resources`] (its own); else none. A port may keep such a lock
