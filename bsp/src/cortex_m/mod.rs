@@ -147,7 +147,7 @@ use CW_PORT_OS_LEVEL as OS_LEVEL;
 const INITIAL_OS_LEVEL: u8 = 0xE0;
 
 /// The Cortex-M CPU under the preemptive port.
-#[derive(Debug, Default)]
+#[derive(Debug)]
 pub struct CortexM {
     /// The kernel lock's BASEPRI, as [`CW_PORT_OS_LEVEL`] holds it: inside the port, so
     /// that every kernel call loads it at an offset from the port it already has in a
@@ -163,10 +163,17 @@ impl CortexM {
         }
     }
 
-    /// The kernel lock's BASEPRI: both copies (before start).
+    /// The kernel lock's BASEPRI: both copies, which stay equal (before start).
     fn set_os_level(&self, value: u8) {
         self.os_level.store(value, Ordering::Relaxed);
         OS_LEVEL.store(value, Ordering::Relaxed);
+    }
+}
+
+impl Default for CortexM {
+    /// [`CortexM::new`]: the kernel lock's level the global holds before start.
+    fn default() -> Self {
+        Self::new()
     }
 }
 

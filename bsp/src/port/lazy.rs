@@ -67,8 +67,9 @@ pub(crate) struct LazyLock {
     /// 0, or the lock, and once a kernel call has handed it to the kernel, its task
     /// ([`word`]).
     word: AtomicU32,
-    /// The resources the running task may lock outside the kernel, one bit each: the
-    /// kernel's answer at the end of the last kernel call, 0 after a lock by the kernel's
+    /// The resources the running task may lock outside the kernel, one bit each of the
+    /// kind of lock each takes ([`lock_free_bit`]): the kernel's answer at the end of
+    /// the last kernel call, 0 after a lock by the kernel's
     /// fast path (the caller then holds a resource). During a kernel call of the
     /// preemptive port, [`IN_KERNEL`] alone: the port's re-entrance flag, and no resource
     /// (a hook's lock goes to the kernel), in the word the lock outside the kernel tests
@@ -77,8 +78,9 @@ pub(crate) struct LazyLock {
 }
 
 /// The bit of the mask that says a kernel call is under way ([`LazyLock::begin_kernel`]);
-/// never a resource's (the kernel's answer is stored without it: resource 31 is always
-/// locked by the kernel).
+/// never a resource's here (the kernel's answer is stored without it: the bit names
+/// resource 15 by the kind of lock that masks ISRs, which the port therefore always
+/// leaves to the kernel).
 pub(crate) const IN_KERNEL: u32 = 1 << 31;
 
 impl LazyLock {

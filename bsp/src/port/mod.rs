@@ -67,8 +67,9 @@ pub unsafe trait OsKernel {
     /// `ReleaseResource`'s fast path ([`Os::try_release_resource`]), as
     /// [`OsKernel::try_get_resource`].
     fn try_release_resource(&mut self, res: ResourceId) -> Option<u8>;
-    /// The resources the running task may lock outside the kernel now, one bit each
-    /// ([`Os::lock_free_resources`]).
+    /// The resources the running task may lock outside the kernel now, one bit each of
+    /// the kind of lock each takes ([`Os::lock_free_resources`],
+    /// [`cw_core::os::lock_free_bit`]).
     fn lock_free_resources(&self) -> u32;
     /// The ceiling of a resource, a processor priority ([`Os::ceiling`]): the level a
     /// lock kept outside the kernel masks.

@@ -46,8 +46,11 @@
 //!   of every kernel call) without a kernel call: one store of the resource into the port's
 //!   `lazy` word where no ISR uses it; where ISRs share it, the same store under the kernel
 //!   lock and then the mask of the resource's ceiling (BASEPRI), the order that keeps every
-//!   ISR that could find the word from finding a weaker mask. The release is one exchange
-//!   of the word back to 0 and the task's mask (none). The kernel is told at the task's
+//!   ISR that could find the word from finding a weaker mask. The kernel's answer names
+//!   each resource by the kind of lock its ceiling makes, and a resource's type may carry
+//!   that kind, so the lock of one no ISR uses needs no table. The release is one exchange
+//!   of the word back to 0, and for a lock that masked ISRs the task's mask (none) again.
+//!   The kernel is told at the task's
 //!   next kernel call, or at the next ISR's entry, whichever comes first: `enter` hands the
 //!   lock to the kernel's own fast path before anything else, so the kernel sees the same
 //!   calls in the same order, and every decision it makes (a switch, an error, the mask an

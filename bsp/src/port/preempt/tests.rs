@@ -706,10 +706,16 @@ fn a_lock_of_a_known_kind_tries_that_kind_alone() {
         assert!(kernel_now(&port) == before, "{res:?} released");
         assert_eq!(port.arch().level.get(), Some(InterruptMask::None));
     }
-    // A lock of one kind released as the other: through the kernel, handed the lock.
+    // A lock of one kind released as the other: through the kernel (its lock taken),
+    // handed the lock.
     let os_errors = kernel_now(&port).hooks().errors().len();
     assert_eq!(get_of_kind(&port, shared, true), Ok(()));
+    let os_locks = port.arch().os_locks.get();
     assert_eq!(release_of_kind(&port, shared, false), Ok(()));
+    assert!(
+        port.arch().os_locks.get() > os_locks,
+        "a kernel call released it"
+    );
     assert_eq!(port.lazy.word(), 0);
     assert!(kernel_now(&port) == before, "released by the kernel");
     assert_eq!(port.arch().level.get(), Some(InterruptMask::None));
