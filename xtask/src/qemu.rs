@@ -763,7 +763,18 @@ fn live_session(
         qemu.kill();
     }
     let finished = qemu.finish();
-    let test = test?;
+    let test = match test {
+        Ok(test) => test,
+        // The image's own report says why it ended, where it did: kept with the failure.
+        Err(e) => {
+            let log = finished.map_or_else(|e| e, |(_, log)| log);
+            return Err(format!(
+                "{e}
+the image's output:
+{log}"
+            ));
+        }
+    };
     print!("{test}");
     let (success, log) = finished?;
     if !runs_forever && !success {

@@ -447,20 +447,23 @@ mod tests {
     }
 
     /// Any sequence of up to 48 operations (a task at a tail, at a head, the oldest taken;
-    /// any priority, any task) against a model of one FIFO per priority: the same entries
+    /// any task, at eight priorities: both ends of the bitmap and both sides of its
+    /// 32-bit words' boundary) against a model of one FIFO per priority: the same entries
     /// in the same order at every priority, the same bitmap and highest priority; a record
     /// is refused only when the entries fill the pool, and a refusal changes nothing. A
     /// test and fuzz target; the kernel's Kani proofs take the queue through the kernel.
     #[test]
     fn any_operations_keep_one_fifo_per_priority() {
         use std::collections::VecDeque;
+        const LEVELS: [u8; 8] = [0, 1, 30, 31, 32, 33, 62, 63];
         bolero::check!()
             .with_type::<Vec<(u8, u8, u8)>>()
             .for_each(|ops| {
                 let mut q = ReadyQueue::<6>::new();
                 let mut model: Vec<VecDeque<u8>> = (0..64).map(|_| VecDeque::new()).collect();
-                for &(kind, prio, task) in ops.iter().take(48) {
-                    let p = usize::from(prio & 63);
+                for &(kind, level, task) in ops.iter().take(48) {
+                    let prio = LEVELS[usize::from(level % 8)];
+                    let p = usize::from(prio);
                     let entries: usize = model.iter().map(VecDeque::len).sum();
                     let before = q;
                     match kind % 3 {
@@ -482,7 +485,8 @@ mod tests {
                         _ => assert_eq!(q.pop_front(prio), model[p].pop_front()),
                     }
                     let mut bitmap = 0u64;
-                    for (level, fifo) in (0u8..).zip(&model) {
+                    for level in LEVELS {
+                        let fifo = &model[usize::from(level)];
                         assert!(q.iter(level).eq(fifo.iter().copied()), "priority {level}");
                         if !fifo.is_empty() {
                             bitmap |= 1 << level;
