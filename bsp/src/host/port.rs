@@ -19,11 +19,7 @@ use cw_core::os::{
 
 use super::clock::VirtualClock;
 use crate::port::lazy::LazyLock;
-use crate::port::{lock_in_kernel, OsKernel, Port};
-
-/// The task slot a lock kept outside the kernel is handed over for when no task runs
-/// (never: the kernel names no resource then).
-const NO_TASK: u8 = u8::MAX - 1;
+use crate::port::{lock_in_kernel, Held, OsKernel, Port};
 
 /// The host port of a kernel `K`.
 pub struct HostPort<K> {
@@ -65,7 +61,7 @@ impl<K: OsKernel> HostPort<K> {
     /// of the kernel then includes it.
     #[inline]
     fn hand_over(&self) {
-        if self.lazy.to_hand_over().is_some() {
+        if LazyLock::to_hand_over(self.lazy.now()).is_some() {
             self.hand_over_now();
         }
     }
@@ -80,27 +76,19 @@ impl<K: OsKernel> HostPort<K> {
 
     /// A lock kept outside the kernel meets the first kernel call since
     /// ([`LazyLock::hand_over`]). A refusal (never seen: the kernel's own contract broken)
-    /// reached ErrorHook, which counts it, and the lock is no longer kept.
+    /// reached ErrorHook, which counts it, and the lock is no longer kept: the call's end
+    /// puts the kernel's answer in the word over it.
     #[cold]
     #[inline(never)]
-    fn hand_over_to(&self, kernel: &mut K, lazy: u32) {
-        if !self.lazy.hand_over(kernel, lazy, NO_TASK) {
-            self.lazy.drop_lock();
-        }
+    fn hand_over_to(&self, kernel: &mut K, lock: u32) {
+        let _ = self.lazy.hand_over(kernel, lock);
     }
 
-    /// A lock's kernel call: the kernel's fast path where it applies, else the service;
-    /// a release frees the word of a lock the kernel was handed. Out of line, so that the
-    /// lock outside the kernel stays small where it is inlined.
+    /// A lock's kernel call: the kernel's fast path where it applies, else the service.
+    /// Out of line, so that the lock outside the kernel stays small where it is inlined.
     #[inline(never)]
     fn lock_call(&self, res: ResourceId, take: bool) -> Result<(), OsError> {
-        self.kernel(|os| {
-            let result = lock_in_kernel(os, res, take);
-            if !take && result.is_ok() {
-                self.lazy.released(res);
-            }
-            result
-        })
+        self.kernel(|os| lock_in_kernel(os, res, take))
     }
 
     /// Raises an interrupt request.
@@ -145,11 +133,11 @@ impl<K: OsKernel> Port for HostPort<K> {
     #[inline]
     fn kernel<R>(&self, f: impl FnOnce(&mut K) -> R) -> R {
         let mut kernel = self.kernel.borrow_mut();
-        if let Some(lazy) = self.lazy.to_hand_over() {
-            self.hand_over_to(&mut kernel, lazy);
+        if let Some(lock) = LazyLock::to_hand_over(self.lazy.now()) {
+            self.hand_over_to(&mut kernel, lock);
         }
         let result = f(&mut kernel);
-        self.lazy.set_mask(kernel.lock_free_resources());
+        self.lazy.set_answer(kernel.lock_free_resources());
         result
     }
 
@@ -163,20 +151,41 @@ impl<K: OsKernel> Port for HostPort<K> {
     /// Otherwise the kernel's fast path, or the service.
     #[inline]
     fn get_resource(&self, res: ResourceId) -> Result<(), OsError> {
-        if self.lazy.may_take_either(res) && self.kernel.try_borrow_mut().is_ok() {
-            // (No mask on the host: a lock of either kind is the one that masks nothing.)
-            self.lazy.take(res, false);
-            return Ok(());
-        }
-        self.lock_call(res, true)
+        self.get_resource_of_kind::<false>(res).map(|_| ())
     }
 
     /// The release of a lock kept outside the kernel that no kernel call has seen: the
-    /// word back to 0. Otherwise through the kernel, which frees the word of a lock it was
-    /// handed.
+    /// kernel's answer back in the word. Otherwise through the kernel.
     #[inline]
     fn release_resource(&self, res: ResourceId) -> Result<(), OsError> {
         if self.lazy.clear_alone(res) {
+            return Ok(());
+        }
+        self.lock_call(res, false)
+    }
+
+    /// The lock outside the kernel where the rules allow it, of either kind (the host
+    /// masks nothing), saying which way it went; [`HostPort::get_resource`] is this.
+    #[inline]
+    fn get_resource_of_kind<const ISR_SHARED: bool>(
+        &self,
+        res: ResourceId,
+    ) -> Result<Held, OsError> {
+        if self.lazy.may_take_either(res) && self.kernel.try_borrow_mut().is_ok() {
+            // (No mask on the host: a lock of either kind is the one that masks nothing.)
+            self.lazy.take(res, false);
+            return Ok(Held::outside(false));
+        }
+        self.lock_call(res, true).map(|()| Held::other())
+    }
+
+    /// The release of a lock [`HostPort::get_resource_of_kind`] took: outside the kernel,
+    /// the kernel's answer back in the word, unless a kernel call the job made since
+    /// (inside the lock) handed the lock over, which leaves the answer 0; through the
+    /// kernel otherwise.
+    #[inline]
+    fn release_held(&self, res: ResourceId, held: Held) -> Result<(), OsError> {
+        if held.outside_masking().is_some() && self.lazy.release(|| ()) {
             return Ok(());
         }
         self.lock_call(res, false)

@@ -298,25 +298,26 @@ pub trait Port {
     /// `isr_shared` says whether an ISR shares it (its ceiling at interrupt level), which
     /// a port's lock outside the kernel then need not look up ([`Resource`] calls this).
     /// Where the kind given is not the resource's, the lock is the kernel's, as correct as
-    /// ever.
+    /// ever. Returns how the lock was taken, which the release is given
+    /// ([`Port::release_held`]).
     ///
     /// # Errors
     /// As the kernel's service.
     #[inline]
-    fn get_resource_of_kind<const ISR_SHARED: bool>(&self, res: ResourceId) -> Result<(), OsError> {
-        self.get_resource(res)
-    }
-
-    /// [`Port::release_resource`] of a lock [`Port::get_resource_of_kind`] took, with the
-    /// same kind.
-    ///
-    /// # Errors
-    /// As the kernel's service.
-    #[inline]
-    fn release_resource_of_kind<const ISR_SHARED: bool>(
+    fn get_resource_of_kind<const ISR_SHARED: bool>(
         &self,
         res: ResourceId,
-    ) -> Result<(), OsError> {
+    ) -> Result<Held, OsError> {
+        self.get_resource(res).map(|()| Held::other())
+    }
+
+    /// The release of a lock [`Port::get_resource_of_kind`] took, told how it was taken.
+    ///
+    /// # Errors
+    /// As the kernel's service.
+    #[inline]
+    fn release_held(&self, res: ResourceId, held: Held) -> Result<(), OsError> {
+        let _ = held;
         self.release_resource(res)
     }
 
@@ -400,6 +401,45 @@ pub trait Port {
     fn hang(&self) {}
 }
 
+/// How [`Port::get_resource_of_kind`] took a lock, for its release
+/// ([`Port::release_held`]). Only the ports make one, and a release takes it, so the
+/// release of a lock outside the kernel is given it once, by the lock's own taker.
+#[must_use]
+#[derive(Debug, PartialEq, Eq)]
+pub struct Held(Way);
+
+#[derive(Debug, PartialEq, Eq)]
+enum Way {
+    /// Outside the kernel, by the port alone, with a lock that masks the ISRs up to the
+    /// resource's ceiling (`masks_isrs`) or nothing: the release need not look at what
+    /// the port keeps to know it is this one.
+    Outside { masks_isrs: bool },
+    /// Any other way: the kernel's lock, or a port's whose general release
+    /// ([`Port::release_resource`]) finds out.
+    Other,
+}
+
+impl Held {
+    /// A lock outside the kernel, masking ISRs or not.
+    pub(crate) const fn outside(masks_isrs: bool) -> Self {
+        Self(Way::Outside { masks_isrs })
+    }
+
+    /// A lock taken any other way.
+    pub(crate) const fn other() -> Self {
+        Self(Way::Other)
+    }
+
+    /// `Some(masks_isrs)` for a lock outside the kernel.
+    #[inline(always)]
+    pub(crate) const fn outside_masking(&self) -> Option<bool> {
+        match self.0 {
+            Way::Outside { masks_isrs } => Some(masks_isrs),
+            Way::Other => None,
+        }
+    }
+}
+
 /// The path the OS tick took ([`Port::tick_isr`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum TickPath<R> {
@@ -462,14 +502,14 @@ impl<T, const ID: u8, const ISR_SHARED: bool> Resource<T, ID, ISR_SHARED> {
     /// take it, `E_OS_CALLEVEL`, `E_OS_DISABLEDINT`.
     #[inline]
     pub fn lock<P: Port, R>(&self, port: &P, f: impl FnOnce(&mut T) -> R) -> Result<R, OsError> {
-        port.get_resource_of_kind::<ISR_SHARED>(Self::ID)?;
+        let held = port.get_resource_of_kind::<ISR_SHARED>(Self::ID)?;
         // SAFETY: GetResource succeeded, so the kernel records this task or ISR as the
         // owner and refuses the resource to every other one until the release below
         // (`OsKernel`'s contract); `f` cannot keep the reference past its return.
         let result = f(unsafe { &mut *self.data.get() });
         // The release cannot fail: the caller owns the resource and took none after it
         // that it still holds (`f` returned, so every lock inside it was released).
-        let _ = port.release_resource_of_kind::<ISR_SHARED>(Self::ID);
+        let _ = port.release_held(Self::ID, held);
         Ok(result)
     }
 

@@ -43,13 +43,16 @@
 //! - **A task's lock outside the kernel.** A task at task level that holds nothing and
 //!   has no interrupt lock in force takes a resource it declares
 //!   ([`Os::lock_free_resources`](cw_core::os::Os::lock_free_resources), asked at the end
-//!   of every kernel call) without a kernel call: one store of the resource into the port's
-//!   `lazy` word where no ISR uses it; where ISRs share it, the same store under the kernel
-//!   lock and then the mask of the resource's ceiling (BASEPRI), the order that keeps every
-//!   ISR that could find the word from finding a weaker mask. The kernel's answer names
-//!   each resource by the kind of lock its ceiling makes, and a resource's type may carry
-//!   that kind, so the lock of one no ISR uses needs no table. The release is one exchange
-//!   of the word back to 0, and for a lock that masked ISRs the task's mask (none) again.
+//!   of every kernel call, and kept in the port's `lazy` word) without a kernel call: one
+//!   store of the lock into that word, in the answer's place, where no ISR uses it; where
+//!   ISRs share it, the same store under the kernel lock and then the mask of the
+//!   resource's ceiling (BASEPRI), the order that keeps every ISR that could find the word
+//!   from finding a weaker mask. The kernel's answer names each resource by the kind of
+//!   lock its ceiling makes, and a resource's type may carry that kind, so the lock of one
+//!   no ISR uses needs no table; the lock in the word names no resource, so the lock's one
+//!   test refuses a second lock too. The release puts the answer's copy back in the word
+//!   and reads the copy again, which a hand-over sets to 0 (then the kernel releases it),
+//!   and for a lock that masked ISRs the task's mask (none) again.
 //!   The kernel is told at the task's
 //!   next kernel call, or at the next ISR's entry, whichever comes first: `enter` hands the
 //!   lock to the kernel's own fast path before anything else, so the kernel sees the same
@@ -76,7 +79,7 @@ use cw_core::os::{
 };
 
 use super::lazy::LazyLock;
-use super::{OsKernel, Port, TickPath};
+use super::{Held, OsKernel, Port, TickPath};
 
 pub mod spec;
 #[cfg(test)]
@@ -589,13 +592,8 @@ pub struct Preemptive<K, A> {
 
 /// The resources a lock may be kept outside the kernel for
 /// ([`cw_core::os::LOCK_FREE_RESOURCES`]), each with its bits in the kernel's answer
-/// ([`OsKernel::lock_free_resources`]); the last one's lock that masks ISRs never, its bit
-/// being the kernel call's flag ([`IN_KERNEL`](super::lazy::IN_KERNEL)).
+/// ([`OsKernel::lock_free_resources`]).
 const LAZY_RESOURCES: usize = cw_core::os::LOCK_FREE_RESOURCES as usize;
-const _: () = assert!(
-    cw_core::os::lock_free_bit(ResourceId(LAZY_RESOURCES as u8 - 1), true)
-        == super::lazy::IN_KERNEL
-);
 
 /// The processor priority a task returns to when it releases a lock kept outside the
 /// kernel: the task held nothing and had no interrupt lock when it took the lock, so it
@@ -779,8 +777,8 @@ impl<K: OsKernel, A: Arch> Preemptive<K, A> {
         };
         compiler_fence(Ordering::SeqCst);
         let (kernel, sched) = self.tables();
-        if let Some(lazy) = self.lazy.to_hand_over() {
-            self.hand_over(kernel, lazy);
+        if let Some(lock) = LazyLock::to_hand_over(lock_free) {
+            self.hand_over(kernel, lock);
             lock_free = 0;
         }
         (kernel, sched, lock_free)
@@ -804,8 +802,8 @@ impl<K: OsKernel, A: Arch> Preemptive<K, A> {
     /// ([`LazyLock::hand_over`]); a refusal breaks the port's own contract: a fatal fault.
     #[cold]
     #[inline(never)]
-    fn hand_over(&self, kernel: &mut K, lazy: u32) {
-        if !self.lazy.hand_over(kernel, lazy, IDLE) {
+    fn hand_over(&self, kernel: &mut K, lock: u32) {
+        if !self.lazy.hand_over(kernel, lock) {
             self.fatal(PortFault::LockRefused);
         }
     }
@@ -820,15 +818,16 @@ impl<K: OsKernel, A: Arch> Preemptive<K, A> {
     /// ([`Preemptive::hand_over`]). `false`: nothing done.
     #[inline(always)]
     fn lazy_get(&self, res: ResourceId, masked: bool) -> bool {
-        // (During a kernel call the kernel's answer is `IN_KERNEL` alone, which names no
-        // resource.)
+        // (During a kernel call the word is the kernel call's flag alone, and while a lock
+        // is kept outside the kernel the lock: neither names a resource.)
         if !self.lazy.may_take(res, masked) {
             return false;
         }
         if !masked {
             // (An ISR between the test and the store finds nothing to hand over, and a
             // task it lets in ends, or waits holding nothing, before this one goes on: the
-            // word is 0 again and the mask the task's.) No ISR uses the resource, and an
+            // word holds the task's answer again and the mask is the task's.) No ISR uses
+            // the resource, and an
             // ISR that finds the word ends with the mask of the task at its ceiling, a
             // task's level, which masks nothing.
             self.arch.may_interrupt();
@@ -859,21 +858,35 @@ impl<K: OsKernel, A: Arch> Preemptive<K, A> {
         true
     }
 
-    /// `ReleaseResource` of a lock of the kind `masked` says, kept outside the kernel and
-    /// not handed to it: one exchange back to 0, which fails if a kernel call (an ISR's)
-    /// handed it over meanwhile (then, as for every lock handed over, the kernel releases
-    /// it), or the lock is of the other kind; then, for a lock that masked ISRs, the
-    /// task's mask again. `false`: nothing done.
+    /// `ReleaseResource` of a lock of `res` of the kind `masked` says, where the word
+    /// holds it (the general release, which does not know how the lock was taken): the
+    /// release outside the kernel ([`Preemptive::release_outside`]). `false`: nothing done
+    /// (no such lock in the word: the kernel's, or of the other kind, or handed over).
     #[inline(always)]
     fn lazy_release(&self, res: ResourceId, masked: bool) -> bool {
+        compiler_fence(Ordering::SeqCst);
+        self.arch.may_interrupt();
+        // (An ISR between the test and the release hands the lock over: the release then
+        // finds the answer 0.)
+        self.lazy.holds(res, masked) && self.release_outside(masked)
+    }
+
+    /// `ReleaseResource` of the lock the running task took outside the kernel, of the
+    /// kind `masked` says: the kernel's answer back in the word and read again
+    /// ([`LazyLock::release`]: no exchange, since an ISR that hands the lock over between
+    /// the read and the store leaves the answer 0, which the second read finds); then,
+    /// for a lock that masked ISRs, the task's mask again. `false`: the lock was handed
+    /// to the kernel, which releases it, masks included.
+    #[inline(always)]
+    fn release_outside(&self, masked: bool) -> bool {
         // The resource's data is left before the release.
         compiler_fence(Ordering::SeqCst);
         self.arch.may_interrupt();
-        if !self.lazy.clear(res, masked) {
+        if !self.lazy.release(|| self.arch.may_interrupt()) {
             return false;
         }
         if masked {
-            // (An ISR between the exchange and the mask finds a task that holds nothing,
+            // (An ISR between the release and the mask finds a task that holds nothing,
             // and ends with the task's mask, which this puts back too.)
             self.arch.may_interrupt();
             self.arch.set_level(TASK_LEVEL);
@@ -943,7 +956,7 @@ impl<K: OsKernel, A: Arch> Preemptive<K, A> {
         };
         compiler_fence(Ordering::SeqCst);
         // The answer, and the kernel call's end with it.
-        self.lazy.set_mask(lock_free);
+        self.lazy.set_answer(lock_free);
         end
     }
 
@@ -1021,7 +1034,6 @@ impl<K: OsKernel, A: Arch> Preemptive<K, A> {
                     // kernel (`spec::fast_path_agrees`), no need to ask.
                     0
                 } else {
-                    self.lazy.released(res);
                     // (The caller holds one fewer.)
                     kernel.lock_free_resources()
                 };
@@ -1058,9 +1070,6 @@ impl<K: OsKernel, A: Arch> Preemptive<K, A> {
         } else {
             kernel.release_resource(res)
         };
-        if !take && result.is_ok() {
-            self.lazy.released(res);
-        }
         self.leave();
         result
     }
@@ -1084,7 +1093,17 @@ impl<K: OsKernel, A: Arch> Preemptive<K, A> {
     #[inline(always)]
     fn leave_at(&self, level: u8, lock_free: u32) {
         compiler_fence(Ordering::SeqCst);
-        self.lazy.set_mask(lock_free);
+        self.lazy.set_answer(lock_free);
+        self.arch.set_level(level);
+    }
+
+    /// [`Preemptive::leave_at`] for a call that left the kernel's answer as it was:
+    /// `before`, the word as the call found it (0 where the call took a lock over), goes
+    /// back alone ([`LazyLock::restore`]).
+    #[inline(always)]
+    fn leave_restoring(&self, level: u8, before: u32) {
+        compiler_fence(Ordering::SeqCst);
+        self.lazy.restore(before);
         self.arch.set_level(level);
     }
 
@@ -1111,7 +1130,7 @@ impl<K: OsKernel, A: Arch> Preemptive<K, A> {
         self.arch.disable_all();
         let first = !core::mem::replace(&mut sched.stopped, true);
         // No resource outside the kernel, and the kernel call's end.
-        self.lazy.set_mask(0);
+        self.lazy.stop();
         if first {
             self.arch.stopped();
         }
@@ -1173,8 +1192,7 @@ impl<K: OsKernel, A: Arch> Preemptive<K, A> {
         // refuses the hand-over): it goes. No resource outside the kernel from here, and
         // the abandoned call's flag goes with the same store: the application's end may
         // still read the kernel (its hooks' record), which a stopped OS serves.
-        self.lazy.drop_lock();
-        self.lazy.set_mask(0);
+        self.lazy.stop();
         self.arch.stopped()
     }
 
@@ -1256,7 +1274,7 @@ impl<K: OsKernel, A: Arch> Port for Preemptive<K, A> {
         if let Some(level) = kernel.try_tick(isr, counter) {
             // (A tick changes nothing for the interrupted task: the kernel's answer is the
             // one from before the call, 0 if the call took a lock over.)
-            self.leave_at(level, lock_free);
+            self.leave_restoring(level, lock_free);
             return TickPath::NothingDue;
         }
         let path = if kernel.try_tick_due(isr, counter).is_some() {
@@ -1281,9 +1299,10 @@ impl<K: OsKernel, A: Arch> Port for Preemptive<K, A> {
     }
 
     /// The release, as [`Preemptive::get_resource`] takes the lock: a lock kept outside
-    /// the kernel that no kernel call has seen is one exchange, and the task's mask again
-    /// where the lock masked ISRs (no task became ready meanwhile: that takes a kernel
-    /// call, which hands the lock over); otherwise the kernel call `lock_call`.
+    /// the kernel that no kernel call has seen is the kernel's answer back in the word,
+    /// and the task's mask again where the lock masked ISRs (no task became ready
+    /// meanwhile: that takes a kernel call, which hands the lock over);
+    /// otherwise the kernel call `lock_call`.
     #[inline]
     fn release_resource(&self, res: ResourceId) -> Result<(), OsError> {
         if self.lazy_release(res, false) || self.lazy_release(res, true) {
@@ -1294,24 +1313,29 @@ impl<K: OsKernel, A: Arch> Port for Preemptive<K, A> {
 
     /// [`Preemptive::get_resource`] with the kind of lock outside the kernel known when
     /// the image is built: only that kind is tried (where the resource is of the other
-    /// kind, the kernel's answer never names it so, and the lock goes to the kernel).
+    /// kind, the kernel's answer never names it so, and the lock goes to the kernel). The
+    /// answer says which way it went, for the release.
     #[inline]
-    fn get_resource_of_kind<const ISR_SHARED: bool>(&self, res: ResourceId) -> Result<(), OsError> {
-        if self.lazy_get(res, ISR_SHARED) {
-            return Ok(());
-        }
-        self.lock_call(res, true)
-    }
-
-    /// [`Preemptive::release_resource`] of a lock [`Preemptive::get_resource_of_kind`]
-    /// took: one exchange, and no mask to put back where the lock masks nothing.
-    #[inline]
-    fn release_resource_of_kind<const ISR_SHARED: bool>(
+    fn get_resource_of_kind<const ISR_SHARED: bool>(
         &self,
         res: ResourceId,
-    ) -> Result<(), OsError> {
-        if self.lazy_release(res, ISR_SHARED) {
-            return Ok(());
+    ) -> Result<Held, OsError> {
+        if self.lazy_get(res, ISR_SHARED) {
+            return Ok(Held::outside(ISR_SHARED));
+        }
+        self.lock_call(res, true).map(|()| Held::other())
+    }
+
+    /// The release of a lock [`Preemptive::get_resource_of_kind`] took: outside the
+    /// kernel, the answer back in the word with no test of the word first, and no mask
+    /// to put back where the lock masks nothing; the kernel's release otherwise, and
+    /// where the lock was handed over meanwhile.
+    #[inline]
+    fn release_held(&self, res: ResourceId, held: Held) -> Result<(), OsError> {
+        if let Some(masks_isrs) = held.outside_masking() {
+            if self.release_outside(masks_isrs) {
+                return Ok(());
+            }
         }
         self.lock_call(res, false)
     }
@@ -1337,7 +1361,7 @@ impl<K: OsKernel, A: Arch> Port for Preemptive<K, A> {
         };
         compiler_fence(Ordering::SeqCst);
         // The kernel's answer, and the kernel call's end with it.
-        self.lazy.set_mask(lock_free);
+        self.lazy.set_answer(lock_free);
         // The fast path runs only with no interrupt lock in force: the kernel's mask is a
         // level, and every-interrupt masking stays off.
         self.arch.set_level(level);
@@ -1360,11 +1384,6 @@ impl<K: OsKernel, A: Arch> Port for Preemptive<K, A> {
                 if kernel.task_returned().is_ok() {
                     sched.ended = true;
                 }
-            }
-            if sched.ended {
-                // The job's lock kept outside the kernel, if any, was handed over at this
-                // call and released with the job (`task_returned`).
-                self.lazy.job_ended(sched.current);
             }
             let called = sched.was_called(usize::from(sched.current));
             (result, sched.ended, called)

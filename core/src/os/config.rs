@@ -28,13 +28,14 @@ pub const MAX_TASKS: usize = 64;
 /// Most user resources one configuration may hold (besides `RES_SCHEDULER`).
 pub const MAX_RESOURCES: usize = 32;
 /// Resources below this one may be locked outside the kernel: the kernel's answer
-/// ([`lock_free_bit`]) has one bit for each kind of such a lock.
-pub const LOCK_FREE_RESOURCES: u8 = 16;
+/// ([`lock_free_bit`]) has one bit for each kind of such a lock, in its low 24 bits (a
+/// port keeps the lock itself in the same word, in the 8 bits above).
+pub const LOCK_FREE_RESOURCES: u8 = 12;
 
 /// The bit of the kernel's answer to which resources the running task may lock outside
 /// the kernel ([`Os::lock_free_resources`](crate::os::Os::lock_free_resources)) that names
 /// resource `res`: bit `res` where no ISR shares it (its ceiling at a task's level: the
-/// lock masks no interrupt), bit `16 + res` where one does (`masks_isrs`: the lock masks
+/// lock masks no interrupt), bit `12 + res` where one does (`masks_isrs`: the lock masks
 /// the ISRs up to the ceiling). So a port that tests a constant resource's first bit
 /// knows, without a table, that the lock masks nothing. 0 from [`LOCK_FREE_RESOURCES`] on:
 /// the answer never names those.

@@ -1103,9 +1103,9 @@ fn lock_free_resources_are_a_preemptive_tasks_own() {
     let Ok(cfg) = std::hint::black_box(OsConfig::<3, 3, 0, 0, 2>::new(description)) else {
         panic!("the configuration is valid")
     };
-    // Resource 2, which the ISRs share, in the upper half: its lock masks them.
+    // Resource 2, which the ISRs share, in the second twelve bits: its lock masks them.
     assert_eq!(cfg.lock_free_resources(0), 0b011);
-    assert_eq!(cfg.lock_free_resources(1), 0b010 | 1 << (16 + 2));
+    assert_eq!(cfg.lock_free_resources(1), 0b010 | 1 << (12 + 2));
     assert_eq!(cfg.lock_free_resources(2), 0);
     assert_eq!(cfg.lock_free_resources(3), 0);
     assert_eq!(cfg.resource_ceiling(2), Some(ISR_LEVEL_BASE + 2));
@@ -1115,8 +1115,8 @@ fn lock_free_resources_are_a_preemptive_tasks_own() {
 }
 
 /// The answer's bit of a resource says which kind of lock it is: bit `r` for one that
-/// masks nothing, bit `16 + r` for one that masks ISRs; none from resource 16 on, where a
-/// task's lock always goes through the kernel.
+/// masks nothing, bit `12 + r` for one that masks ISRs; none from resource 12 on, where a
+/// task's lock always goes through the kernel. The answer fits in its low 24 bits.
 #[test]
 fn the_lock_free_bit_says_the_kind_of_lock() {
     for r in 0..=u8::MAX {
@@ -1125,26 +1125,27 @@ fn the_lock_free_bit_says_the_kind_of_lock() {
             crate::os::lock_free_bit(ResourceId(r), true),
         );
         if r < crate::os::LOCK_FREE_RESOURCES {
-            assert_eq!((unmasked, masked), (1 << r, 1 << (16 + r)), "{r}");
+            assert_eq!((unmasked, masked), (1 << r, 1 << (12 + r)), "{r}");
+            assert!(masked < 1 << 24, "{r}");
         } else {
             assert_eq!((unmasked, masked), (0, 0), "{r}");
         }
     }
-    // A task's resources from 16 on are never named, of either kind.
+    // A task's resources from 12 on are never named, of either kind.
     let description = OsDescription::new(
-        [TaskConfig::basic("A", 1).uses(1 << 16 | 1 << 17 | 1)],
+        [TaskConfig::basic("A", 1).uses(1 << 12 | 1 << 13 | 1)],
         [],
         [],
-        [IsrConfig::cat2("I", 0).uses(1 << 17)],
+        [IsrConfig::cat2("I", 0).uses(1 << 13)],
     );
-    let Ok(cfg) = std::hint::black_box(OsConfig::<1, 18, 0, 0, 1>::new(description)) else {
+    let Ok(cfg) = std::hint::black_box(OsConfig::<1, 14, 0, 0, 1>::new(description)) else {
         panic!("the configuration is valid")
     };
     assert_eq!(cfg.lock_free_resources(0), 0b1);
     // An ISR of priority 0 makes the lowest interrupt-level ceiling: shared all the same.
-    assert_eq!(cfg.resource_ceiling(17), Some(ISR_LEVEL_BASE));
-    assert!(cfg.isr_shared(ResourceId(17)));
-    assert!(!cfg.isr_shared(ResourceId(16)));
+    assert_eq!(cfg.resource_ceiling(13), Some(ISR_LEVEL_BASE));
+    assert!(cfg.isr_shared(ResourceId(13)));
+    assert!(!cfg.isr_shared(ResourceId(12)));
 }
 
 /// A ready queue of more than 255 records cannot be indexed by the kernel's `u8` links;
@@ -2269,7 +2270,7 @@ fn a_resource_an_isr_shares_may_be_locked_outside_the_kernel_at_its_ceiling() {
         Err(e) => panic!("{}", e.describe()),
     };
     let mut os: Os<1, 1, 0, 0, 1, 1> = started(&SHARED);
-    assert_eq!(os.lock_free_resources(), 1 << 16);
+    assert_eq!(os.lock_free_resources(), 1 << 12);
     assert_eq!(os.interrupt_mask(), InterruptMask::None);
     let verdict = spec::lock_pair_leaves_no_trace(&os, R0);
     assert!(verdict.is_ok(), "{verdict:?}");

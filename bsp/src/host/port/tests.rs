@@ -10,7 +10,7 @@ use cw_core::os::{
 use super::HostPort;
 use crate::host::clock::VirtualClock;
 use crate::port::lazy::{check_any_steps, word};
-use crate::port::Port;
+use crate::port::{Held, Port};
 
 const LOW: TaskId = TaskId(0);
 const HIGH: TaskId = TaskId(1);
@@ -37,6 +37,7 @@ type Kernel = Os<2, 2, 1, 0, 1, 2>;
 
 /// The port after `StartOS`: Low (autostart) runs.
 fn started() -> HostPort<Kernel> {
+    HELD.with_borrow_mut(|all| *all = [const { None }; 3]);
     let Ok(kernel) = Kernel::new(&OS) else {
         panic!("the test kernel");
     };
@@ -55,7 +56,7 @@ fn kernel_now(port: &HostPort<Kernel>) -> Kernel {
 fn kernel_view(port: &HostPort<Kernel>) -> Kernel {
     let mut view = kernel_now(port);
     let lazy = port.lazy.word();
-    if word::is_unhanded(lazy) {
+    if word::is_locked(lazy) {
         assert!(
             view.try_get_resource(word::resource(lazy)).is_some(),
             "the hand-over"
@@ -70,11 +71,11 @@ fn a_tasks_lock_is_a_store_and_the_next_kernel_call_hands_it_over() {
     let before = kernel_now(&port);
     for res in [ResourceId(0), ResourceId(1)] {
         assert_eq!(port.get_resource(res), Ok(()));
-        assert_ne!(port.lazy.word(), 0);
+        assert!(word::is_locked(port.lazy.word()));
         assert!(kernel_now(&port) == before, "the kernel was not called");
         assert_eq!(kernel_view(&port).resource_owner(res), Some(LOW));
         assert_eq!(port.release_resource(res), Ok(()));
-        assert_eq!(port.lazy.word(), 0);
+        assert_eq!(port.lazy.word(), LOW_ANSWER, "the answer again");
         assert!(kernel_now(&port) == before, "the pair left no trace");
     }
     // A kernel call inside the lock: the kernel holds it for Low first, so High, which
@@ -84,7 +85,35 @@ fn a_tasks_lock_is_a_store_and_the_next_kernel_call_hands_it_over() {
     assert_eq!(kernel_now(&port).resource_owner(ResourceId(1)), Some(LOW));
     assert_eq!(kernel_now(&port).running(), Some(LOW));
     assert_eq!(port.release_resource(ResourceId(1)), Ok(()));
-    assert_eq!(port.lazy.word(), 0);
+    assert!(!word::is_locked(port.lazy.word()));
+    assert_eq!(kernel_now(&port).resource_owner(ResourceId(1)), None);
+    assert_eq!(kernel_now(&port).running(), Some(HIGH));
+}
+
+/// A lock taken by [`Port::get_resource_of_kind`] is released as it was taken: outside
+/// the kernel, the answer back in the word; where a kernel call inside the lock handed it
+/// over, through the kernel.
+#[test]
+fn a_lock_released_as_it_was_taken() {
+    let port = started();
+    let before = kernel_now(&port);
+    let held = port.get_resource_of_kind::<true>(ResourceId(0));
+    assert_eq!(held, Ok(Held::outside(false)), "the host masks nothing");
+    assert_eq!(
+        port.release_held(ResourceId(0), Held::outside(false)),
+        Ok(())
+    );
+    assert_eq!(port.lazy.word(), LOW_ANSWER);
+    assert!(kernel_now(&port) == before, "the pair left no trace");
+    // A kernel call inside it: the answer is 0 from the hand-over, so the release goes
+    // to the kernel, which lets High in.
+    assert!(port.get_resource_of_kind::<false>(ResourceId(1)).is_ok());
+    assert_eq!(port.kernel(|os| os.activate_task(HIGH)), Ok(()));
+    assert_eq!(port.lazy.answer(), 0);
+    assert_eq!(
+        port.release_held(ResourceId(1), Held::outside(false)),
+        Ok(())
+    );
     assert_eq!(kernel_now(&port).resource_owner(ResourceId(1)), None);
     assert_eq!(kernel_now(&port).running(), Some(HIGH));
 }
@@ -96,7 +125,7 @@ fn a_nested_lock_of_the_same_resource_is_refused_by_the_kernel_as_ever() {
     assert_eq!(port.get_resource(ResourceId(1)), Err(OsError::Access));
     assert_eq!(kernel_now(&port).resource_owner(ResourceId(1)), Some(LOW));
     assert_eq!(port.release_resource(ResourceId(1)), Ok(()));
-    assert_eq!(port.lazy.word(), 0);
+    assert_eq!(port.lazy.word(), LOW_ANSWER);
     assert_eq!(kernel_now(&port).resource_owner(ResourceId(1)), None);
 }
 
@@ -119,21 +148,53 @@ fn what_is_read_of_the_kernel_includes_a_lock_kept_outside_it() {
 fn isrs_lock_through_the_kernel() {
     let port = started();
     assert_eq!(port.kernel(|os| os.enter_isr(IsrId(0))), Ok(()));
-    assert_eq!(port.lazy.mask(), 0);
+    assert_eq!(port.lazy.word(), 0);
     assert_eq!(port.get_resource(ResourceId(0)), Ok(()));
     assert_eq!(port.lazy.word(), 0);
     assert_eq!(port.release_resource(ResourceId(0)), Ok(()));
     assert_eq!(port.kernel(|os| os.exit_isr()), Ok(()));
     // Resource 0, which the ISR shares, by the lock that masks it; 1 by the other.
-    assert_eq!(port.lazy.mask(), 1 << 16 | 1 << 1);
+    assert_eq!(port.lazy.word(), LOW_ANSWER);
+}
+
+/// Low's answer: resource 0, which the ISR shares, by the lock that masks it (bit 12);
+/// resource 1 by the other (bit 1).
+const LOW_ANSWER: u32 = 1 << 12 | 1 << 1;
+
+std::thread_local! {
+    /// How [`step_on_both`] took each resource by its kind, for the release.
+    static HELD: core::cell::RefCell<[Option<Held>; 3]> =
+        const { core::cell::RefCell::new([None, None, None]) };
 }
 
 /// One step on the port and on the reference kernel, called for every lock.
 fn step_on_both(port: &HostPort<Kernel>, reference: &mut Kernel, op: u8) {
-    let res = ResourceId(op / 5 % 3);
-    match op % 5 {
+    let res = ResourceId(op / 7 % 3);
+    let slot = usize::from(res.0);
+    match op % 7 {
         0 => assert_eq!(port.get_resource(res), reference.get_resource(res)),
-        1 => assert_eq!(port.release_resource(res), reference.release_resource(res)),
+        1 => {
+            HELD.with_borrow_mut(|all| all[slot] = None);
+            assert_eq!(port.release_resource(res), reference.release_resource(res));
+        }
+        5 => {
+            // As the firmware's `Resource` locks: the way kept for the release.
+            let held = port.get_resource_of_kind::<false>(res);
+            assert_eq!(
+                held.as_ref().map(|_| ()).map_err(|e| *e),
+                reference.get_resource(res)
+            );
+            if let Ok(held) = held {
+                HELD.with_borrow_mut(|all| all[slot] = Some(held));
+            }
+        }
+        6 => {
+            let held = HELD.with_borrow_mut(|all| all[slot].take());
+            assert_eq!(
+                port.release_held(res, held.unwrap_or_else(Held::other)),
+                reference.release_resource(res)
+            );
+        }
         2 => {
             // An ISR that enters (where the mask lets it) and returns.
             let entered = port.kernel(|os| os.enter_isr(IsrId(0)));

@@ -16,7 +16,8 @@ use cw_core::os::{
 use super::spec;
 use super::{check, Arch, InterruptMask, PortFault, Preemptive, Refusal, IDLE, MAX_TASKS};
 use crate::port::lazy::check_any_steps;
-use crate::port::{Port, TickPath};
+use crate::port::lazy::word;
+use crate::port::{Held, Port, TickPath};
 
 const LOW: TaskId = TaskId(0);
 const HIGH: TaskId = TaskId(1);
@@ -226,6 +227,7 @@ fn take_switch(port: &TestPort, sp: u32) -> u32 {
 
 /// StartOS: `Low` (autostart) is chosen, the switch starts its job on the shared stack.
 fn started() -> TestPort {
+    HELD.with_borrow_mut(|all| *all = [const { None }; 4]);
     let port = port();
     port.set_task_stack(WAITER, WAITER_STACK.0, WAITER_STACK.1);
     port.start_checked();
@@ -574,27 +576,40 @@ fn long_schedules_keep_the_stacks_apart() {
         .for_each(|steps| assert!(spec::stacks_stay_apart(steps)));
 }
 
-/// [`Port::get_resource_of_kind`] with the kind known only when the test runs.
+std::thread_local! {
+    /// How [`get_of_kind`] took each resource, for [`release_of_kind`].
+    static HELD: RefCell<[Option<Held>; 4]> = const { RefCell::new([None, None, None, None]) };
+}
+
+/// [`Port::get_resource_of_kind`] with the kind known only when the test runs; how the
+/// lock was taken is kept for [`release_of_kind`], as the firmware's `Resource` keeps it.
 fn get_of_kind(port: &TestPort, res: ResourceId, isr_shared: bool) -> Result<(), OsError> {
-    if isr_shared {
+    let held = if isr_shared {
         port.get_resource_of_kind::<true>(res)
     } else {
         port.get_resource_of_kind::<false>(res)
-    }
+    }?;
+    HELD.with_borrow_mut(|all| all[usize::from(res.0) % 4] = Some(held));
+    Ok(())
 }
 
-/// [`Port::release_resource_of_kind`] with the kind known only when the test runs.
-fn release_of_kind(port: &TestPort, res: ResourceId, isr_shared: bool) -> Result<(), OsError> {
-    if isr_shared {
-        port.release_resource_of_kind::<true>(res)
-    } else {
-        port.release_resource_of_kind::<false>(res)
-    }
+/// [`Port::release_held`] of the lock [`get_of_kind`] took of `res` (a lock taken any
+/// other way where none).
+fn release_of_kind(port: &TestPort, res: ResourceId) -> Result<(), OsError> {
+    let held = HELD.with_borrow_mut(|all| all[usize::from(res.0) % 4].take());
+    port.release_held(res, held.unwrap_or_else(Held::other))
+}
+
+/// [`Port::release_resource`], the general release: a lock [`get_of_kind`] took of
+/// `res` is no longer to be released by [`release_of_kind`].
+fn release(port: &TestPort, res: ResourceId) -> Result<(), OsError> {
+    HELD.with_borrow_mut(|all| all[usize::from(res.0) % 4] = None);
+    port.release_resource(res)
 }
 
 /// Low's answer: resource 0, which the ISR shares, by the lock that masks it (bit
-/// 16), resource 1, which only tasks share, by the lock that masks nothing (bit 1).
-const LOW_ANSWER: u32 = 1 << 16 | 1 << 1;
+/// 12), resource 1, which only tasks share, by the lock that masks nothing (bit 1).
+const LOW_ANSWER: u32 = 1 << 12 | 1 << 1;
 
 /// The kernel as the port leaves it, with a lock kept outside the kernel handed over as
 /// the next kernel call would: what every kernel call sees.
@@ -602,9 +617,11 @@ fn kernel_view(port: &TestPort) -> Kernel {
     // SAFETY: the model runs one context at a time and no kernel call is under way.
     let mut view = unsafe { *port.kernel.get() };
     let lazy = port.lazy.word();
-    if crate::port::lazy::word::is_unhanded(lazy) {
-        let res = crate::port::lazy::word::resource(lazy);
-        assert!(view.try_get_resource(res).is_some(), "the hand-over");
+    if word::is_locked(lazy) {
+        assert!(
+            view.try_get_resource(word::resource(lazy)).is_some(),
+            "the hand-over"
+        );
     }
     view
 }
@@ -622,7 +639,7 @@ fn a_tasks_lock_outside_the_kernel_is_a_store_and_a_pair_leaves_the_kernel_untou
     let before = kernel_now(&port);
     let os_locks = port.arch().os_locks.get();
     assert_eq!(port.get_resource(tasks_only), Ok(()));
-    assert_ne!(port.lazy.word(), 0);
+    assert!(word::is_locked(port.lazy.word()));
     assert!(kernel_now(&port) == before, "the kernel was not called");
     // No ISR uses it: the store alone, not even the kernel lock.
     assert_eq!(port.arch().os_locks.get(), os_locks);
@@ -631,12 +648,12 @@ fn a_tasks_lock_outside_the_kernel_is_a_store_and_a_pair_leaves_the_kernel_untou
     assert_eq!(kernel_view(&port).running_priority(), Some(2));
     assert_eq!(port.arch().level.get(), Some(InterruptMask::None));
     assert_eq!(port.release_resource(tasks_only), Ok(()));
-    assert_eq!(port.lazy.word(), 0);
+    assert_eq!(port.lazy.word(), LOW_ANSWER, "the answer again");
     assert!(kernel_now(&port) == before, "the pair left no trace");
     // A resource an ISR shares too: the port masks the ISR itself, at the ceiling.
     let shared = ResourceId(0);
     assert_eq!(port.get_resource(shared), Ok(()));
-    assert_ne!(port.lazy.word(), 0);
+    assert!(word::is_locked(port.lazy.word()));
     assert!(kernel_now(&port) == before, "the kernel was not called");
     // The store under the kernel lock, then the ceiling's mask.
     assert_eq!(port.arch().os_locks.get(), os_locks + 1);
@@ -652,7 +669,7 @@ fn a_tasks_lock_outside_the_kernel_is_a_store_and_a_pair_leaves_the_kernel_untou
     assert_eq!(kernel_now(&port).resource_owner(tasks_only), Some(LOW));
     assert_eq!(port.release_resource(tasks_only), Ok(()));
     assert_eq!(port.release_resource(shared), Ok(()));
-    assert_eq!(port.lazy.word(), 0);
+    assert_eq!(port.lazy.word(), LOW_ANSWER, "the answer again");
     assert!(kernel_now(&port) == before, "both released");
     assert_eq!(port.arch().level.get(), Some(InterruptMask::None));
     // The pair again: the release puts the task's mask back itself.
@@ -663,14 +680,13 @@ fn a_tasks_lock_outside_the_kernel_is_a_store_and_a_pair_leaves_the_kernel_untou
 }
 
 /// A lock of a kind known when the image is built ([`Port::get_resource_of_kind`]) tries
-/// that kind alone: a resource only tasks share is one store and its release one exchange,
-/// neither touching the mask; one an ISR shares masks it and puts the task's mask back.
-/// Where the kind given is not the resource's, the lock and release are the kernel's; a
-/// lock of one kind released as the other goes to the kernel, which is handed the lock
-/// first. Every way leaves the kernel as it was.
+/// that kind alone: a resource only tasks share is one store and its release the answer
+/// put back, neither touching the mask; one an ISR shares masks it and puts the task's
+/// mask back. Where the kind given is not the resource's, the lock and release are the
+/// kernel's; a lock outside the kernel whose release is not told so goes to the kernel,
+/// which is handed the lock first. Every way leaves the kernel as it was.
 #[test]
 fn a_lock_of_a_known_kind_tries_that_kind_alone() {
-    use crate::port::lazy::word;
     let port = started();
     let (shared, tasks_only) = (ResourceId(0), ResourceId(1));
     let before = kernel_now(&port);
@@ -678,11 +694,11 @@ fn a_lock_of_a_known_kind_tries_that_kind_alone() {
     let untouched = Some(InterruptMask::UpTo(5));
     port.arch().level.set(untouched);
     assert_eq!(get_of_kind(&port, tasks_only, false), Ok(()));
-    assert_eq!(port.lazy.word(), word::unhanded(tasks_only, false));
+    assert_eq!(port.lazy.word(), word::locked(tasks_only, false));
     assert!(kernel_now(&port) == before, "the kernel was not called");
     assert_eq!(kernel_view(&port).resource_owner(tasks_only), Some(LOW));
-    assert_eq!(release_of_kind(&port, tasks_only, false), Ok(()));
-    assert_eq!(port.lazy.word(), 0);
+    assert_eq!(release_of_kind(&port, tasks_only), Ok(()));
+    assert_eq!(port.lazy.word(), LOW_ANSWER, "the answer again");
     assert_eq!(
         port.arch().level.get(),
         untouched,
@@ -692,9 +708,9 @@ fn a_lock_of_a_known_kind_tries_that_kind_alone() {
     port.arch().level.set(Some(InterruptMask::None));
     // The ISRs' kind: the ceiling's mask, then the task's.
     assert_eq!(get_of_kind(&port, shared, true), Ok(()));
-    assert_eq!(port.lazy.word(), word::unhanded(shared, true));
+    assert_eq!(port.lazy.word(), word::locked(shared, true));
     assert_eq!(port.arch().level.get(), Some(InterruptMask::UpTo(1)));
-    assert_eq!(release_of_kind(&port, shared, true), Ok(()));
+    assert_eq!(release_of_kind(&port, shared), Ok(()));
     assert_eq!(port.arch().level.get(), Some(InterruptMask::None));
     assert!(kernel_now(&port) == before, "the pair left no trace");
     // Kinds that are not the resources': the kernel's locks.
@@ -702,21 +718,24 @@ fn a_lock_of_a_known_kind_tries_that_kind_alone() {
         assert_eq!(get_of_kind(&port, res, kind), Ok(()));
         assert_eq!(port.lazy.word(), 0, "{res:?}");
         assert_eq!(kernel_now(&port).resource_owner(res), Some(LOW));
-        assert_eq!(release_of_kind(&port, res, kind), Ok(()));
+        assert_eq!(release_of_kind(&port, res), Ok(()));
         assert!(kernel_now(&port) == before, "{res:?} released");
         assert_eq!(port.arch().level.get(), Some(InterruptMask::None));
     }
-    // A lock of one kind released as the other: through the kernel (its lock taken),
-    // handed the lock.
+    // A lock outside the kernel released without being told so: through the kernel
+    // (its lock taken), handed the lock.
     let os_errors = kernel_now(&port).hooks().errors().len();
-    assert_eq!(get_of_kind(&port, shared, true), Ok(()));
+    assert_eq!(
+        port.get_resource_of_kind::<true>(shared),
+        Ok(Held::outside(true))
+    );
     let os_locks = port.arch().os_locks.get();
-    assert_eq!(release_of_kind(&port, shared, false), Ok(()));
+    assert_eq!(port.release_held(shared, Held::other()), Ok(()));
     assert!(
         port.arch().os_locks.get() > os_locks,
         "a kernel call released it"
     );
-    assert_eq!(port.lazy.word(), 0);
+    assert_eq!(port.lazy.word(), LOW_ANSWER, "the answer again");
     assert!(kernel_now(&port) == before, "released by the kernel");
     assert_eq!(port.arch().level.get(), Some(InterruptMask::None));
     assert_eq!(kernel_now(&port).hooks().errors().len(), os_errors);
@@ -734,10 +753,18 @@ fn the_next_kernel_call_hands_the_lock_to_the_kernel_before_anything_else() {
         assert_eq!(os.activate_task(HIGH), Ok(()));
     });
     assert!(!port.arch().switch.get(), "High waits for the release");
-    assert_ne!(port.lazy.word() & crate::port::lazy::word::HANDED, 0);
+    assert_eq!(
+        port.lazy.answer(),
+        0,
+        "handed over: the task holds a resource"
+    );
+    assert!(!word::is_locked(port.lazy.word()));
     // The release goes through the kernel, which switches to High.
     assert_eq!(port.release_resource(tasks_only), Ok(()));
-    assert_eq!(port.lazy.word(), 0);
+    assert!(
+        !word::is_locked(port.lazy.word()),
+        "High runs, with its own answer"
+    );
     assert_eq!(kernel_now(&port).resource_owner(tasks_only), None);
     assert!(port.arch().switch.get(), "the release lets High in");
     assert_eq!(kernel_now(&port).running(), Some(HIGH));
@@ -754,7 +781,7 @@ fn a_tick_with_nothing_due_takes_the_lock_over_and_its_answer_says_so() {
     };
     assert_eq!(port.get_resource(tasks_only), Ok(()));
     assert_eq!(
-        port.lazy.mask(),
+        port.lazy.answer(),
         LOW_ANSWER,
         "the answer from before the lock"
     );
@@ -762,7 +789,7 @@ fn a_tick_with_nothing_due_takes_the_lock_over_and_its_answer_says_so() {
     // now, so the answer it leaves is 0, not the one it found.
     assert_eq!(port.tick_isr(tick, counter, whole), TickPath::NothingDue);
     assert!(!port.lazy.in_kernel());
-    assert_eq!(port.lazy.mask(), 0);
+    assert_eq!((port.lazy.word(), port.lazy.answer()), (0, 0));
     assert_eq!(kernel_now(&port).resource_owner(tasks_only), Some(LOW));
     // Another lock goes to the kernel: the same resource is refused there, the other one
     // is taken by the kernel.
@@ -770,8 +797,11 @@ fn a_tick_with_nothing_due_takes_the_lock_over_and_its_answer_says_so() {
     assert_eq!(port.get_resource(ResourceId(0)), Ok(()));
     assert_eq!(port.release_resource(ResourceId(0)), Ok(()));
     assert_eq!(port.release_resource(tasks_only), Ok(()));
-    assert_eq!(port.lazy.word(), 0);
-    assert_eq!(port.lazy.mask(), LOW_ANSWER, "the task holds nothing again");
+    assert_eq!(
+        (port.lazy.word(), port.lazy.answer()),
+        (LOW_ANSWER, LOW_ANSWER),
+        "the task holds nothing again"
+    );
     assert_eq!(kernel_now(&port).resource_owner(tasks_only), None);
 }
 
@@ -805,7 +835,7 @@ fn a_nested_lock_of_the_same_resource_is_refused_by_the_kernel_as_ever() {
     assert_eq!(kernel_now(&port).hooks().errors(), [OsError::Access]);
     assert_eq!(kernel_now(&port).resource_owner(tasks_only), Some(LOW));
     assert_eq!(port.release_resource(tasks_only), Ok(()));
-    assert_eq!(port.lazy.word(), 0);
+    assert_eq!(port.lazy.word(), LOW_ANSWER, "the answer again");
     assert_eq!(kernel_now(&port).resource_owner(tasks_only), None);
 }
 
@@ -834,17 +864,17 @@ fn isrs_hooks_and_tasks_under_an_interrupt_lock_lock_through_the_kernel() {
     let port = started();
     // In an ISR (after its entry): the lock goes to the kernel.
     port.kernel(|os| os.enter_isr(IsrId(0))).expect("enter");
-    assert_eq!(port.lazy.mask(), 0);
+    assert_eq!(port.lazy.word(), 0);
     assert_eq!(port.get_resource(ResourceId(0)), Ok(()));
     assert_eq!(port.lazy.word(), 0);
     assert_eq!(port.release_resource(ResourceId(0)), Ok(()));
     port.kernel(|os| os.exit_isr()).expect("exit");
     // Back in Low, which may again.
-    assert_eq!(port.lazy.mask(), LOW_ANSWER);
+    assert_eq!(port.lazy.word(), LOW_ANSWER);
     // Under SuspendOSInterrupts: the kernel refuses the lock (E_OS_CALLEVEL in AUTOSAR).
     port.kernel(|os| os.suspend_os_interrupts())
         .expect("suspend");
-    assert_eq!(port.lazy.mask(), 0);
+    assert_eq!(port.lazy.word(), 0);
     assert!(port.get_resource(ResourceId(1)).is_err());
     assert_eq!(port.lazy.word(), 0);
     port.kernel(|os| os.resume_os_interrupts()).expect("resume");
@@ -856,8 +886,8 @@ fn isrs_hooks_and_tasks_under_an_interrupt_lock_lock_through_the_kernel() {
     assert!(port.lazy.in_kernel());
     assert_eq!(port.lazy.begin_kernel(), None);
     assert!(!port.lazy_get(ResourceId(1), false));
-    assert_eq!(port.lazy.word(), 0);
-    port.lazy.set_mask(before);
+    assert_eq!(port.lazy.word(), word::IN_KERNEL);
+    port.lazy.restore(before);
     assert!(!port.lazy.in_kernel());
     assert!(port.lazy_get(ResourceId(1), false));
     assert!(port.lazy_release(ResourceId(1), false));
@@ -876,7 +906,7 @@ fn lock_step_on_both(port: &TestPort, reference: &mut Kernel, op: u8) {
             "get {res:?}"
         ),
         1 => assert_eq!(
-            port.release_resource(res),
+            release(port, res),
             reference.release_resource(res),
             "release {res:?}"
         ),
@@ -886,9 +916,9 @@ fn lock_step_on_both(port: &TestPort, reference: &mut Kernel, op: u8) {
             "get {res:?} of kind {isr_shared}"
         ),
         3 => assert_eq!(
-            release_of_kind(port, res, isr_shared),
+            release_of_kind(port, res),
             reference.release_resource(res),
-            "release {res:?} of kind {isr_shared}"
+            "release {res:?} as taken"
         ),
         4 => {
             // An ISR that enters (where the mask lets it) and returns.
@@ -929,8 +959,10 @@ struct Pending {
     /// `Tick` (which locks the resource it shares with Low), else `Can` (which activates
     /// High).
     tick: bool,
-    /// Whether it was taken, and whether a lock outside the kernel was in the port's word
-    /// then (the order the kernel sees: after the lock, before its release).
+    /// Whether it was taken, and whether Low held a resource then: a lock outside the
+    /// kernel in the port's word, or one handed over or taken by the kernel (the answer
+    /// 0): the order the kernel sees, after a lock and before its release (one that
+    /// finds the answer 0 goes to the kernel after the interrupt).
     taken: Option<bool>,
 }
 
@@ -1015,8 +1047,8 @@ fn take_pending(model: &Model, point: bool) {
     if !model.admits(if pending.tick { 1 } else { 2 }) {
         return;
     }
-    let locked = pending.port.lazy.word() != 0;
-    pending.taken = Some(locked);
+    let lazy = &pending.port.lazy;
+    pending.taken = Some(word::is_locked(lazy.word()) || lazy.answer() == 0);
     PENDING.set(Some(pending));
     interrupt(pending.port, pending.tick);
 }
@@ -1047,9 +1079,9 @@ fn any_interrupt_between_the_stores_of_a_lock_outside_the_kernel() {
                     let kind = (op / 10 % 2 == 1).then_some(res.0 == 0);
                     let result = match (take, kind) {
                         (true, None) => port.get_resource(res),
-                        (false, None) => port.release_resource(res),
+                        (false, None) => release(port, res),
                         (true, Some(isr_shared)) => get_of_kind(port, res, isr_shared),
-                        (false, Some(isr_shared)) => release_of_kind(port, res, isr_shared),
+                        (false, Some(_)) => release_of_kind(port, res),
                     };
                     // The interrupt taken inside the call, where the kernel saw it.
                     let inside = PENDING.get().and_then(|p| p.taken.map(|l| (p.tick, l)));
