@@ -31,9 +31,10 @@ use crate::Result;
 /// How many functions each view prints (all of them go to the file).
 const SHOWN: usize = 40;
 
-/// The trace's one function for every mark (the measuring images' spans, jobs and ISR
-/// entries): what the measuring itself executes.
-const MARK: &str = "cw_bsp::cortex_m::trace::mark";
+/// The trace's one out-of-line function for every mark (the measuring images' spans, jobs
+/// and ISR entries): what the measuring itself executes, but for the constant and the call
+/// at each mark's site.
+const MARK: &str = "cw_bsp::cortex_m::trace::mark_word";
 
 /// The address of an executed instruction in one `-d exec` line (`Trace 0: 0xHOST
 /// [0000000a/PC/flags/cflags] symbol`), `None` for a line of another kind.
