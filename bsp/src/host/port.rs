@@ -19,7 +19,7 @@ use cw_core::os::{
 
 use super::clock::VirtualClock;
 use crate::port::lazy::LazyLock;
-use crate::port::{lock_in_kernel, Held, OsKernel, Port};
+use crate::port::{lock_in_kernel, OsKernel, Port};
 
 /// The host port of a kernel `K`.
 pub struct HostPort<K> {
@@ -151,41 +151,23 @@ impl<K: OsKernel> Port for HostPort<K> {
     /// Otherwise the kernel's fast path, or the service.
     #[inline]
     fn get_resource(&self, res: ResourceId) -> Result<(), OsError> {
-        self.get_resource_of_kind::<false>(res).map(|_| ())
-    }
-
-    /// The release of a lock kept outside the kernel that no kernel call has seen: the
-    /// kernel's answer back in the word. Otherwise through the kernel.
-    #[inline]
-    fn release_resource(&self, res: ResourceId) -> Result<(), OsError> {
-        if self.lazy.clear_alone(res) {
-            return Ok(());
-        }
-        self.lock_call(res, false)
-    }
-
-    /// The lock outside the kernel where the rules allow it, of either kind (the host
-    /// masks nothing), saying which way it went; [`HostPort::get_resource`] is this.
-    #[inline]
-    fn get_resource_of_kind<const ISR_SHARED: bool>(
-        &self,
-        res: ResourceId,
-    ) -> Result<Held, OsError> {
         if self.lazy.may_take_either(res) && self.kernel.try_borrow_mut().is_ok() {
             // (No mask on the host: a lock of either kind is the one that masks nothing.)
             self.lazy.take(res, false);
-            return Ok(Held::outside(false));
+            return Ok(());
         }
-        self.lock_call(res, true).map(|()| Held::other())
+        self.lock_call(res, true)
     }
 
-    /// The release of a lock [`HostPort::get_resource_of_kind`] took: outside the kernel,
-    /// the kernel's answer back in the word, unless a kernel call the job made since
-    /// (inside the lock) handed the lock over, which leaves the answer 0; through the
-    /// kernel otherwise.
+    /// The release of a lock kept outside the kernel that no kernel call has seen: the
+    /// kernel's answer back in the word, where the word still holds the lock (no interrupt
+    /// comes inside a job here, so nothing comes between the test and the store; a kernel
+    /// call the job made inside the lock handed it over). Otherwise through the kernel.
+    /// (The port's lock of a kind is this lock and its release this release: the port's
+    /// default [`Port::get_resource_of_kind`] and [`Port::release_held`].)
     #[inline]
-    fn release_held(&self, res: ResourceId, held: Held) -> Result<(), OsError> {
-        if held.outside_masking().is_some() && self.lazy.release(|| ()) {
+    fn release_resource(&self, res: ResourceId) -> Result<(), OsError> {
+        if self.lazy.clear_alone(res) {
             return Ok(());
         }
         self.lock_call(res, false)

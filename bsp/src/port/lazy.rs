@@ -8,7 +8,7 @@
 //!
 //! The book: [the OS](../../../../book/os.html), "A task's lock outside the kernel".
 
-use core::sync::atomic::{AtomicU32, Ordering};
+use core::sync::atomic::{compiler_fence, AtomicU32, Ordering};
 
 use cw_core::os::{lock_free_bit, ResourceId, LOCK_FREE_RESOURCES};
 
@@ -130,7 +130,13 @@ impl LazyLock {
     pub(crate) fn release(&self, between: impl Fn()) -> bool {
         let answer = self.answer.load(Ordering::Relaxed);
         between();
+        // The order of the three is the release's whole argument, and they are accesses
+        // of two words that nothing else orders: the compiler must neither move the second
+        // load above the store nor take the first load's value for it (no instruction on a
+        // single core, whose interrupts see its accesses in program order).
+        compiler_fence(Ordering::SeqCst);
         self.word.store(answer, Ordering::Relaxed);
+        compiler_fence(Ordering::SeqCst);
         between();
         self.answer.load(Ordering::Relaxed) != 0
     }

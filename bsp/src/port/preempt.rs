@@ -760,10 +760,13 @@ impl<K: OsKernel, A: Arch> Preemptive<K, A> {
         (kernel, sched)
     }
 
-    /// The kernel lock taken: the kernel, the tables, and the kernel's answer from before
-    /// the call (which resources the running task may lock outside the kernel; 0 where a
-    /// lock kept outside the kernel was handed over now, since the task holds a resource),
-    /// for a call that leaves it as it was ([`Preemptive::leave_at`] with it). Not generic
+    /// The kernel lock taken: the kernel, the tables, and the lock word from before the
+    /// call (the kernel's answer, which resources the running task may lock outside the
+    /// kernel, or a release's store of it just after a hand-over, whose copy says 0; 0
+    /// where a lock kept outside the kernel was handed over now, since the task holds a
+    /// resource), for a call that leaves the answer as it was: the word alone goes back
+    /// ([`Preemptive::leave_restoring`] with it, never [`Preemptive::leave_at`], which
+    /// would set the copy too). Not generic
     /// over the call, so a size-optimised image keeps one copy (a speed-optimised one
     /// inlines it).
     #[inline]

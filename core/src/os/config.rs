@@ -1015,7 +1015,7 @@ impl<const T: usize, const R: usize, const C: usize, const A: usize, const I: us
 
     /// The user resources task `index` declares, one bit each ([`lock_free_bit`]: the
     /// first [`LOCK_FREE_RESOURCES`], those an ISR shares too, a ceiling at interrupt
-    /// level, in the upper half); none for a task that is not fully preemptive, or an
+    /// level, in the second twelve bits); none for a task that is not fully preemptive, or an
     /// unknown index. What a port may let the task lock outside the kernel
     /// ([`Os::lock_free_resources`](crate::os::Os::lock_free_resources)), masking the ISRs
     /// at or below the ceiling itself where an ISR shares the resource.

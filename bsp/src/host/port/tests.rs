@@ -90,30 +90,32 @@ fn a_tasks_lock_is_a_store_and_the_next_kernel_call_hands_it_over() {
     assert_eq!(kernel_now(&port).running(), Some(HIGH));
 }
 
-/// A lock taken by [`Port::get_resource_of_kind`] is released as it was taken: outside
-/// the kernel, the answer back in the word; where a kernel call inside the lock handed it
-/// over, through the kernel.
+/// A lock taken by [`Port::get_resource_of_kind`] is the general lock and its release the
+/// general release (the host's default): outside the kernel, the answer back in the word;
+/// where a kernel call inside the lock handed it over, through the kernel.
 #[test]
-fn a_lock_released_as_it_was_taken() {
+fn a_lock_of_a_kind_is_the_general_lock_on_the_host() {
     let port = started();
     let before = kernel_now(&port);
     let held = port.get_resource_of_kind::<true>(ResourceId(0));
-    assert_eq!(held, Ok(Held::outside(false)), "the host masks nothing");
     assert_eq!(
-        port.release_held(ResourceId(0), Held::outside(false)),
-        Ok(())
+        held,
+        Ok(Held::other()),
+        "the general release finds the lock"
     );
+    assert!(word::is_locked(port.lazy.word()), "outside the kernel");
+    assert_eq!(port.release_held(ResourceId(0), Held::other()), Ok(()));
     assert_eq!(port.lazy.word(), LOW_ANSWER);
     assert!(kernel_now(&port) == before, "the pair left no trace");
-    // A kernel call inside it: the answer is 0 from the hand-over, so the release goes
-    // to the kernel, which lets High in.
-    assert!(port.get_resource_of_kind::<false>(ResourceId(1)).is_ok());
+    // A kernel call inside it hands it over, so the release goes to the kernel, which
+    // lets High in.
+    assert_eq!(
+        port.get_resource_of_kind::<false>(ResourceId(1)),
+        Ok(Held::other())
+    );
     assert_eq!(port.kernel(|os| os.activate_task(HIGH)), Ok(()));
     assert_eq!(port.lazy.answer(), 0);
-    assert_eq!(
-        port.release_held(ResourceId(1), Held::outside(false)),
-        Ok(())
-    );
+    assert_eq!(port.release_held(ResourceId(1), Held::other()), Ok(()));
     assert_eq!(kernel_now(&port).resource_owner(ResourceId(1)), None);
     assert_eq!(kernel_now(&port).running(), Some(HIGH));
 }

@@ -741,6 +741,51 @@ fn a_lock_of_a_known_kind_tries_that_kind_alone() {
     assert_eq!(kernel_now(&port).hooks().errors().len(), os_errors);
 }
 
+/// A hand-over between the release's load and its store (an ISR's kernel call), then a
+/// tick with nothing due before its second load: the release stored the answer it had
+/// loaded before the hand-over, and the tick, which leaves the answer as it found it,
+/// puts that word back; the answer's copy stays 0, so the release still finds the
+/// hand-over and goes to the kernel, which releases the lock. (A tick that set the copy
+/// too would make the release end outside the kernel with the kernel holding the lock.)
+#[test]
+fn a_tick_after_a_hand_over_inside_a_release_leaves_the_release_to_the_kernel() {
+    let port = started();
+    let (tick, counter, tasks_only) = (IsrId(0), CounterId(0), ResourceId(1));
+    assert_eq!(get_of_kind(&port, tasks_only, false), Ok(()));
+    let point = Cell::new(0);
+    let released = port.lazy.release(|| {
+        if point.get() == 0 {
+            from_isr(&port, |os| {
+                assert_eq!(os.resource_owner(tasks_only), Some(LOW), "handed over");
+            });
+        } else {
+            let whole = |os: &mut Kernel| {
+                os.enter_isr(tick)?;
+                let _ = os.increment_counter(counter);
+                os.exit_isr()
+            };
+            assert_eq!(port.tick_isr(tick, counter, whole), TickPath::NothingDue);
+        }
+        point.set(point.get() + 1);
+    });
+    assert_eq!(point.get(), 2);
+    assert!(!released, "the second load finds the hand-over");
+    assert_eq!(
+        port.lazy.word(),
+        LOW_ANSWER,
+        "the tick put back the release's store"
+    );
+    assert_eq!(port.lazy.answer(), 0);
+    assert_eq!(kernel_now(&port).resource_owner(tasks_only), Some(LOW));
+    // The release goes on as the port's does: through the kernel.
+    assert_eq!(port.release_held(tasks_only, Held::other()), Ok(()));
+    assert_eq!(kernel_now(&port).resource_owner(tasks_only), None);
+    assert_eq!(
+        (port.lazy.word(), port.lazy.answer()),
+        (LOW_ANSWER, LOW_ANSWER)
+    );
+}
+
 #[test]
 fn the_next_kernel_call_hands_the_lock_to_the_kernel_before_anything_else() {
     let port = started();
@@ -1061,8 +1106,8 @@ fn take_pending(model: &Model, point: bool) {
 /// no ISR is let in whose resource the task holds, after every step the mask in force is
 /// the one the kernel (the lock handed over) would apply, and the kernel is the one called
 /// for every lock with each interrupt where it fell (after the lock's store, or before the
-/// release's exchange, when it found the lock in the word). (A bolero test and fuzz
-/// target.)
+/// release's store, when it found the lock in the word or handed over: the answer's copy
+/// 0). (A bolero test and fuzz target.)
 #[test]
 fn any_interrupt_between_the_stores_of_a_lock_outside_the_kernel() {
     bolero::check!().with_type::<Vec<u8>>().for_each(|ops| {
