@@ -1,39 +1,81 @@
-//! A single-producer, single-consumer byte ring: a UART's receive interrupt puts bytes in,
-//! a task takes them out, with atomics alone (no lock: the interrupt never waits for the
-//! task). The boards' UART sensors use it (mps2's UART1, the S32K144EVB's LPUART).
+//! A single-producer, single-consumer ring: an interrupt puts values in, a task or the
+//! idle loop takes them out, with atomics alone (no lock: the producer never waits for
+//! the consumer). The boards' UART sensors use it for bytes (mps2's UART1, the
+//! S32K144EVB's LPUART: [`ByteRing`]), the measuring image's trace for its record of job
+//! starts ([`WordRing`]).
 //!
 //! The producer writes a slot and then publishes it with a release store of the tail; the
 //! consumer reads slots up to the tail it acquired and hands them back with a release
-//! store of the head. A byte that finds the ring full is dropped and counted as an
-//! overrun, as a UART's own overrun would drop it. The indices count bytes since start
+//! store of the head. A value that finds the ring full is dropped and counted as an
+//! overrun, as a UART's own overrun would drop it. The indices count values since start
 //! and wrap at 2^32; `N` is a power of two, so `index % N` stays continuous across the
 //! wrap.
 
 use core::sync::atomic::{AtomicU32, AtomicU8, Ordering};
 
-/// The ring: `N` bytes (a power of two, at most 2^31).
-pub struct ByteRing<const N: usize> {
-    bytes: [AtomicU8; N],
-    /// Bytes written since start (the producer's).
+/// An atomic slot of a [`Ring`]: the value type it holds.
+pub trait Slot {
+    /// What the slot holds.
+    type Value: Copy;
+    /// An empty slot.
+    const EMPTY: Self;
+    /// The value in the slot.
+    fn get(&self) -> Self::Value;
+    /// Puts `value` in the slot.
+    fn put(&self, value: Self::Value);
+}
+
+impl Slot for AtomicU8 {
+    type Value = u8;
+    const EMPTY: Self = AtomicU8::new(0);
+    fn get(&self) -> u8 {
+        self.load(Ordering::Relaxed)
+    }
+    fn put(&self, value: u8) {
+        self.store(value, Ordering::Relaxed);
+    }
+}
+
+impl Slot for AtomicU32 {
+    type Value = u32;
+    const EMPTY: Self = AtomicU32::new(0);
+    fn get(&self) -> u32 {
+        self.load(Ordering::Relaxed)
+    }
+    fn put(&self, value: u32) {
+        self.store(value, Ordering::Relaxed);
+    }
+}
+
+/// The ring: `N` slots of `S` (`N` a power of two, at most 2^31).
+pub struct Ring<S, const N: usize> {
+    slots: [S; N],
+    /// Values written since start (the producer's).
     tail: AtomicU32,
-    /// Bytes read since start (the consumer's).
+    /// Values read since start (the consumer's).
     head: AtomicU32,
-    /// Bytes offered since start.
+    /// Values offered since start.
     received: AtomicU32,
-    /// Bytes dropped on a full ring.
+    /// Values dropped on a full ring.
     overruns: AtomicU32,
 }
+
+/// A ring of bytes.
+pub type ByteRing<const N: usize> = Ring<AtomicU8, N>;
+
+/// A ring of 32-bit words.
+pub type WordRing<const N: usize> = Ring<AtomicU32, N>;
 
 /// What a ring counted since start.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub struct RingStats {
-    /// Bytes offered to the ring.
+    /// Values offered to the ring.
     pub received: u32,
-    /// Bytes dropped because the ring was full.
+    /// Values dropped because the ring was full.
     pub overruns: u32,
 }
 
-impl<const N: usize> ByteRing<N> {
+impl<S: Slot, const N: usize> Ring<S, N> {
     const SIZE_OK: () = assert!(
         N.is_power_of_two() && N <= 1 << 31,
         "a ring's size is a power of two"
@@ -44,7 +86,7 @@ impl<const N: usize> ByteRing<N> {
     pub const fn new() -> Self {
         let () = Self::SIZE_OK;
         Self {
-            bytes: [const { AtomicU8::new(0) }; N],
+            slots: [const { S::EMPTY }; N],
             tail: AtomicU32::new(0),
             head: AtomicU32::new(0),
             received: AtomicU32::new(0),
@@ -52,34 +94,31 @@ impl<const N: usize> ByteRing<N> {
         }
     }
 
-    /// The producer's side: `byte` in, or `false` (dropped, counted) when the ring is
+    /// The producer's side: `value` in, or `false` (dropped, counted) when the ring is
     /// full. Only one context may push.
-    pub fn push(&self, byte: u8) -> bool {
+    pub fn push(&self, value: S::Value) -> bool {
         self.received.fetch_add(1, Ordering::Relaxed);
         let tail = self.tail.load(Ordering::Relaxed);
         if tail.wrapping_sub(self.head.load(Ordering::Acquire)) as usize >= N {
             self.overruns.fetch_add(1, Ordering::Relaxed);
             return false;
         }
-        if let Some(slot) = self.bytes.get(tail as usize % N) {
-            slot.store(byte, Ordering::Relaxed);
+        if let Some(slot) = self.slots.get(tail as usize % N) {
+            slot.put(value);
         }
         self.tail.store(tail.wrapping_add(1), Ordering::Release);
         true
     }
 
-    /// The consumer's side: the oldest byte not yet taken. Only one context may pop.
-    pub fn pop(&self) -> Option<u8> {
+    /// The consumer's side: the oldest value not yet taken. Only one context may pop.
+    pub fn pop(&self) -> Option<S::Value> {
         let head = self.head.load(Ordering::Relaxed);
         if head == self.tail.load(Ordering::Acquire) {
             return None;
         }
-        let byte = self
-            .bytes
-            .get(head as usize % N)
-            .map(|slot| slot.load(Ordering::Relaxed));
+        let value = self.slots.get(head as usize % N).map(Slot::get);
         self.head.store(head.wrapping_add(1), Ordering::Release);
-        byte
+        value
     }
 
     /// What the ring counted.
@@ -91,7 +130,7 @@ impl<const N: usize> ByteRing<N> {
     }
 }
 
-impl<const N: usize> Default for ByteRing<N> {
+impl<S: Slot, const N: usize> Default for Ring<S, N> {
     fn default() -> Self {
         Self::new()
     }
@@ -165,6 +204,23 @@ mod tests {
             ring.stats(),
             RingStats {
                 received: 6,
+                overruns: 1
+            }
+        );
+    }
+
+    #[test]
+    fn a_word_ring_keeps_every_bit_of_its_words() {
+        let ring = WordRing::<2>::new();
+        assert!(ring.push(u32::MAX) && ring.push(0x8000_0001));
+        assert!(!ring.push(7), "full");
+        assert_eq!(ring.pop(), Some(u32::MAX));
+        assert_eq!(ring.pop(), Some(0x8000_0001));
+        assert_eq!(ring.pop(), None);
+        assert_eq!(
+            ring.stats(),
+            RingStats {
+                received: 3,
                 overruns: 1
             }
         );

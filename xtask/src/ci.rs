@@ -53,6 +53,7 @@ pub const STAGES: &[&str] = &[
     "mutants",
     "mutation",
     "qemu",
+    "eval",
     "differential",
     "interop",
     "view",
@@ -72,12 +73,13 @@ const BUDGET_S: &[(&str, u32)] = &[
     ("clippy", 76),
     ("test", 280),
     ("cross", 63),
-    ("miri", 492),
+    ("miri", 487),
     ("model", 58),
-    ("coverage", 210),
+    ("coverage", 200),
     ("mutants", 78),
     ("mutation", 280),
     ("qemu", 100),
+    ("eval", 15),
     ("differential", 6),
     ("interop", 15),
     ("view", 6),
@@ -327,6 +329,7 @@ fn run_stage(stage: &str) -> Result {
         "mutants" => crate::mutants::run(),
         "mutation" => crate::mutation::run(&crate::mutation::Options::ci()),
         "qemu" => crate::qemu::run(&crate::qemu::Options::ci()),
+        "eval" => crate::eval::run(&crate::eval::Options::ci()),
         "differential" => {
             differential::run(&differential::Options::default())?;
             crate::dbc_differential::run(&crate::dbc_differential::Options::default())

@@ -21,6 +21,9 @@
 //!   [--flash] [--serial tcp:PORT]`:
 //!   the ECU's Cortex-M4 image on QEMU's mps2-an386, the emulator-in-the-loop tests against
 //!   the host simulation (`tests/`), and python-can against it live;
+//! - `cargo xtask eval [--duration S] [--scenario FILE] [--out DIR] [--book]`: the paper's
+//!   evaluation on this ECU (its Table 1, task periodicity and jitter, on the Cortex-M4
+//!   image), a Markdown report with its samples as CSV and its plots as SVG;
 //! - `cargo xtask s32k144 [--uart-sensor] [--flash] [--probe VID:PID]`: the ECU's image for NXP's
 //!   S32K144EVB built and checked (the flash configuration field at 0x400, the vector
 //!   table, flash and RAM), then written to the board through a debug probe (probe-rs);
@@ -50,6 +53,7 @@ mod dbc_differential;
 mod decode_speed;
 mod differential;
 mod docs;
+mod eval;
 mod image;
 mod log_formats;
 mod mpc5748g;
@@ -83,7 +87,7 @@ struct Cli {
 #[derive(Subcommand)]
 enum Command {
     /// Run the checks in order (stages: setup, fmt, clippy, test, cross, miri, model,
-    /// coverage, mutants, mutation, qemu, differential, interop, view, docs, fuzz, bench); stop
+    /// coverage, mutants, mutation, qemu, eval, differential, interop, view, docs, fuzz, bench); stop
     /// at the first failing stage unless --keep-going; each stage prints its time budget
     Ci(ci::Options),
     /// Install what the checks need (the check command's setup stage)
@@ -112,6 +116,9 @@ enum Command {
     Mutation(mutation::Options),
     /// Build the ECU's Cortex-M4 image and run it on QEMU's mps2-an386
     Qemu(qemu::Options),
+    /// The paper's evaluation on this ECU: the periodicity of its tasks (the paper's
+    /// Table 1) on the Cortex-M4 image, written as a report with its samples and plots
+    Eval(eval::Options),
     /// Build and check the ECU's image for NXP's S32K144EVB (flash configuration field,
     /// vector table, flash and RAM); with --flash, write it to the board with probe-rs and
     /// show its log
@@ -166,6 +173,7 @@ fn run(command: Command) -> Result {
         Command::Mutants => mutants::run(),
         Command::Mutation(options) => mutation::run(&options),
         Command::Qemu(options) => qemu::run(&options),
+        Command::Eval(options) => eval::run(&options),
         Command::S32k144(options) => s32k144::run(&options),
         Command::Mpc5748g => mpc5748g::run(),
         Command::View => view::run(),

@@ -39,7 +39,8 @@ use crate::image::{build_bin, footprint};
 use crate::process::{root, target_dir, Cmd};
 use crate::Result;
 
-const FIGURE7: &str = "scenarios/figure7.txt";
+/// The paper's Figure 7, the image's default scenario.
+pub const FIGURE7: &str = "scenarios/figure7.txt";
 
 /// Options of `cargo xtask qemu`.
 #[derive(Default, clap::Args)]

@@ -15,9 +15,10 @@ use cortex_m::peripheral::{SCB, SYST};
 
 use crate::port::preempt::Mark;
 pub use crate::port::trace::{
-    Event, EventKind, MarkCosts, SpanRecord, TaskRecord, Trace, EVENTS, IDLE_ROW, MAX_ISRS,
-    PER_COUNT, SPANS,
+    start_record, Event, EventKind, MarkCosts, SpanRecord, TaskRecord, Trace, EVENTS, IDLE_ROW,
+    MAX_ISRS, PER_COUNT, SPANS,
 };
+use crate::ring::{RingStats, WordRing};
 
 /// Whether the trace records: cw-bsp's feature `trace` (the measuring images). Without it
 /// the port's and the drivers' marks are nothing (they test this constant before reading
@@ -181,9 +182,11 @@ pub fn take_jobs(task: u8) -> SpanRecord {
     with(|t| t.take_jobs(task))
 }
 
-/// The marks' costs are measured ([`Trace::calibrated`]).
+/// The marks' costs are measured ([`Trace::calibrated`]); the calibration's job starts
+/// are taken off the ring.
 pub fn calibrated(costs: MarkCosts) {
     with(|t| t.calibrated(costs));
+    while STARTS.pop().is_some() {}
 }
 
 /// Span `id` ends at `at` (nothing if it was not started), net of the ISRs that
@@ -198,9 +201,33 @@ pub fn span_end_as(started: usize, id: usize, at: u32) {
     with(|t| t.span_end_as(started, id, at));
 }
 
-/// A job of `task` starts, at `at` (counts).
+/// The job starts not yet taken by the image ([`take_start`]): the evaluation's record
+/// of them ([`start_record`]), for the paper's Table 1. The producer is the job-start
+/// mark, under the trace's interrupt lock (a job that preempts another's mark waits for
+/// it); the consumer is the image's idle loop, without a lock. 1,024 words: the idle loop
+/// runs every millisecond, and a millisecond starts at most a handful of jobs.
+static STARTS: WordRing<1024> = WordRing::new();
+
+/// A job of `task` starts, at `at` (counts). Out of line, so that the ring's code leaves
+/// the other marks' code in [`mark_word`] as it was.
+#[inline(never)]
 pub(crate) fn job_started(task: u8, at: u32) {
-    with(|t| t.job_started(task, at));
+    with(|t| {
+        t.job_started(task, at);
+        // (A full ring counts the start as dropped: the image reports it.)
+        let _ = STARTS.push(start_record::encode(task, at));
+    });
+}
+
+/// The oldest job start not yet taken ([`start_record`]). The image's idle loop alone
+/// takes them.
+pub fn take_start() -> Option<u32> {
+    STARTS.pop()
+}
+
+/// The job starts recorded since the image started, and those a full ring dropped.
+pub fn starts_stats() -> RingStats {
+    STARTS.stats()
 }
 
 /// The job of `task` ends, at `at` (counts).

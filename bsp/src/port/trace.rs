@@ -395,6 +395,79 @@ impl Trace {
     }
 }
 
+/// The record of job starts a measuring image writes for the evaluation (`cargo xtask
+/// eval`, the paper's Table 1): one 32-bit word per job start, the task's slot in the top
+/// four bits and the start's time stamp (counts since the OS started) in the low
+/// [`start_record::TIME_BITS`]. The image writes the words little-endian to a host file;
+/// [`start_record::Unwrapper`] gives the times back in full.
+pub mod start_record {
+    use super::MAX_TASKS;
+
+    /// Bits of the time stamp a record keeps: at the Cortex-M port's 25 MHz SysTick they
+    /// wrap after 10.7 s, and every periodic task starts a job at least every 40 ms, so
+    /// two records in a row are never that far apart.
+    pub const TIME_BITS: u32 = 28;
+    /// The time stamp's bits.
+    pub const TIME_MASK: u32 = (1 << TIME_BITS) - 1;
+
+    // Every task slot fits in the four bits above the time stamp.
+    const _: () = assert!(MAX_TASKS <= 1 << (32 - TIME_BITS));
+
+    /// The record of a job of task slot `task` that started at `at` (counts).
+    #[inline(always)]
+    pub const fn encode(task: u8, at: u32) -> u32 {
+        (task as u32) << TIME_BITS | at & TIME_MASK
+    }
+
+    /// Reads records in the order they were written, each time stamp unwrapped against
+    /// the one before it (the first is taken as it is): counts since the OS started, as
+    /// long as no two records in a row are [`TIME_MASK`] counts or more apart.
+    #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+    pub struct Unwrapper {
+        last: Option<u64>,
+    }
+
+    impl Unwrapper {
+        /// A reader before the first record.
+        pub const fn new() -> Self {
+            Self { last: None }
+        }
+
+        /// The next record: its task slot and its time stamp in full.
+        pub fn next(&mut self, word: u32) -> (u8, u64) {
+            let low = u64::from(word & TIME_MASK);
+            let at = match self.last {
+                None => low,
+                Some(last) => {
+                    let ahead = low.wrapping_sub(last) & u64::from(TIME_MASK);
+                    last + ahead
+                }
+            };
+            self.last = Some(at);
+            ((word >> TIME_BITS) as u8, at)
+        }
+    }
+
+    /// The contract: records of job starts at times `first`, then each `gaps` later (a
+    /// gap below `TIME_MASK`), read back give every task and time in full, counted from
+    /// `first`'s low bits.
+    pub fn round_trip(first: u32, starts: &[(u8, u32)]) -> bool {
+        let mut reader = Unwrapper::new();
+        let (task0, at0) = reader.next(encode(0, first));
+        if task0 != 0 || at0 != u64::from(first & TIME_MASK) {
+            return false;
+        }
+        let (mut at, mut expected) = (first, at0);
+        starts.iter().all(|&(task, gap)| {
+            let task = task % MAX_TASKS as u8;
+            let gap = gap % TIME_MASK;
+            at = at.wrapping_add(gap);
+            expected += u64::from(gap);
+            reader.next(encode(task, at)) == (task, expected)
+        })
+    }
+}
+
 impl Default for Trace {
     fn default() -> Self {
         Self::new()

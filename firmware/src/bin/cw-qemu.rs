@@ -4,6 +4,8 @@
 #![no_std]
 #![no_main]
 
+use core::sync::atomic::AtomicU32;
+
 use cw_bsp::mps2::{self, FatalEnd, Led};
 use cw_bsp::port::Slot;
 use cw_core::sonar::SonarConfig;
@@ -31,7 +33,7 @@ fn main() -> ! {
         mps2::fatal("started twice")
     };
     let scenario: &'static ImageScenario = scenario;
-    let end_ms = scenario.duration_ms();
+    let end_ms = start.duration_ms.unwrap_or_else(|| scenario.duration_ms());
     let Ok(stalls) = Stalls::of(scenario, config::OS.tasks()) else {
         mps2::fatal("the scenario's `stall` names no task of the OS configuration")
     };
@@ -56,6 +58,9 @@ fn main() -> ! {
         end_ms,
         scenario,
         uart_sensor,
+        job_starts: start.job_starts,
+        starts_written: AtomicU32::new(0),
+        starts_lost: AtomicU32::new(0),
     }) else {
         mps2::fatal("started twice")
     };

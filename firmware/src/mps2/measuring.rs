@@ -22,8 +22,19 @@
 //! ([`ScenarioInput`]) that the ModeManager SWC samples, as on the host board. A
 //! `shutdown` ends the run at `ShutdownOS` (the port's [`App::shut_down`]): interrupts
 //! stay off, the report follows. It plays every command the host simulation does.
+//!
+//! For the evaluation (`cargo xtask eval`, the paper's Table 1), `--duration-ms N` runs
+//! the scenario for N ms instead of its own length (its last position held), and
+//! `--job-starts PATH` has the idle loop write every job's start to the host file PATH
+//! as it goes (`cw_bsp::cortex_m::trace::start_record`: the task's slot and the start's
+//! SysTick count in one little-endian word). The idle loop takes the starts off the
+//! trace's ring in every run, written or not, so that the job-start mark takes the same
+//! path in every run as in its calibration.
+
+use core::sync::atomic::{AtomicU32, Ordering};
 
 use cw_bsp::cortex_m::{now_ms, App, CortexMPort};
+use cw_bsp::mps2::semihosting::HostFile;
 use cw_bsp::mps2::{self, CoreDelay, Led, SensorUart, SlcanCan, Unconnected};
 use cw_bsp::port::preempt::PortFault;
 use cw_bsp::port::Port;
@@ -137,6 +148,10 @@ pub struct Start {
     /// The seed of the scenario sensor's noise and dropouts (`--seed N`, default 1, as
     /// the host simulation's).
     pub seed: u64,
+    /// How long the run lasts (`--duration-ms N`), else the scenario's own length.
+    pub duration_ms: Option<u64>,
+    /// The host file the job starts go to (`--job-starts PATH`).
+    pub job_starts: Option<HostFile>,
 }
 
 /// The run the command line asks for: the scenario file named by `--scenario PATH`, read
@@ -173,6 +188,29 @@ pub fn load() -> Start {
             mps2::exit(false)
         }
     };
+    let duration_ms = match option("--duration-ms").map(str::parse::<u64>) {
+        None => None,
+        Some(Ok(ms)) if ms > 0 => Some(ms),
+        Some(_) => {
+            mps2::leds_safe();
+            defmt::println!("FATAL: --duration-ms takes a whole number of ms above 0");
+            mps2::exit(false)
+        }
+    };
+    let job_starts = match option("--job-starts") {
+        None => None,
+        Some(path) => match HostFile::create(path) {
+            Ok(file) => {
+                defmt::println!("cw-qemu: job starts to {}", path);
+                Some(file)
+            }
+            Err(e) => {
+                mps2::leds_safe();
+                defmt::println!("FATAL: job starts {}: {}", path, defmt::Display2Format(&e));
+                mps2::exit(false)
+            }
+        },
+    };
     let mut text = [0u8; SCENARIO_FILE_MAX];
     let (name, scenario) = match option("--scenario") {
         None => ("scenarios/figure7.txt (compiled in)", parse(FIGURE7)),
@@ -206,6 +244,8 @@ pub fn load() -> Start {
                 scenario: s,
                 uart_sensor,
                 seed,
+                duration_ms,
+                job_starts,
             }
         }
         Err(e) => {
@@ -308,6 +348,12 @@ pub struct Mps2App {
     pub scenario: &'static ImageScenario,
     /// The sensor is the UART ranging module.
     pub uart_sensor: bool,
+    /// Where the job starts go (`--job-starts`), else nowhere.
+    pub job_starts: Option<HostFile>,
+    /// Job starts written to [`Mps2App::job_starts`].
+    pub starts_written: AtomicU32,
+    /// Job starts the host failed to write.
+    pub starts_lost: AtomicU32,
 }
 
 impl App for Mps2App {
@@ -331,6 +377,7 @@ impl App for Mps2App {
     }
 
     fn idle(&self) {
+        self.take_job_starts();
         report_supervision("cw-qemu", &self.ecu);
         if now_ms() < self.end_ms {
             return;
@@ -388,6 +435,68 @@ impl App for Mps2App {
 }
 
 impl Mps2App {
+    /// Takes the job starts off the trace's ring ([`cw_bsp::cortex_m::trace::take_start`])
+    /// and writes them to the host file, if the run names one, 16 at a time: in the idle
+    /// loop, without an interrupt lock (the ring's producer preempts it freely), and at
+    /// the run's end. A semihosting call is one instruction of the run's virtual time.
+    #[inline(never)]
+    fn take_job_starts(&self) {
+        use cw_bsp::cortex_m::trace::take_start;
+        let mut bytes = [0u8; 64];
+        loop {
+            let mut len = 0;
+            for chunk in bytes.chunks_exact_mut(4) {
+                let Some(word) = take_start() else { break };
+                chunk.copy_from_slice(&word.to_le_bytes());
+                len += 4;
+            }
+            let Some(taken) = bytes.get(..len).filter(|b| !b.is_empty()) else {
+                return;
+            };
+            let count = (len / 4) as u32;
+            match &self.job_starts {
+                Some(file) if file.write(taken).is_ok() => {
+                    self.starts_written.fetch_add(count, Ordering::Relaxed);
+                }
+                Some(_) => {
+                    self.starts_lost.fetch_add(count, Ordering::Relaxed);
+                }
+                None => {}
+            }
+        }
+    }
+
+    /// The job starts' report, where the run records them: the periodic tasks (slot,
+    /// name, period), the time base, and what the record holds and lost.
+    fn report_job_starts(&self) {
+        self.take_job_starts();
+        if self.job_starts.is_none() {
+            return;
+        }
+        let counts_per_ms = cw_bsp::cortex_m::trace::read(|t| t.counts_per_ms);
+        defmt::println!(
+            "cw-qemu: job starts time base {} counts per ms",
+            counts_per_ms
+        );
+        for (slot, &period) in config::PERIOD_MS.iter().enumerate() {
+            if period > 0 {
+                defmt::println!(
+                    "cw-qemu: job starts periodic {} {} {} ms",
+                    slot,
+                    task_name(slot),
+                    period
+                );
+            }
+        }
+        let ring = cw_bsp::cortex_m::trace::starts_stats();
+        defmt::println!(
+            "cw-qemu: job starts {} dropped, {} written, {} not written",
+            ring.overruns,
+            self.starts_written.load(Ordering::Relaxed),
+            self.starts_lost.load(Ordering::Relaxed)
+        );
+    }
+
     /// The end-of-run report over semihosting, then QEMU's exit: success if `ok`, the
     /// schedule held and no kernel or port error was counted.
     fn end_run(&self, ok: bool) -> ! {
@@ -395,6 +504,7 @@ impl Mps2App {
         let task_stack = cw_bsp::cortex_m::basic_stack_use();
         let main_stack = cw_bsp::cortex_m::main_stack_use();
         let schedule_ok = report_trace();
+        self.report_job_starts();
         let link = mps2::slcan_stats();
         defmt::println!(
             "cw-qemu: slcan received {} frames, {} commands, {} malformed lines; {} overruns, {} replies dropped",

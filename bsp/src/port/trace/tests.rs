@@ -1,6 +1,7 @@
 //! The trace's arithmetic: what a span and a job are net of.
 
 use super::*;
+use std::vec::Vec;
 
 /// Mark costs in counts (the trace keeps sixteenths): start 5, end 9, job start 6, job
 /// end 11, ISR entry 7; an empty span 3, an empty job 4.
@@ -127,4 +128,50 @@ fn calibration_forgets_the_records_and_keeps_the_isr_spans() {
         t.spans[OUTER].sum,
         u64::from((40 - (10 - 3) - 14) * PER_COUNT)
     );
+}
+
+#[test]
+fn job_start_records_come_back_whole_across_the_time_stamps_wrap() {
+    use super::start_record::{encode, Unwrapper, TIME_MASK};
+    let mut reader = Unwrapper::new();
+    // The first record as it is; 4 ms later across the 28 bits' wrap; 4 ms after that
+    // across the u32 counter's own wrap.
+    assert_eq!(
+        reader.next(encode(5, TIME_MASK - 10)),
+        (5, u64::from(TIME_MASK) - 10)
+    );
+    let at = u64::from(TIME_MASK) + 99_990;
+    assert_eq!(
+        reader.next(encode(1, TIME_MASK.wrapping_add(99_990))),
+        (1, at)
+    );
+    let mut reader = Unwrapper::new();
+    let first = u32::MAX - 50;
+    assert_eq!(
+        reader.next(encode(15, first)),
+        (15, u64::from(TIME_MASK) - 50)
+    );
+    assert_eq!(
+        reader.next(encode(2, first.wrapping_add(100_000))),
+        (2, u64::from(TIME_MASK) - 50 + 100_000)
+    );
+}
+
+/// Any run of job starts, at any first time and with any gaps below the time stamp's
+/// range, reads back whole.
+#[test]
+fn job_start_records_round_trip() {
+    bolero::check!()
+        .with_type::<(u32, Vec<(u8, u32)>)>()
+        .for_each(|(first, starts)| assert!(super::start_record::round_trip(*first, starts)));
+}
+
+/// Kani: two records after the first, any times and tasks.
+#[cfg(kani)]
+#[kani::proof]
+#[kani::unwind(3)]
+fn every_two_job_start_records_round_trip() {
+    let first: u32 = kani::any();
+    let starts: [(u8, u32); 2] = kani::any();
+    assert!(super::start_record::round_trip(first, &starts));
 }
