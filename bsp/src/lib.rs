@@ -49,6 +49,8 @@ pub mod icount;
 pub mod mem;
 pub mod mpc5748g;
 pub mod port;
+#[cfg(all(feature = "host", target_os = "linux"))]
+pub mod realtime;
 pub mod ring;
 pub mod slcan;
 

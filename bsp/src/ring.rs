@@ -121,6 +121,18 @@ impl<S: Slot, const N: usize> Ring<S, N> {
         value
     }
 
+    /// How many values wait in the ring (a snapshot: either side may move it next).
+    pub fn len(&self) -> u32 {
+        self.tail
+            .load(Ordering::Acquire)
+            .wrapping_sub(self.head.load(Ordering::Acquire))
+    }
+
+    /// Whether no value waits in the ring (a snapshot, as [`Ring::len`]).
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
     /// What the ring counted.
     pub fn stats(&self) -> RingStats {
         RingStats {
@@ -196,6 +208,7 @@ mod tests {
         assert_eq!(ring.pop(), None);
         assert!((1..=4).all(|b| ring.push(b)));
         assert!(!ring.push(5), "full");
+        assert_eq!(ring.len(), 4);
         assert_eq!(ring.pop(), Some(1));
         assert!(ring.push(6));
         let out: Vec<_> = core::iter::from_fn(|| ring.pop()).collect();
@@ -217,6 +230,7 @@ mod tests {
         assert_eq!(ring.pop(), Some(u32::MAX));
         assert_eq!(ring.pop(), Some(0x8000_0001));
         assert_eq!(ring.pop(), None);
+        assert!(ring.is_empty());
         assert_eq!(
             ring.stats(),
             RingStats {

@@ -8,7 +8,7 @@ use std::io::Write;
 
 use clap::Parser;
 use std::process::ExitCode;
-use std::time::{Duration, Instant};
+use std::time::Instant;
 
 use cw_bsp::host::CandumpLog;
 use cw_core::warning::{Measurement, WarningLevel};
@@ -37,9 +37,13 @@ struct Options {
     /// Seed of the sensor noise
     #[arg(long, default_value_t = 1)]
     seed: u64,
-    /// Pace the simulation to the wall clock
+    /// Pace the simulation to the wall clock (absolute-deadline sleeps; SCHED_FIFO where
+    /// permitted)
     #[arg(long)]
     realtime: bool,
+    /// Write every job's start as CSV (task,cycle_ms,virtual_us,wall_ns)
+    #[arg(long, value_name = "FILE")]
+    job_starts: Option<String>,
 }
 
 /// `--duration`: seconds, more than 0 and at most 10^7, as whole milliseconds.
@@ -111,19 +115,16 @@ fn run(o: &Options) -> Result<(), String> {
     let end_ms = o.duration_ms.unwrap_or_else(|| scenario.duration_ms());
     let mut sim = Simulation::new(scenario, o.seed).map_err(|e| e.to_string())?;
     let started = Instant::now();
-    if o.realtime {
-        while sim.now_ms() < end_ms {
-            let next = (sim.now_ms() + 10).min(end_ms);
-            sim.run_until_ms(next);
-            let due = Duration::from_millis(next);
-            if let Some(wait) = due.checked_sub(started.elapsed()) {
-                std::thread::sleep(wait);
-            }
-        }
+    let scheduling = if o.realtime {
+        Some(run_in_real_time(&mut sim, end_ms, o.job_starts.is_some())?)
     } else {
         sim.run_until_ms(end_ms);
-    }
+        None
+    };
     let wall = started.elapsed();
+    if let Some(path) = &o.job_starts {
+        write_job_starts(&mut sim, path)?;
+    }
 
     if let Some(path) = &o.trace {
         let mut text = String::from(TraceRow::CSV_HEADER);
@@ -160,6 +161,7 @@ fn run(o: &Options) -> Result<(), String> {
     let ratio = simulated_s / wall.as_secs_f64().max(1e-9);
     let text = format!(
         "{}\nsummary: {:.1} s of ECU time simulated in {:.1} ms of wall time ({:.0}x real time)\n\
+         {}\
          \x20        {} CAN frames on the bus; distance frames sent {}, refused {}; received frames dropped {}\n\
          \x20        bus-offs {}, kernel errors {}, thresholds red < {} mm, yellow < {} mm\n\
          \x20        EcuM state at the end: {:?}\n\
@@ -168,6 +170,7 @@ fn run(o: &Options) -> Result<(), String> {
         simulated_s,
         wall.as_secs_f64() * 1000.0,
         ratio,
+        scheduling.map_or_else(String::new, |s| format!("         real time: {s}\n")),
         sim.frames().len(),
         stats.frames_requested,
         stats.frames_refused,
@@ -181,6 +184,71 @@ fn run(o: &Options) -> Result<(), String> {
     );
     out.write_all(text.as_bytes())
         .map_err(|e| format!("cannot write to stdout: {e}"))
+}
+
+/// Runs the simulation to `end_ms` paced to the wall clock: each millisecond of ECU time
+/// stepped at its own millisecond after the start, by a sleep to that absolute deadline
+/// on the monotonic clock (a late step does not delay the ones after it), in the
+/// real-time scheduling class where the system permits it; with `wall_starts`, every
+/// job's start noted on that clock too. Returns the scheduling it had.
+#[cfg(target_os = "linux")]
+fn run_in_real_time(
+    sim: &mut Simulation,
+    end_ms: u64,
+    wall_starts: bool,
+) -> Result<cw_bsp::realtime::Scheduling, String> {
+    let scheduling = cw_bsp::realtime::enter_realtime();
+    if wall_starts {
+        sim.ecu().port().record_wall_starts();
+    }
+    let origin = cw_bsp::realtime::now_ns();
+    let first = sim.now_ms();
+    while sim.now_ms() < end_ms && sim.reset_at_us().is_none() {
+        let next = sim.now_ms() + 1;
+        let deadline = origin + (next - first) * 1_000_000;
+        cw_bsp::realtime::sleep_until_ns(deadline)
+            .map_err(|e| format!("the real-time sleep was refused (error {e})"))?;
+        sim.run_until_ms(next);
+    }
+    Ok(scheduling)
+}
+
+/// `--realtime` needs Linux's clock_nanosleep and SCHED_FIFO.
+#[cfg(not(target_os = "linux"))]
+fn run_in_real_time(_: &mut Simulation, _: u64, _: bool) -> Result<String, String> {
+    Err("--realtime runs on Linux only (clock_nanosleep, SCHED_FIFO)".into())
+}
+
+/// `--job-starts`: every job's start, in order, as CSV (`task,cycle_ms,virtual_us,
+/// wall_ns`): the task's name, its period (0: not periodic), the start in virtual time
+/// and, where the run was paced to the wall clock, on the monotonic clock (then from the
+/// first paced millisecond on: the start-up before it is not paced).
+fn write_job_starts(sim: &mut Simulation, path: &str) -> Result<(), String> {
+    let port = sim.ecu().port();
+    let wall = port.wall_job_starts();
+    let starts: Vec<(cw_core::os::TaskId, u64, Option<u64>)> = if wall.is_empty() {
+        port.job_starts()
+            .iter()
+            .map(|&(t, us)| (t, us, None))
+            .collect()
+    } else {
+        wall.iter().map(|&(t, us, ns)| (t, us, Some(ns))).collect()
+    };
+    let mut text = String::from("task,cycle_ms,virtual_us,wall_ns\n");
+    for (task, at_us, wall_ns) in starts {
+        let slot = usize::from(task.0);
+        let name = cw_firmware::config::OS
+            .tasks()
+            .get(slot)
+            .map_or("?", |t| t.name);
+        let cycle = cw_firmware::config::PERIOD_MS
+            .get(slot)
+            .copied()
+            .unwrap_or(0);
+        let wall_ns = wall_ns.map(|ns| ns.to_string()).unwrap_or_default();
+        text.push_str(&format!("{name},{cycle},{at_us},{wall_ns}\n"));
+    }
+    std::fs::write(path, text).map_err(|e| format!("cannot write job starts {path}: {e}"))
 }
 
 /// The summary's lines on WdgM and the watchdog: every supervision held, or which failed

@@ -68,18 +68,18 @@ pub const STAGES: &[&str] = &[
 /// defmt-print, mdBook, valgrind, QEMU, llvm, the Python venv); it takes seconds once those
 /// are there.
 const BUDGET_S: &[(&str, u32)] = &[
-    ("setup", 445),
+    ("setup", 440),
     ("fmt", 5),
     ("clippy", 76),
     ("test", 280),
     ("cross", 63),
     ("miri", 487),
-    ("model", 58),
+    ("model", 48),
     ("coverage", 200),
     ("mutants", 78),
     ("mutation", 280),
     ("qemu", 100),
-    ("eval", 15),
+    ("eval", 30),
     ("differential", 6),
     ("interop", 15),
     ("view", 6),

@@ -1,14 +1,19 @@
 //! `cargo xtask eval`: the paper's evaluation (its section 5) measured on this ECU, written
 //! as a report a reader can check and plot: Markdown, the raw samples as CSV, SVG plots.
 //!
-//! What it measures so far: the periodicity of the periodic tasks (the paper's Table 1)
-//! on the Cortex-M4 image under QEMU (`-icount shift=5`: 32 ns of virtual time per
-//! instruction, [`cw_bsp::icount`]), with the paper's definitions: `T_period` is the time
-//! between two consecutive starts of a task's jobs, each observed at the job's first line
-//! (the port's job-start mark), and `T_jitter = |T_cycle - T_period|`. The image writes
-//! every job's start to a host file as it runs (`--job-starts`, over semihosting, from its
-//! idle loop: `cw_bsp::cortex_m::trace::start_record`), so every period of the run is a
-//! sample, none is summarised on the target.
+//! What it measures so far: the periodicity of the periodic tasks (the paper's Table 1),
+//! with the paper's definitions: `T_period` is the time between two consecutive starts of
+//! a task's jobs, each observed at the job's first line, and `T_jitter = |T_cycle -
+//! T_period|`. Every period of a run is a sample; none is summarised where it is measured.
+//! Two settings:
+//! - the Cortex-M4 image under QEMU (`-icount shift=5`: 32 ns of virtual time per
+//!   instruction, [`cw_bsp::icount`]), which writes every job's start to a host file as it
+//!   runs (`--job-starts`, over semihosting, from its idle loop:
+//!   `cw_bsp::cortex_m::trace::start_record`);
+//! - the host simulation paced to the wall clock (`cw-ecu --realtime --job-starts`): each
+//!   millisecond of ECU time stepped at its millisecond of the monotonic clock, by
+//!   absolute-deadline sleeps, in `SCHED_FIFO` where the system permits it
+//!   ([`cw_bsp::realtime`]), each job's start read on that clock.
 //!
 //! The book's chapter ([`BOOK`]) is this command's report from a real run
 //! (`cargo xtask eval --book`).
@@ -38,6 +43,9 @@ pub struct Options {
     /// paper's Figure 7)
     #[arg(long, value_name = "FILE")]
     pub scenario: Option<PathBuf>,
+    /// Wall time of the host's real-time setting, seconds (default: --duration)
+    #[arg(long, value_name = "SECONDS", value_parser = duration_s)]
+    pub realtime_duration: Option<f64>,
     /// Where the report, the samples and the plots go (default target/eval)
     #[arg(long, value_name = "DIR")]
     pub out: Option<PathBuf>,
@@ -48,11 +56,13 @@ pub struct Options {
 }
 
 impl Options {
-    /// The check command's `eval` stage: 60 s of ECU time on Figure 7, the report in
-    /// `target/eval-ci` (the book's chapter untouched), checked ([`check`]).
+    /// The check command's `eval` stage: 60 s of ECU time on Figure 7 on the image, 10 s
+    /// in real time on the host, the report in `target/eval-ci` (the book's chapter
+    /// untouched), checked ([`check`]).
     pub fn ci() -> Self {
         Self {
             duration: 60.0,
+            realtime_duration: Some(10.0),
             scenario: None,
             out: Some(target_dir().join("eval-ci")),
             book: false,
@@ -106,24 +116,41 @@ pub fn run(options: &Options) -> Result {
         .clone()
         .unwrap_or_else(|| root().join(crate::qemu::FIGURE7));
     let duration_ms = (options.duration * 1000.0).round() as u64;
+    let realtime_ms = options
+        .realtime_duration
+        .map_or(duration_ms, |s| (s * 1000.0).round() as u64);
     let image = crate::qemu::build()?;
     let started = Instant::now();
     let run = run_image(&image, &scenario, duration_ms, &out)?;
-    let wall = started.elapsed();
-    let tasks = periodicity(&run)?;
+    let image_wall = started.elapsed();
+    let image_setting = Setting {
+        key: "cortex-m4-qemu",
+        label: "Cortex-M4 image, QEMU".into(),
+        ecu_ms: duration_ms,
+        wall: image_wall,
+        tasks: periodicity(&run.task_starts())?,
+    };
+    let started = Instant::now();
+    let (host, scheduling) = run_host_realtime(&scenario, realtime_ms, &out)?;
+    let host_setting = Setting {
+        key: "host-realtime",
+        label: format!("host, real time ({scheduling})"),
+        ecu_ms: realtime_ms,
+        wall: started.elapsed(),
+        tasks: periodicity(&host)?,
+    };
     let report = Report {
-        duration_ms,
+        command: command_line(options),
         scenario: scenario
             .strip_prefix(root())
             .unwrap_or(&scenario)
             .display()
             .to_string(),
-        wall,
-        run: &run,
-        tasks: &tasks,
+        settings: vec![image_setting, host_setting],
     };
-    check(&report)?;
+    // Written first, so that a report that fails its checks can be read.
     write_report(&report, &out, "plots")?;
+    check(&report)?;
     check_plots(&report, &out.join("plots"))?;
     println!("eval: the report is {}", out.join("report.md").display());
     if options.book {
@@ -140,6 +167,34 @@ pub fn run(options: &Options) -> Result {
     Ok(())
 }
 
+/// The command as a reader would type it again.
+fn command_line(options: &Options) -> String {
+    let mut line = format!("cargo xtask eval --duration {}", options.duration);
+    if let Some(rt) = options.realtime_duration {
+        line.push_str(&format!(" --realtime-duration {rt}"));
+    }
+    if let Some(scenario) = &options.scenario {
+        line.push_str(&format!(" --scenario {}", scenario.display()));
+    }
+    if options.book {
+        line.push_str(" --book");
+    }
+    line
+}
+
+/// One setting's measurement: its tasks' periodicity.
+struct Setting {
+    /// Its name in the samples' CSV and the plots' file names.
+    key: &'static str,
+    /// Its name in the report.
+    label: String,
+    /// ECU time it ran, ms.
+    ecu_ms: u64,
+    /// Wall time it took.
+    wall: Duration,
+    tasks: Vec<TaskPeriodicity>,
+}
+
 /// What the image's run gave: its log's facts and every job start.
 struct ImageRun {
     /// SysTick counts per OS tick (1 ms).
@@ -148,6 +203,135 @@ struct ImageRun {
     periodic: Vec<(u8, String, u32)>,
     /// Every job start, in order: task slot and time (counts since the OS started).
     starts: Vec<(u8, u64)>,
+}
+
+/// A periodic task's job starts in one setting: its name, its cycle (ms) and each start
+/// (ms, on the setting's clock).
+#[derive(Debug)]
+struct TaskStarts {
+    name: String,
+    cycle_ms: u32,
+    starts_ms: Vec<f64>,
+}
+
+/// Runs the host simulation paced to the wall clock for `duration_ms` (`cw-ecu --realtime
+/// --job-starts`), showing the time left; returns the periodic tasks' starts (ms on the
+/// monotonic clock) and the scheduling the run had, in its own words.
+fn run_host_realtime(
+    scenario: &Path,
+    duration_ms: u64,
+    out: &Path,
+) -> Result<(Vec<TaskStarts>, String)> {
+    crate::process::Cmd::new("cargo")
+        .args(["build", "--release", "-p", "cw-firmware", "--bin", "cw-ecu"])
+        .run()?;
+    let ecu = target_dir().join("release").join("cw-ecu");
+    let csv = out.join("host-realtime-starts.csv");
+    let mut command = std::process::Command::new(&ecu);
+    command
+        .arg("--scenario")
+        .arg(scenario)
+        .arg("--duration")
+        .arg(format!("{}", duration_ms as f64 / 1000.0))
+        .arg("--realtime")
+        .arg("--job-starts")
+        .arg(&csv)
+        .stdin(std::process::Stdio::null())
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped());
+    let shown: Vec<String> = std::iter::once(command.get_program())
+        .chain(command.get_args())
+        .map(|a| a.to_string_lossy().into_owned())
+        .collect();
+    println!("$ {}", shown.join(" "));
+    let child = command
+        .spawn()
+        .map_err(|e| format!("starting {}: {e}", ecu.display()))?;
+    let waiter = std::thread::spawn(move || child.wait_with_output());
+    let bar = indicatif::ProgressBar::new(duration_ms);
+    bar.set_style(
+        indicatif::ProgressStyle::with_template(
+            "eval: host in real time {bar:30} {pos}/{len} ms, about {eta} left",
+        )
+        .map_err(|e| format!("the progress bar's template: {e}"))?,
+    );
+    let started = Instant::now();
+    while !waiter.is_finished() {
+        std::thread::sleep(Duration::from_millis(200));
+        bar.set_position((started.elapsed().as_millis() as u64).min(duration_ms));
+    }
+    bar.finish_and_clear();
+    let output = waiter
+        .join()
+        .map_err(|_| "the thread waiting for cw-ecu panicked".to_string())?
+        .map_err(|e| format!("waiting for {}: {e}", ecu.display()))?;
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    if !output.status.success() {
+        return Err(format!(
+            "eval: cw-ecu --realtime failed ({}):\n{}{}",
+            output.status,
+            stdout,
+            String::from_utf8_lossy(&output.stderr)
+        ));
+    }
+    std::fs::write(out.join("host-realtime.txt"), stdout.as_bytes())
+        .map_err(|e| format!("writing {}: {e}", out.display()))?;
+    let scheduling = stdout
+        .lines()
+        .find_map(|l| l.trim().strip_prefix("real time: "))
+        .ok_or("eval: cw-ecu --realtime did not say how it was scheduled (no `real time:` line)")?
+        .to_string();
+    let text =
+        std::fs::read_to_string(&csv).map_err(|e| format!("reading {}: {e}", csv.display()))?;
+    let starts = host_starts(&text).map_err(|e| format!("{}: {e}", csv.display()))?;
+    println!(
+        "eval: the host in real time ({scheduling}): {} periodic tasks over {duration_ms} ms",
+        starts.len()
+    );
+    Ok((starts, scheduling))
+}
+
+/// The periodic tasks' starts in `cw-ecu --job-starts`'s CSV (`task,cycle_ms,virtual_us,
+/// wall_ns`), on the wall clock, in ms since the first start; an error names the line.
+fn host_starts(text: &str) -> Result<Vec<TaskStarts>> {
+    let mut lines = text.lines().enumerate();
+    match lines.next() {
+        Some((_, "task,cycle_ms,virtual_us,wall_ns")) => {}
+        _ => return Err("line 1 is not the header `task,cycle_ms,virtual_us,wall_ns`".into()),
+    }
+    let mut tasks: Vec<TaskStarts> = Vec::new();
+    let mut first_ns = None;
+    for (n, line) in lines {
+        let bad = || {
+            format!(
+                "line {}: `{line}` is not task,cycle_ms,virtual_us,wall_ns with a wall time",
+                n + 1
+            )
+        };
+        let fields: Vec<&str> = line.split(',').collect();
+        let [name, cycle, _virtual, wall] = fields.as_slice() else {
+            return Err(bad());
+        };
+        let cycle: u32 = cycle.parse().map_err(|_| bad())?;
+        let wall: u64 = wall.parse().map_err(|_| bad())?;
+        let first = *first_ns.get_or_insert(wall);
+        if cycle == 0 {
+            continue;
+        }
+        let at_ms = wall.saturating_sub(first) as f64 / 1e6;
+        match tasks.iter_mut().find(|t| t.name == *name) {
+            Some(t) => t.starts_ms.push(at_ms),
+            None => tasks.push(TaskStarts {
+                name: (*name).to_string(),
+                cycle_ms: cycle,
+                starts_ms: vec![at_ms],
+            }),
+        }
+    }
+    if tasks.is_empty() {
+        return Err("no periodic task started a job".into());
+    }
+    Ok(tasks)
 }
 
 /// Runs the measuring image for `duration_ms` of ECU time on `scenario`, its job starts
@@ -231,6 +415,26 @@ fn run_image(image: &Path, scenario: &Path, duration_ms: u64, out: &Path) -> Res
         periodic: facts.periodic,
         starts,
     })
+}
+
+impl ImageRun {
+    /// The periodic tasks' starts, in ms since the OS started.
+    fn task_starts(&self) -> Vec<TaskStarts> {
+        let per_ms = f64::from(self.counts_per_ms);
+        self.periodic
+            .iter()
+            .map(|(slot, name, cycle)| TaskStarts {
+                name: name.clone(),
+                cycle_ms: *cycle,
+                starts_ms: self
+                    .starts
+                    .iter()
+                    .filter(|(s, _)| s == slot)
+                    .map(|&(_, at)| at as f64 / per_ms)
+                    .collect(),
+            })
+            .collect()
+    }
 }
 
 /// Follows the job-start file as the image writes it: the ECU time of the last start
@@ -377,32 +581,26 @@ struct TaskPeriodicity {
     jitter: Stats,
 }
 
-/// `T_period` and `T_jitter` of every periodic task from the run's job starts.
-fn periodicity(run: &ImageRun) -> Result<Vec<TaskPeriodicity>> {
-    let per_ms = f64::from(run.counts_per_ms);
-    run.periodic
+/// `T_period` and `T_jitter` of every periodic task from its job starts.
+fn periodicity(tasks: &[TaskStarts]) -> Result<Vec<TaskPeriodicity>> {
+    tasks
         .iter()
-        .map(|(slot, name, cycle)| {
-            let starts: Vec<f64> = run
-                .starts
-                .iter()
-                .filter(|(s, _)| s == slot)
-                .map(|&(_, at)| at as f64 / per_ms)
-                .collect();
-            let samples: Vec<(f64, f64, f64)> = starts
+        .map(|t| {
+            let samples: Vec<(f64, f64, f64)> = t
+                .starts_ms
                 .windows(2)
                 .map(|w| {
                     let period = w[1] - w[0];
-                    (w[1], period, (f64::from(*cycle) - period).abs())
+                    (w[1], period, (f64::from(t.cycle_ms) - period).abs())
                 })
                 .collect();
             let stats = |pick: fn(&(f64, f64, f64)) -> f64| {
                 Stats::of(&samples.iter().map(pick).collect::<Vec<_>>())
-                    .ok_or_else(|| format!("eval: {name} started fewer than two jobs"))
+                    .ok_or_else(|| format!("eval: {} started fewer than two jobs", t.name))
             };
             Ok(TaskPeriodicity {
-                name: name.clone(),
-                cycle_ms: *cycle,
+                name: t.name.clone(),
+                cycle_ms: t.cycle_ms,
                 period: stats(|s| s.1)?,
                 jitter: stats(|s| s.2)?,
                 samples,
@@ -412,40 +610,48 @@ fn periodicity(run: &ImageRun) -> Result<Vec<TaskPeriodicity>> {
 }
 
 /// What the report holds.
-struct Report<'a> {
-    duration_ms: u64,
+struct Report {
+    command: String,
     scenario: String,
-    wall: Duration,
-    run: &'a ImageRun,
-    tasks: &'a [TaskPeriodicity],
+    settings: Vec<Setting>,
 }
 
-/// The report's own checks: every periodic task present with its samples, every figure
-/// finite and in order (max >= avg >= min >= 0), the periods' mean within one count of
-/// the cycle over the run (a task that lost or gained a job would be a whole cycle off).
+/// The report's own checks, in every setting: every periodic task present with about as
+/// many periods as the run's length gives, every figure finite and in order (max at least
+/// avg, avg at least min, min at least 0), and the periods' mean within half of what one
+/// job lost or gained would move it (the cycle over the number of periods) of the cycle:
+/// the mean is the last start less the first over the periods, so the first and the
+/// last start's delays move it by their difference over the periods, and a job lost or
+/// gained by a whole cycle over the periods.
 fn check(report: &Report) -> Result {
-    for t in report.tasks {
-        let expected = report.duration_ms / u64::from(t.cycle_ms);
-        if (t.samples.len() as u64 + 2) < expected {
-            return Err(format!(
-                "eval: {} has {} periods in {} ms, expected about {expected}",
-                t.name,
-                t.samples.len(),
-                report.duration_ms
-            ));
-        }
-        for (what, s) in [("T_period", t.period), ("T_jitter", t.jitter)] {
-            let finite = s.row().iter().all(|x| x.is_finite());
-            if !finite || s.max < s.avg || s.avg < s.min || s.min < 0.0 || s.sd < 0.0 {
-                return Err(format!("eval: {} {what} is inconsistent: {s:?}", t.name));
+    for setting in &report.settings {
+        for t in &setting.tasks {
+            let expected = setting.ecu_ms / u64::from(t.cycle_ms);
+            if (t.samples.len() as u64 + 2) < expected {
+                return Err(format!(
+                    "eval: {}: {} has {} periods in {} ms, expected about {expected}",
+                    setting.label,
+                    t.name,
+                    t.samples.len(),
+                    setting.ecu_ms
+                ));
             }
-        }
-        let one_count = 1.0 / f64::from(report.run.counts_per_ms);
-        if (t.period.avg - f64::from(t.cycle_ms)).abs() > one_count {
-            return Err(format!(
-                "eval: {}'s mean period is {} ms for a {} ms cycle",
-                t.name, t.period.avg, t.cycle_ms
-            ));
+            for (what, s) in [("T_period", t.period), ("T_jitter", t.jitter)] {
+                let finite = s.row().iter().all(|x| x.is_finite());
+                if !finite || s.max < s.avg || s.avg < s.min || s.min < 0.0 || s.sd < 0.0 {
+                    return Err(format!(
+                        "eval: {}: {} {what} is inconsistent: {s:?}",
+                        setting.label, t.name
+                    ));
+                }
+            }
+            let one_job = f64::from(t.cycle_ms) / t.samples.len() as f64;
+            if (t.period.avg - f64::from(t.cycle_ms)).abs() > one_job / 2.0 {
+                return Err(format!(
+                    "eval: {}: {}'s mean period is {} ms for a {} ms cycle",
+                    setting.label, t.name, t.period.avg, t.cycle_ms
+                ));
+            }
         }
     }
     Ok(())
@@ -457,13 +663,15 @@ fn write_report(report: &Report, out: &Path, plots_dir: &str) -> Result {
     std::fs::create_dir_all(&plots).map_err(|e| format!("creating {}: {e}", plots.display()))?;
     write_plots(report, &plots)?;
     let mut csv = String::from("setting,task,cycle_ms,start_ms,period_ms,jitter_ms\n");
-    for t in report.tasks {
-        for (start, period, jitter) in &t.samples {
-            let _ = writeln!(
-                csv,
-                "cortex-m4-qemu,{},{},{start:.6},{period:.6},{jitter:.6}",
-                t.name, t.cycle_ms
-            );
+    for setting in &report.settings {
+        for t in &setting.tasks {
+            for (start, period, jitter) in &t.samples {
+                let _ = writeln!(
+                    csv,
+                    "{},{},{},{start:.6},{period:.6},{jitter:.6}",
+                    setting.key, t.name, t.cycle_ms
+                );
+            }
         }
     }
     let path = out.join("periods.csv");
@@ -475,42 +683,65 @@ fn write_report(report: &Report, out: &Path, plots_dir: &str) -> Result {
 
 /// Every plot of the report is there and is an SVG document.
 fn check_plots(report: &Report, dir: &Path) -> Result {
-    for t in report.tasks {
-        let path = dir.join(plot_name(&t.name));
-        let text = std::fs::read_to_string(&path)
-            .map_err(|e| format!("eval: the plot {}: {e}", path.display()))?;
-        if !(text.starts_with("<svg") && text.trim_end().ends_with("</svg>")) {
-            return Err(format!("eval: {} is not an SVG document", path.display()));
+    for setting in &report.settings {
+        for t in &setting.tasks {
+            let path = dir.join(plot_name(setting.key, &t.name));
+            let text = std::fs::read_to_string(&path)
+                .map_err(|e| format!("eval: the plot {}: {e}", path.display()))?;
+            if !(text.starts_with("<svg") && text.trim_end().ends_with("</svg>")) {
+                return Err(format!("eval: {} is not an SVG document", path.display()));
+            }
         }
     }
     Ok(())
 }
 
-/// The SVG file of a task's jitter histogram.
-fn plot_name(task: &str) -> String {
-    format!("jitter-{task}.svg")
+/// The SVG file of a task's jitter histogram in a setting.
+fn plot_name(setting: &str, task: &str) -> String {
+    format!("jitter-{setting}-{task}.svg")
 }
 
-/// One histogram per periodic task: its jobs by `T_jitter`, in µs.
+/// One histogram per periodic task and setting: its jobs by `T_jitter`, in µs.
 fn write_plots(report: &Report, dir: &Path) -> Result {
-    for t in report.tasks {
-        let path = dir.join(plot_name(&t.name));
-        histogram(t, &path).map_err(|e| format!("plotting {}: {e}", path.display()))?;
+    for setting in &report.settings {
+        for t in &setting.tasks {
+            let path = dir.join(plot_name(setting.key, &t.name));
+            histogram(t, &setting.label, &path)
+                .map_err(|e| format!("plotting {}: {e}", path.display()))?;
+        }
     }
     Ok(())
 }
 
-fn histogram(t: &TaskPeriodicity, path: &Path) -> std::result::Result<(), String> {
+/// A task's jobs by `T_jitter` in one setting: 40 bars from 0 to the 99.9th percentile
+/// (a rare long stall of the host would otherwise squeeze every other job into the first
+/// bar), the last bar also counting the jobs beyond it, which the caption names.
+fn histogram(t: &TaskPeriodicity, setting: &str, path: &Path) -> std::result::Result<(), String> {
     const BINS: usize = 40;
-    let max_us = (t.jitter.max * 1000.0).max(1.0);
-    let width = max_us / BINS as f64;
+    let mut sorted: Vec<f64> = t.samples.iter().map(|s| s.2 * 1000.0).collect();
+    sorted.sort_by(f64::total_cmp);
+    let at = (sorted.len() * 999 / 1000).min(sorted.len().saturating_sub(1));
+    let top_us = sorted.get(at).copied().unwrap_or(0.0).max(1.0);
+    let width = top_us / BINS as f64;
     let mut counts = [0u32; BINS];
-    for (_, _, jitter) in &t.samples {
-        let bin = ((jitter * 1000.0 / width) as usize).min(BINS - 1);
+    let mut beyond = 0u32;
+    for jitter in &sorted {
+        if *jitter > top_us {
+            beyond += 1;
+        }
+        let bin = ((jitter / width) as usize).min(BINS - 1);
         if let Some(c) = counts.get_mut(bin) {
             *c += 1;
         }
     }
+    let tail = if beyond > 0 {
+        format!(
+            "; last bar: {beyond} beyond {top_us:.1} µs, up to {:.1}",
+            t.jitter.max * 1000.0
+        )
+    } else {
+        String::new()
+    };
     let top = counts.iter().copied().max().unwrap_or(1).max(1);
     let root = SVGBackend::new(path, (640, 360)).into_drawing_area();
     let e = |e: &dyn std::fmt::Display| e.to_string();
@@ -518,21 +749,21 @@ fn histogram(t: &TaskPeriodicity, path: &Path) -> std::result::Result<(), String
     let mut chart = ChartBuilder::on(&root)
         .caption(
             format!(
-                "{} (T_cycle {} ms): T_jitter of {} jobs, Cortex-M4 image on QEMU",
+                "{} (T_cycle {} ms), {} jobs: {setting}",
                 t.name,
                 t.cycle_ms,
-                t.samples.len()
+                t.samples.len() + 1
             ),
-            ("sans-serif", 16),
+            ("sans-serif", 14),
         )
         .margin(12)
         .x_label_area_size(40)
         .y_label_area_size(60)
-        .build_cartesian_2d(0.0..max_us * 1.02, 0u32..top + top / 10 + 1)
+        .build_cartesian_2d(0.0..top_us * 1.02, 0u32..top + top / 10 + 1)
         .map_err(|x| e(&x))?;
     chart
         .configure_mesh()
-        .x_desc("T_jitter (µs)")
+        .x_desc(format!("T_jitter (µs){tail}"))
         .y_desc("jobs")
         .draw()
         .map_err(|x| e(&x))?;
@@ -545,65 +776,91 @@ fn histogram(t: &TaskPeriodicity, path: &Path) -> std::result::Result<(), String
     root.present().map_err(|x| e(&x))
 }
 
+/// A row of four figures, as the paper prints them (ms, six decimals).
+fn row(s: [f64; 4]) -> String {
+    s.iter()
+        .map(|x| format!("{x:.6}"))
+        .collect::<Vec<_>>()
+        .join(" | ")
+}
+
 /// The report in Markdown; the plots are under `plots_dir`, relative to it.
 fn markdown(report: &Report, plots_dir: &str) -> String {
     let mut md = String::new();
     let _ = writeln!(md, "# The evaluation (the paper's section 5)\n");
     let _ = writeln!(
         md,
-        "Written by `cargo xtask eval --duration {}{}` on {} ({}; {}), {} ms of ECU time on `{}` \
-         (its last position held to the end), in {:.0} s of wall time.\n",
-        report.duration_ms as f64 / 1000.0,
-        if plots_dir == "evaluation" {
-            " --book"
-        } else {
-            ""
-        },
+        "Written by `{}` on {} ({}; {}), on `{}` (its last position held to the end). \
+         The settings:\n",
+        report.command,
         today(),
         machine(),
         qemu_version(),
-        report.duration_ms,
         report.scenario,
-        report.wall.as_secs_f64()
     );
-    let _ = writeln!(
-        md,
-        "## Task periodicity (the paper's Table 1)\n\n\
-         The paper's definitions: `T_period` is the time between two consecutive starts of a \
-         task's jobs, each observed at the job's first line, and `T_jitter = |T_cycle - T_period|` \
-         (the paper's equation 2). Every job of the run is a sample: the image writes each \
-         job's start (the port's job-start mark, a SysTick count) to a host file as it runs, \
-         from its idle loop. Statistics: avg, max, min and σ (the population's standard \
-         deviation) in ms, as the paper gives them.\n\n\
-         The Cortex-M4 image runs on QEMU's mps2-an386 with `-icount shift=5`: every \
-         instruction takes 32 ns of virtual time (31.25 million instructions per second) and \
-         SysTick counts at 25 MHz, so a time here is the image's own instructions, one count \
-         40 ns. The paper's MPC5748G runs at 160 MHz: at one instruction per cycle the same \
-         instructions would take a fifth of the time (an assumption, not a measurement: the \
-         e200z4's pipeline and memories differ).\n"
-    );
-    let _ = writeln!(
-        md,
-        "| task | setting | | T_period avg | max | min | σ | T_jitter avg | max | min | σ |\n\
-         |---|---|---|---|---|---|---|---|---|---|---|"
-    );
-    for t in report.tasks {
-        let row = |s: [f64; 4]| {
-            s.iter()
-                .map(|x| format!("{x:.6}"))
-                .collect::<Vec<_>>()
-                .join(" | ")
-        };
+    for setting in &report.settings {
         let _ = writeln!(
             md,
-            "| `{}` ({} ms) | Cortex-M4 image, QEMU | {} jobs | {} | {} |",
-            t.name,
-            t.cycle_ms,
-            t.samples.len() + 1,
-            row(t.period.row()),
-            row(t.jitter.row())
+            "- {}: {} ms of ECU time in {:.0} s of wall time;",
+            setting.label,
+            setting.ecu_ms,
+            setting.wall.as_secs_f64()
         );
-        if let Some((_, period, jitter)) = PAPER.iter().find(|(name, _, _)| *name == t.name) {
+    }
+    let _ = writeln!(
+        md,
+        "\n## Task periodicity (the paper's Table 1)\n\n\
+         The paper's definitions: `T_period` is the time between two consecutive starts of a \
+         task's jobs, each observed at the job's first line, and `T_jitter = |T_cycle - T_period|` \
+         (the paper's equation 2). Every job of a run is a sample. Statistics: avg, max, min \
+         and σ (the population's standard deviation) in ms, as the paper gives them.\n\n\
+         **The Cortex-M4 image** runs on QEMU's mps2-an386 with `-icount shift=5`: every \
+         instruction takes 32 ns of virtual time (31.25 million instructions per second) and \
+         SysTick counts at 25 MHz, so a time here is the image's own instructions, one count \
+         40 ns. The image writes each job's start (the port's job-start mark, a SysTick count) \
+         to a host file as it runs, from its idle loop. The paper's MPC5748G runs at 160 MHz: \
+         at one instruction per cycle the same instructions would take a fifth of the time (an \
+         assumption, not a measurement: the e200z4's pipeline and memories differ).\n\n\
+         **The host in real time** is the host simulation (`cw-ecu --realtime`, release build) \
+         paced to the wall clock: each millisecond of ECU time is stepped at its millisecond \
+         after the start, by a sleep to that absolute deadline on the monotonic clock \
+         (`clock_nanosleep` with `TIMER_ABSTIME`), in the scheduling class the setting's name \
+         gives (`SCHED_FIFO` where the system permits it), and each job's start is read on \
+         that clock. Its jitter is the host's: the kernel's wake-up latency, the other \
+         processes and the machine's virtualisation, plus the jobs' own time on the host.\n"
+    );
+    let _ = writeln!(
+        md,
+        "| task | setting | jobs | T_period avg | max | min | σ | T_jitter avg | max | min | σ |\n\
+         |---|---|---|---|---|---|---|---|---|---|---|"
+    );
+    let mut names: Vec<(&str, u32)> = Vec::new();
+    for t in report.settings.iter().flat_map(|s| &s.tasks) {
+        if !names.iter().any(|(n, _)| *n == t.name) {
+            names.push((&t.name, t.cycle_ms));
+        }
+    }
+    for (name, cycle) in &names {
+        let mut first = true;
+        for setting in &report.settings {
+            if let Some(t) = setting.tasks.iter().find(|t| t.name == *name) {
+                let task = if first {
+                    format!("`{name}` ({cycle} ms)")
+                } else {
+                    String::new()
+                };
+                first = false;
+                let _ = writeln!(
+                    md,
+                    "| {task} | {} | {} | {} | {} |",
+                    setting.label,
+                    t.samples.len() + 1,
+                    row(t.period.row()),
+                    row(t.jitter.row())
+                );
+            }
+        }
+        if let Some((_, period, jitter)) = PAPER.iter().find(|(n, _, _)| n == name) {
             let _ = writeln!(
                 md,
                 "| | the paper, MPC5748G | 30 min | {} | {} |",
@@ -620,60 +877,69 @@ fn markdown(report: &Report, plots_dir: &str) -> String {
     );
     let _ = writeln!(
         md,
-        "Against the paper's jitter (the issue's goal: at or below it):\n"
+        "Against the paper's jitter (the goal: at or below it on the image):\n"
     );
-    for t in report.tasks {
-        if let Some((_, _, jitter)) = PAPER.iter().find(|(name, _, _)| *name == t.name) {
-            let met = t.jitter.avg <= jitter[0] && t.jitter.max <= jitter[1];
+    for setting in &report.settings {
+        for t in &setting.tasks {
+            if let Some((_, _, jitter)) = PAPER.iter().find(|(name, _, _)| *name == t.name) {
+                let met = t.jitter.avg <= jitter[0] && t.jitter.max <= jitter[1];
+                let _ = writeln!(
+                    md,
+                    "- {}, `{}`: avg {:.6} ms against {:.6}, max {:.6} ms against {:.6}: {}",
+                    setting.label,
+                    t.name,
+                    t.jitter.avg,
+                    jitter[0],
+                    t.jitter.max,
+                    jitter[1],
+                    if met { "at or below" } else { "above" }
+                );
+            }
+        }
+    }
+    let _ = writeln!(
+        md,
+        "\nWhat makes the jitter on the image: every alarm is due on a tick (1 ms), so a job \
+         starts after the tick's ISR, which activates the tasks whose alarms are due, and after \
+         the jobs of higher priority released on the same tick. `T_jitter` is how much that \
+         delay differs between two consecutive releases: the ISR's length with two alarms due \
+         or with four, the higher jobs' lengths as the distance and the level change.\n\n\
+         Where this measurement is stronger than the paper's: every job of a run is a sample \
+         and every sample is published; the image's run is deterministic (QEMU counts \
+         instructions, so the same build gives the same figures on any host) and one command \
+         reproduces it; the image's time stamps come from the clock that also drives the OS \
+         tick, and cost the measured jobs nothing (the trace's marks are taken off the jobs' \
+         instruction counts, and the record is written from the idle loop); the host in real \
+         time shows what a general-purpose OS adds. Where it is weaker: QEMU's virtual time \
+         is not a chip's clock. It has no caches, flash wait states, bus contention or \
+         interrupt entry cycles, and every instruction takes the same time, so it shows the \
+         jitter the software makes, not the hardware's. The image's mean period is the cycle to within \
+         the first and the last start's delays over the run (the OS tick and the time stamps \
+         share SysTick: no drift between two clocks); the paper's means \
+         (9.984680 ms for 10 ms) show its measuring timer and its OS counter running from \
+         different clocks, or drift between them. No run on an MPC5748G or any other chip is \
+         behind these figures.\n"
+    );
+    let _ = writeln!(md, "Each task's jobs by `T_jitter`, per setting:\n");
+    for setting in &report.settings {
+        for t in &setting.tasks {
             let _ = writeln!(
                 md,
-                "- `{}`: avg {:.6} ms against {:.6}, max {:.6} ms against {:.6}: {}",
+                "![{} T_jitter histogram, {}]({}/{})\n",
                 t.name,
-                t.jitter.avg,
-                jitter[0],
-                t.jitter.max,
-                jitter[1],
-                if met { "at or below" } else { "above" }
+                setting.label,
+                plots_dir,
+                plot_name(setting.key, &t.name)
             );
         }
     }
     let _ = writeln!(
         md,
-        "\nWhat makes the jitter here: every alarm is due on a tick (1 ms), so a job starts \
-         after the tick's ISR, which activates the tasks whose alarms are due, and after the \
-         jobs of higher priority released on the same tick. `T_jitter` is how much that delay \
-         differs between two consecutive releases: the ISR's length with two alarms due or \
-         with four, the higher jobs' lengths as the distance and the level change.\n\n\
-         Where this measurement is stronger than the paper's: every job of the run is a \
-         sample and every sample is published; the run is deterministic (QEMU counts \
-         instructions, so the same build gives the same figures on any host) and one command \
-         reproduces it; the time stamps come from the image itself, from the clock that also \
-         drives the OS tick, and cost the measured jobs nothing (the trace's marks are taken \
-         off the jobs' instruction counts, and the record is written from the idle loop). \
-         Where it is weaker: QEMU's virtual time is not a chip's clock. It has no caches, \
-         flash wait states, bus contention or interrupt entry cycles, and every instruction \
-         takes the same time, so it shows the jitter the software makes, not the hardware's. \
-         The mean period is exact here by construction (the OS tick and the time stamps \
-         share SysTick); the paper's means (9.984680 ms for 10 ms) show its measuring timer \
-         and its OS counter running from different clocks, or drift between them. No run on \
-         an MPC5748G or any other chip is behind these figures.\n"
-    );
-    let _ = writeln!(md, "Each task's jobs by `T_jitter`:\n");
-    for t in report.tasks {
-        let _ = writeln!(
-            md,
-            "![{} T_jitter histogram]({}/{})\n",
-            t.name,
-            plots_dir,
-            plot_name(&t.name)
-        );
-    }
-    let _ = writeln!(
-        md,
         "The samples: `periods.csv` beside the report (`setting,task,cycle_ms,start_ms,\
-         period_ms,jitter_ms`, one row per job after each task's first), and the image's \
-         record itself, `job-starts.bin` (little-endian words: the task's slot in the top \
-         four bits, the start's SysTick count in the low 28)."
+         period_ms,jitter_ms`, one row per job after each task's first; the start on the \
+         setting's clock), the image's record itself, `job-starts.bin` (little-endian words: \
+         the task's slot in the top four bits, the start's SysTick count in the low 28), and \
+         the host's, `host-realtime-starts.csv` (`task,cycle_ms,virtual_us,wall_ns`)."
     );
     md
 }
@@ -775,7 +1041,7 @@ mod tests {
             periodic: vec![(1, "OsLEDTask".into(), 10)],
             starts: decode_starts(&bytes).unwrap(),
         };
-        let tasks = periodicity(&run).unwrap();
+        let tasks = periodicity(&run.task_starts()).unwrap();
         let t = &tasks[0];
         assert_eq!(t.samples.len(), 4);
         let close = |a: f64, b: f64| (a - b).abs() < 1e-9;
@@ -784,6 +1050,62 @@ mod tests {
         assert!(close(t.jitter.max, 0.1) && close(t.jitter.min, 0.0));
         assert!(close(t.jitter.avg, 0.05));
         assert!(close(t.jitter.sd, 0.05));
+    }
+
+    #[test]
+    fn the_hosts_starts_are_read_per_periodic_task_and_a_bad_line_is_named() {
+        let text = "task,cycle_ms,virtual_us,wall_ns\n\
+            OsLEDTask,10,10000,5000000\n\
+            OsComTask,0,10010,5010000\n\
+            OsLEDTask,10,20000,15100000\n";
+        let tasks = host_starts(text).unwrap();
+        assert_eq!(tasks.len(), 1);
+        assert_eq!(
+            (tasks[0].name.as_str(), tasks[0].cycle_ms),
+            ("OsLEDTask", 10)
+        );
+        assert_eq!(tasks[0].starts_ms, [0.0, 10.1]);
+        let bad = text.replace("20000,15100000", "20000,");
+        assert!(host_starts(&bad).unwrap_err().contains("line 4"));
+        assert!(host_starts("task,x\n").unwrap_err().contains("line 1"));
+    }
+
+    /// Starts 10 ms apart over 100 ms, in a report's one setting.
+    fn report_of(starts_ms: Vec<f64>) -> Report {
+        let tasks = periodicity(&[TaskStarts {
+            name: "OsLEDTask".into(),
+            cycle_ms: 10,
+            starts_ms,
+        }])
+        .unwrap();
+        Report {
+            command: String::new(),
+            scenario: String::new(),
+            settings: vec![Setting {
+                key: "test",
+                label: "test".into(),
+                ecu_ms: 100,
+                wall: Duration::ZERO,
+                tasks,
+            }],
+        }
+    }
+
+    #[test]
+    fn a_lost_job_fails_the_check_and_the_starts_delays_do_not() {
+        // Every other start 7 µs late, the last one too: the mean is off by 0.7 µs.
+        let delayed = (0..=10)
+            .map(|k| f64::from(k) * 10.0 + if k % 2 == 1 { 0.007 } else { 0.0 })
+            .collect();
+        assert_eq!(check(&report_of(delayed)), Ok(()));
+        // One job lost: its neighbours 20 ms apart, the mean a ninth of a cycle off.
+        let mut lost: Vec<f64> = (0..=10).map(|k| f64::from(k) * 10.0).collect();
+        lost.remove(5);
+        let error = check(&report_of(lost)).unwrap_err();
+        assert!(error.contains("OsLEDTask's mean period"), "{error}");
+        // Too few periods for the run's length.
+        let short = (0..=4).map(|k| f64::from(k) * 10.0).collect();
+        assert!(check(&report_of(short)).unwrap_err().contains("4 periods"));
     }
 
     #[test]

@@ -219,10 +219,15 @@ pub(crate) fn job_started(task: u8, at: u32) {
     });
 }
 
-/// The oldest job start not yet taken ([`start_record`]). The image's idle loop alone
-/// takes them.
+/// The oldest job start not yet taken ([`start_record`]). One context at a time may take
+/// them (the ring has one reader).
 pub fn take_start() -> Option<u32> {
     STARTS.pop()
+}
+
+/// How many job starts wait on the ring (as the producer last left it).
+pub fn starts_waiting() -> u32 {
+    STARTS.len()
 }
 
 /// The job starts recorded since the image started, and those a full ring dropped.

@@ -2,7 +2,9 @@
 //!
 //! Nothing here reads the wall clock or starts a thread: the simulation advances a shared
 //! [`VirtualClock`] from event to event, so a run is fully determined by its scenario and
-//! its seeds, and one simulated hour takes as long as its events take to compute.
+//! its seeds, and one simulated hour takes as long as its events take to compute. (A run
+//! paced to the wall clock, `crate::realtime`, asks the port to note each job's start on
+//! that clock too, [`HostPort::record_wall_starts`]; what the ECU does stays the same.)
 //!
 //! Parts (each a cheaply clonable handle where the firmware and the test both need it):
 //!

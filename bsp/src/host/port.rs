@@ -33,6 +33,13 @@ pub struct HostPort<K> {
     jobs: RefCell<Vec<TaskId>>,
     /// Every job start: (task, virtual time in µs).
     starts: RefCell<Vec<(TaskId, u64)>>,
+    /// Every job start since [`HostPort::record_wall_starts`] (a run paced to the wall
+    /// clock): task, virtual time in µs, and the wall clock's time
+    /// (`crate::realtime::now_ns`).
+    wall_starts: RefCell<Vec<(TaskId, u64, u64)>>,
+    /// Whether [`HostPort::record_wall_starts`] was called (tested on every job start:
+    /// a flag, not the list's borrow).
+    record_wall: core::cell::Cell<bool>,
     /// ISRs whose entry the kernel refused, in order (their lines quieted).
     refused: RefCell<Vec<IsrId>>,
 }
@@ -47,6 +54,8 @@ impl<K: OsKernel> HostPort<K> {
             clock: clock.clone(),
             jobs: RefCell::new(Vec::new()),
             starts: RefCell::new(Vec::new()),
+            wall_starts: RefCell::new(Vec::new()),
+            record_wall: core::cell::Cell::new(false),
             refused: RefCell::new(Vec::new()),
         }
     }
@@ -116,6 +125,20 @@ impl<K: OsKernel> HostPort<K> {
     /// Every job start so far: (task, virtual time in µs).
     pub fn job_starts(&self) -> Ref<'_, Vec<(TaskId, u64)>> {
         self.starts.borrow()
+    }
+
+    /// From now on every job start is also recorded with the wall clock's time (Linux's
+    /// monotonic clock, `crate::realtime::now_ns`), for a run paced to it
+    /// ([`HostPort::wall_job_starts`]).
+    #[cfg(target_os = "linux")]
+    pub fn record_wall_starts(&self) {
+        self.record_wall.set(true);
+    }
+
+    /// The job starts since [`HostPort::record_wall_starts`]: (task, virtual µs,
+    /// monotonic ns); empty if it was not called.
+    pub fn wall_job_starts(&self) -> Vec<(TaskId, u64, u64)> {
+        self.wall_starts.borrow().clone()
     }
 
     /// Lets go of the job starts so far (a live simulation, which would keep them all).
@@ -190,7 +213,13 @@ impl<K: OsKernel> Port for HostPort<K> {
 
     fn job_started(&self, task: TaskId) {
         self.jobs.borrow_mut().push(task);
-        self.starts.borrow_mut().push((task, self.clock.now_us()));
+        let now_us = self.clock.now_us();
+        self.starts.borrow_mut().push((task, now_us));
+        #[cfg(target_os = "linux")]
+        if self.record_wall.get() {
+            let wall_ns = crate::realtime::now_ns();
+            self.wall_starts.borrow_mut().push((task, now_us, wall_ns));
+        }
     }
 
     fn job_finished(&self, _task: TaskId) {

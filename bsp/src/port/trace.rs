@@ -405,7 +405,7 @@ pub mod start_record {
 
     /// Bits of the time stamp a record keeps: at the Cortex-M port's 25 MHz SysTick they
     /// wrap after 10.7 s, and every periodic task starts a job at least every 40 ms, so
-    /// two records in a row are never that far apart.
+    /// two records in a row are never half that far apart ([`Unwrapper`]).
     pub const TIME_BITS: u32 = 28;
     /// The time stamp's bits.
     pub const TIME_MASK: u32 = (1 << TIME_BITS) - 1;
@@ -420,12 +420,19 @@ pub mod start_record {
     }
 
     /// Reads records in the order they were written, each time stamp unwrapped against
-    /// the one before it (the first is taken as it is): counts since the OS started, as
-    /// long as no two records in a row are [`TIME_MASK`] counts or more apart.
+    /// the one before it (the first is taken as it is): counts since the OS started. Two
+    /// records in a row may be out of order by less than half the stamp's range (a job's
+    /// mark reads the time before it takes the lock that puts the record on the ring, so
+    /// an interrupt between the two lets a later job's record in first): a step of half
+    /// the range or more is read as backwards. Ahead, two records in a row must be less
+    /// than half the range apart (5.4 s at 25 MHz).
     #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
     pub struct Unwrapper {
         last: Option<u64>,
     }
+
+    /// Half the time stamp's range: the longest step read as ahead.
+    pub const HALF: u32 = 1 << (TIME_BITS - 1);
 
     impl Unwrapper {
         /// A reader before the first record.
@@ -433,14 +440,19 @@ pub mod start_record {
             Self { last: None }
         }
 
-        /// The next record: its task slot and its time stamp in full.
+        /// The next record: its task slot and its time stamp in full (a step back before
+        /// the first record's time is read as that time).
         pub fn next(&mut self, word: u32) -> (u8, u64) {
-            let low = u64::from(word & TIME_MASK);
+            let low = word & TIME_MASK;
             let at = match self.last {
-                None => low,
+                None => u64::from(low),
                 Some(last) => {
-                    let ahead = low.wrapping_sub(last) & u64::from(TIME_MASK);
-                    last + ahead
+                    let ahead = low.wrapping_sub(last as u32) & TIME_MASK;
+                    if ahead < HALF {
+                        last + u64::from(ahead)
+                    } else {
+                        last.saturating_sub(u64::from((1 << TIME_BITS) - ahead))
+                    }
                 }
             };
             self.last = Some(at);
@@ -448,21 +460,25 @@ pub mod start_record {
         }
     }
 
-    /// The contract: records of job starts at times `first`, then each `gaps` later (a
-    /// gap below `TIME_MASK`), read back give every task and time in full, counted from
+    /// The contract: records of job starts at times `first`, then each `steps` later (a
+    /// step of either sign, less than [`HALF`] long; a step back that would go before
+    /// `first` is taken ahead), read back give every task and time in full, counted from
     /// `first`'s low bits.
-    pub fn round_trip(first: u32, starts: &[(u8, u32)]) -> bool {
+    pub fn round_trip(first: u32, starts: &[(u8, i32)]) -> bool {
         let mut reader = Unwrapper::new();
         let (task0, at0) = reader.next(encode(0, first));
         if task0 != 0 || at0 != u64::from(first & TIME_MASK) {
             return false;
         }
         let (mut at, mut expected) = (first, at0);
-        starts.iter().all(|&(task, gap)| {
+        starts.iter().all(|&(task, step)| {
             let task = task % MAX_TASKS as u8;
-            let gap = gap % TIME_MASK;
-            at = at.wrapping_add(gap);
-            expected += u64::from(gap);
+            let mut step = i64::from(step) % i64::from(HALF);
+            if i64::try_from(expected).map_or(true, |e| e + step < 0) {
+                step = -step;
+            }
+            at = at.wrapping_add(step as u32);
+            expected = expected.wrapping_add(step as u64);
             reader.next(encode(task, at)) == (task, expected)
         })
     }

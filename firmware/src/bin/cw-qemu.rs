@@ -4,7 +4,7 @@
 #![no_std]
 #![no_main]
 
-use core::sync::atomic::AtomicU32;
+use core::sync::atomic::{AtomicBool, AtomicU32};
 
 use cw_bsp::mps2::{self, FatalEnd, Led};
 use cw_bsp::port::Slot;
@@ -61,6 +61,8 @@ fn main() -> ! {
         job_starts: start.job_starts,
         starts_written: AtomicU32::new(0),
         starts_lost: AtomicU32::new(0),
+        taking_starts: AtomicBool::new(false),
+        starts_in_flight: AtomicU32::new(0),
     }) else {
         mps2::fatal("started twice")
     };

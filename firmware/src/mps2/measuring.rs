@@ -31,7 +31,7 @@
 //! trace's ring in every run, written or not, so that the job-start mark takes the same
 //! path in every run as in its calibration.
 
-use core::sync::atomic::{AtomicU32, Ordering};
+use core::sync::atomic::{AtomicBool, AtomicU32, Ordering};
 
 use cw_bsp::cortex_m::{now_ms, App, CortexMPort};
 use cw_bsp::mps2::semihosting::HostFile;
@@ -354,6 +354,11 @@ pub struct Mps2App {
     pub starts_written: AtomicU32,
     /// Job starts the host failed to write.
     pub starts_lost: AtomicU32,
+    /// A context is taking job starts off the ring (the ring has one reader: a task that
+    /// ends the run while the idle loop was taking them finds this set).
+    pub taking_starts: AtomicBool,
+    /// Job starts taken off the ring and not yet written.
+    pub starts_in_flight: AtomicU32,
 }
 
 impl App for Mps2App {
@@ -377,7 +382,7 @@ impl App for Mps2App {
     }
 
     fn idle(&self) {
-        self.take_job_starts();
+        let _ = self.take_job_starts();
         report_supervision("cw-qemu", &self.ecu);
         if now_ms() < self.end_ms {
             return;
@@ -439,9 +444,14 @@ impl Mps2App {
     /// and writes them to the host file, if the run names one, 16 at a time: in the idle
     /// loop, without an interrupt lock (the ring's producer preempts it freely), and at
     /// the run's end. A semihosting call is one instruction of the run's virtual time.
+    /// The ring has one reader at a time: `false` where another context was taking them
+    /// (a task that ends the run while the idle loop was in here), nothing done.
     #[inline(never)]
-    fn take_job_starts(&self) {
+    fn take_job_starts(&self) -> bool {
         use cw_bsp::cortex_m::trace::take_start;
+        if self.taking_starts.swap(true, Ordering::Acquire) {
+            return false;
+        }
         let mut bytes = [0u8; 64];
         loop {
             let mut len = 0;
@@ -451,9 +461,10 @@ impl Mps2App {
                 len += 4;
             }
             let Some(taken) = bytes.get(..len).filter(|b| !b.is_empty()) else {
-                return;
+                break;
             };
             let count = (len / 4) as u32;
+            self.starts_in_flight.store(count, Ordering::Relaxed);
             match &self.job_starts {
                 Some(file) if file.write(taken).is_ok() => {
                     self.starts_written.fetch_add(count, Ordering::Relaxed);
@@ -463,13 +474,23 @@ impl Mps2App {
                 }
                 None => {}
             }
+            self.starts_in_flight.store(0, Ordering::Relaxed);
         }
+        self.taking_starts.store(false, Ordering::Release);
+        true
     }
 
     /// The job starts' report, where the run records them: the periodic tasks (slot,
     /// name, period), the time base, and what the record holds and lost.
     fn report_job_starts(&self) {
-        self.take_job_starts();
+        if !self.take_job_starts() {
+            // The run ends in a task that preempted the idle loop while it took starts
+            // off the ring: those it held, and those still on the ring, are not written.
+            let held = self.starts_in_flight.load(Ordering::Relaxed);
+            let left = cw_bsp::cortex_m::trace::starts_waiting();
+            self.starts_lost
+                .fetch_add(held.saturating_add(left), Ordering::Relaxed);
+        }
         if self.job_starts.is_none() {
             return;
         }
