@@ -239,11 +239,7 @@ fn run_host_realtime(
         .stdin(std::process::Stdio::null())
         .stdout(std::process::Stdio::piped())
         .stderr(std::process::Stdio::piped());
-    let shown: Vec<String> = std::iter::once(command.get_program())
-        .chain(command.get_args())
-        .map(|a| a.to_string_lossy().into_owned())
-        .collect();
-    println!("$ {}", shown.join(" "));
+    println!("$ {}", crate::process::shown(&command));
     let child = command
         .spawn()
         .map_err(|e| format!("starting {}: {e}", ecu.display()))?;
@@ -362,11 +358,7 @@ fn run_image(image: &Path, scenario: &Path, duration_ms: u64, out: &Path) -> Res
     .arg(format!("file:{}", out.join("slcan.txt").display()))
     .arg("-kernel")
     .arg(image);
-    let shown: Vec<String> = std::iter::once(qemu.get_program())
-        .chain(qemu.get_args())
-        .map(|a| a.to_string_lossy().into_owned())
-        .collect();
-    println!("$ {}", shown.join(" "));
+    println!("$ {}", crate::process::shown(&qemu));
     let image_path = image.to_path_buf();
     let runner = std::thread::spawn(move || cw_tests::qemu::run(qemu, &image_path));
     let bar = indicatif::ProgressBar::new(duration_ms);

@@ -30,6 +30,16 @@ pub fn target_dir() -> PathBuf {
     }
 }
 
+/// A command as a shell would show it: the program and its arguments, space-separated
+/// (for the `$ ...` line printed before it runs).
+pub fn shown(command: &Command) -> String {
+    std::iter::once(command.get_program())
+        .chain(command.get_args())
+        .map(|a| a.to_string_lossy().into_owned())
+        .collect::<Vec<_>>()
+        .join(" ")
+}
+
 /// Output of a finished command whose output was captured.
 pub struct Captured {
     /// Whether it exited with status 0.

@@ -232,13 +232,10 @@ fn run_image_at(
 /// Runs `qemu` (a QEMU command running `image`) to its end, showing the command; returns
 /// the image's decoded log, or an error with it if the image did not exit with success.
 fn decoded_run(qemu: std::process::Command, image: &Path) -> Result<String> {
-    let shown: Vec<String> = std::iter::once(qemu.get_program())
-        .chain(qemu.get_args())
-        .map(|a| a.to_string_lossy().into_owned())
-        .collect();
+    let shown = crate::process::shown(&qemu);
     println!(
         "$ {} | {} -e {} --log-format '{{s}}'",
-        shown.join(" "),
+        shown,
         cw_tests::qemu::DECODER,
         image.display()
     );
@@ -686,11 +683,8 @@ fn event_run(image: &Path, fault: &str, success: bool, lines: &[&str], no_mpu: b
         .args(["-serial", "null"])
         .arg("-kernel")
         .arg(image);
-    let shown: Vec<String> = std::iter::once(qemu.get_program())
-        .chain(qemu.get_args())
-        .map(|a| a.to_string_lossy().into_owned())
-        .collect();
-    println!("$ {}", shown.join(" "));
+    let shown = crate::process::shown(&qemu);
+    println!("$ {}", shown);
     let (ended_ok, report) = cw_tests::qemu::run(qemu, image)?;
     print!("{report}");
     let missing: Vec<&str> = lines
