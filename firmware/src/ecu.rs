@@ -128,6 +128,9 @@ pub mod span {
     /// The calibration's second span, inside or across [`CALIBRATION`] (the cost of a
     /// span's marks as a span around them sees it).
     pub const CALIBRATION_INNER: usize = 12;
+    /// Each probe of the communication stack's layers (`crate::stack_probe`), one after
+    /// the other before the OS starts (the measuring images only).
+    pub const STACK_PROBE: usize = 13;
     /// The spans named apart from [`NAMES`] (numbered after the board's).
     pub const MORE_NAMES: [(usize, &str); 1] = [(
         LOCK_PAIR,

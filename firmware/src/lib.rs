@@ -21,4 +21,6 @@ pub mod mps2;
 pub mod rte;
 #[cfg(all(feature = "s32k144evb", target_arch = "arm", target_os = "none"))]
 pub mod s32k144evb;
+pub mod schedulability;
+pub mod stack_probe;
 pub mod swc;

@@ -44,6 +44,10 @@ struct Options {
     /// Write every job's start as CSV (task,cycle_ms,virtual_us,wall_ns)
     #[arg(long, value_name = "FILE")]
     job_starts: Option<String>,
+    /// Write the end-to-end latencies as CSV (path,at_us,level,latency_us): each echo to
+    /// its distance frame on the bus, each threshold crossing to the LEDs
+    #[arg(long, value_name = "FILE")]
+    end_to_end: Option<String>,
 }
 
 /// `--duration`: seconds, more than 0 and at most 10^7, as whole milliseconds.
@@ -124,6 +128,9 @@ fn run(o: &Options) -> Result<(), String> {
     let wall = started.elapsed();
     if let Some(path) = &o.job_starts {
         write_job_starts(&mut sim, path)?;
+    }
+    if let Some(path) = &o.end_to_end {
+        write_end_to_end(&sim, path)?;
     }
 
     if let Some(path) = &o.trace {
@@ -249,6 +256,28 @@ fn write_job_starts(sim: &mut Simulation, path: &str) -> Result<(), String> {
         text.push_str(&format!("{name},{cycle},{at_us},{wall_ns}\n"));
     }
     std::fs::write(path, text).map_err(|e| format!("cannot write job starts {path}: {e}"))
+}
+
+/// `--end-to-end`: the run's end-to-end latencies (`Simulation::end_to_end`), in virtual
+/// time, as CSV (`path,at_us,level,latency_us`): `echo_to_frame` rows (the echo's capture,
+/// no level, the time to its frame's end on the bus), then `crossing_to_led` rows (the
+/// crossing, the level entered, the time until the LEDs showed it; empty where they never
+/// did). No crossing rows where the scenario sends the ECU frames (the thresholds may
+/// change).
+fn write_end_to_end(sim: &Simulation, path: &str) -> Result<(), String> {
+    let e2e = sim.end_to_end();
+    let mut text = String::from("path,at_us,level,latency_us\n");
+    for (at, latency) in &e2e.echo_to_frame {
+        text.push_str(&format!("echo_to_frame,{at},,{latency}\n"));
+    }
+    for c in e2e.crossing_to_led.iter().flatten() {
+        let latency = c.latency_us.map(|l| l.to_string()).unwrap_or_default();
+        text.push_str(&format!(
+            "crossing_to_led,{},{:?},{latency}\n",
+            c.at_us, c.level
+        ));
+    }
+    std::fs::write(path, text).map_err(|e| format!("cannot write end-to-end latencies {path}: {e}"))
 }
 
 /// The summary's lines on WdgM and the watchdog: every supervision held, or which failed

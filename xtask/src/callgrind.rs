@@ -83,8 +83,9 @@ pub const PROBES: &[(&str, &str)] = &[
     ),
 ];
 
-/// Probes of the communication stack per layer (the paper's Figure 10), in
-/// `firmware/examples/stack_probe.rs`, with the ECU's own configuration.
+/// Probes of the communication stack per layer (the paper's Figure 10),
+/// `cw_firmware::stack_probe` through `firmware/examples/stack_probe.rs`, with the ECU's
+/// own configuration.
 pub const STACK_PROBES: &[(&str, &str)] = &[
     (
         "tx_path",
@@ -171,9 +172,7 @@ pub fn run(options: &Options) -> Result {
     if !binary.exists() {
         return Err(format!("probe binary {} not found", binary.display()));
     }
-    let out_dir = target_dir().join("xtask-callgrind");
-    std::fs::create_dir_all(&out_dir)
-        .map_err(|e| format!("creating {}: {e}", out_dir.display()))?;
+    let out_dir = out_dir()?;
 
     let stack_binary = target_dir()
         .join("release")
@@ -186,27 +185,19 @@ pub fn run(options: &Options) -> Result {
 
     let mut rows = Vec::new();
     let mut errors = Vec::new();
-    Cmd::new("cargo")
-        .args(["build", "--release", "-p", "cw-firmware", "--bin", "cw-ecu"])
-        .run()?;
-    let ecu = target_dir().join("release").join("cw-ecu");
-    for (i, &(function, description)) in ECU_PATHS.iter().enumerate() {
-        match measure_ecu(&ecu, &out_dir, i, function) {
+    for (description, measured) in ecu_paths()? {
+        match measured {
             Ok((per_call, calls)) => {
                 rows.push(("ecu", description, format!("{per_call:.1} ({calls} calls)")))
             }
             Err(e) => {
                 rows.push(("ecu", description, "ERROR".into()));
-                errors.push(format!("{function}: {e}"));
+                errors.push(e);
             }
         }
     }
     for (binary, &(op, description)) in probes {
-        let measured = measure(binary, &out_dir, op, LOW).and_then(|low| {
-            let high = measure(binary, &out_dir, op, HIGH)?;
-            per_call(op, low, high)
-        });
-        match measured {
+        match measure_probe(binary, &out_dir, op) {
             Ok(per_call) => rows.push((op, description, format!("{per_call:.2}"))),
             Err(e) => {
                 rows.push((op, description, "ERROR".into()));
@@ -244,6 +235,68 @@ pub fn run(options: &Options) -> Result {
             errors.join("\n  ")
         ))
     }
+}
+
+/// Instructions per call of `probe_<op>` in `binary`: two runs, [`LOW`] and [`HIGH`]
+/// calls, so that whatever does not grow with the calls cancels.
+fn measure_probe(binary: &Path, out_dir: &Path, op: &str) -> Result<f64> {
+    let low = measure(binary, out_dir, op, LOW)?;
+    let high = measure(binary, out_dir, op, HIGH)?;
+    per_call(op, low, high)
+}
+
+/// The output files' folder.
+fn out_dir() -> Result<PathBuf> {
+    let out_dir = target_dir().join("xtask-callgrind");
+    std::fs::create_dir_all(&out_dir)
+        .map_err(|e| format!("creating {}: {e}", out_dir.display()))?;
+    Ok(out_dir)
+}
+
+/// Builds the stack probe (`firmware/examples/stack_probe.rs`) and gives its path.
+pub fn stack_probe_binary() -> Result<PathBuf> {
+    Cmd::new("cargo")
+        .args([
+            "build",
+            "--release",
+            "-p",
+            "cw-firmware",
+            "--example",
+            STACK_EXAMPLE,
+        ])
+        .run()?;
+    Ok(target_dir()
+        .join("release")
+        .join("examples")
+        .join(STACK_EXAMPLE))
+}
+
+/// Instructions per call of the stack probe `op` in `binary` ([`stack_probe_binary`]).
+pub fn stack_probe(binary: &Path, op: &str) -> Result<f64> {
+    measure_probe(binary, &out_dir()?, op).map_err(|e| format!("{op}: {e}"))
+}
+
+/// One of [`ECU_PATHS`] measured: what it does, and its instructions per call and the
+/// calls, or what went wrong.
+pub type EcuPath = (&'static str, Result<(f64, u64)>);
+
+/// Builds `cw-ecu` and measures each of [`ECU_PATHS`] on Figure 7.
+pub fn ecu_paths() -> Result<Vec<EcuPath>> {
+    Cmd::new("cargo")
+        .args(["build", "--release", "-p", "cw-firmware", "--bin", "cw-ecu"])
+        .run()?;
+    let ecu = target_dir().join("release").join("cw-ecu");
+    let out_dir = out_dir()?;
+    Ok(ECU_PATHS
+        .iter()
+        .enumerate()
+        .map(|(i, &(function, description))| {
+            (
+                description,
+                measure_ecu(&ecu, &out_dir, i, function).map_err(|e| format!("{function}: {e}")),
+            )
+        })
+        .collect())
 }
 
 /// Runs one probe under callgrind and returns the collected instruction count.

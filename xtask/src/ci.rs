@@ -53,13 +53,14 @@ pub const STAGES: &[&str] = &[
     "mutants",
     "mutation",
     "qemu",
-    "eval",
     "differential",
     "interop",
     "view",
     "docs",
     "fuzz",
     "bench",
+    // After `bench`, which builds the release `cw-ecu` and the stack probe it also runs.
+    "eval",
 ];
 
 /// Each stage's time budget on CI's 2-core machine, seconds: printed with the stage and in

@@ -15,7 +15,7 @@ use cortex_m::peripheral::{SCB, SYST};
 
 use crate::port::preempt::Mark;
 pub use crate::port::trace::{
-    start_record, Event, EventKind, MarkCosts, SpanRecord, TaskRecord, Trace, EVENTS, IDLE_ROW,
+    job_record, Event, EventKind, MarkCosts, SpanRecord, TaskRecord, Trace, EVENTS, IDLE_ROW,
     MAX_ISRS, PER_COUNT, SPANS,
 };
 use crate::ring::{RingStats, WordRing};
@@ -89,14 +89,14 @@ pub fn mark(mark: Mark) {
 }
 
 // Every kind of mark, with the largest numbers the trace keeps, comes back from its word
-// as it went in (the trace's tables: 16 task slots, 4 ISRs, 13 spans).
+// as it went in (the trace's tables: 16 task slots, 4 ISRs, 14 spans).
 const _: () = {
     let mut kind = 0;
     while kind <= MarkWord::SPAN_END_AS {
         let word = MarkWord::new(
             kind,
             255,
-            if kind == MarkWord::SPAN_END_AS { 12 } else { 0 },
+            if kind == MarkWord::SPAN_END_AS { 13 } else { 0 },
         );
         assert!(MarkWord::of(word.mark()).0 == word.0);
         kind += 1;
@@ -186,7 +186,7 @@ pub fn take_jobs(task: u8) -> SpanRecord {
 /// are taken off the ring.
 pub fn calibrated(costs: MarkCosts) {
     with(|t| t.calibrated(costs));
-    while STARTS.pop().is_some() {}
+    while JOB_RECORDS.pop().is_some() {}
 }
 
 /// Span `id` ends at `at` (nothing if it was not started), net of the ISRs that
@@ -201,12 +201,13 @@ pub fn span_end_as(started: usize, id: usize, at: u32) {
     with(|t| t.span_end_as(started, id, at));
 }
 
-/// The job starts not yet taken by the image ([`take_start`]): the evaluation's record
-/// of them ([`start_record`]), for the paper's Table 1. The producer is the job-start
-/// mark, under the trace's interrupt lock (a job that preempts another's mark waits for
-/// it); the consumer is the image's idle loop, without a lock. 1,024 words: the idle loop
-/// runs every millisecond, and a millisecond starts at most a handful of jobs.
-static STARTS: WordRing<1024> = WordRing::new();
+/// The job starts and ends not yet taken by the image ([`take_job_record`]): the
+/// evaluation's record of them ([`job_record`]), for the paper's Table 1 and the measured
+/// response times. The producers are the job-start and job-end marks, under the trace's
+/// interrupt lock (a job that preempts another's mark waits for it); the consumer is the
+/// image's idle loop, without a lock. 1,024 words: the idle loop runs every millisecond,
+/// and a millisecond starts and ends at most a handful of jobs.
+static JOB_RECORDS: WordRing<1024> = WordRing::new();
 
 /// A job of `task` starts, at `at` (counts). Out of line, so that the ring's code leaves
 /// the other marks' code in [`mark_word`] as it was.
@@ -214,30 +215,34 @@ static STARTS: WordRing<1024> = WordRing::new();
 pub(crate) fn job_started(task: u8, at: u32) {
     with(|t| {
         t.job_started(task, at);
-        // (A full ring counts the start as dropped: the image reports it.)
-        let _ = STARTS.push(start_record::encode(task, at));
+        // (A full ring counts the record as dropped: the image reports it.)
+        let _ = JOB_RECORDS.push(job_record::encode(task, false, at));
     });
 }
 
-/// The oldest job start not yet taken ([`start_record`]). One context at a time may take
-/// them (the ring has one reader).
-pub fn take_start() -> Option<u32> {
-    STARTS.pop()
-}
-
-/// How many job starts wait on the ring (as the producer last left it).
-pub fn starts_waiting() -> u32 {
-    STARTS.len()
-}
-
-/// The job starts recorded since the image started, and those a full ring dropped.
-pub fn starts_stats() -> RingStats {
-    STARTS.stats()
-}
-
-/// The job of `task` ends, at `at` (counts).
+/// The job of `task` ends, at `at` (counts). Out of line, as [`job_started`].
+#[inline(never)]
 pub(crate) fn job_finished(task: u8, at: u32) {
-    with(|t| t.job_finished(task, at));
+    with(|t| {
+        t.job_finished(task, at);
+        let _ = JOB_RECORDS.push(job_record::encode(task, true, at));
+    });
+}
+
+/// The oldest job record not yet taken ([`job_record`]). One context at a time may take
+/// them (the ring has one reader).
+pub fn take_job_record() -> Option<u32> {
+    JOB_RECORDS.pop()
+}
+
+/// How many job records wait on the ring (as the producer last left it).
+pub fn job_records_waiting() -> u32 {
+    JOB_RECORDS.len()
+}
+
+/// The job records made since the image started, and those a full ring dropped.
+pub fn job_records_stats() -> RingStats {
+    JOB_RECORDS.stats()
 }
 
 /// Category-2 ISR `isr` was entered, at `at` (counts).

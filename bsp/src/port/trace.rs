@@ -56,7 +56,7 @@ pub enum EventKind {
 }
 
 /// Spans the application can mark.
-pub const SPANS: usize = 13;
+pub const SPANS: usize = 14;
 
 /// The unit of every length the trace keeps: a sixteenth of a SysTick count, so that a
 /// mark's cost, measured as a mean, is taken off to a fraction of an instruction.
@@ -105,6 +105,8 @@ pub struct TaskRecord {
     /// The time from a job's first line to its last (preempting jobs included, ISRs and
     /// the trace's marks not).
     pub span: SpanRecord,
+    /// The same less the jobs that preempted it: what the job executed itself.
+    pub own: SpanRecord,
 }
 
 /// The lengths of one kind of span, in sixteenths of a SysTick count ([`PER_COUNT`]).
@@ -174,6 +176,8 @@ pub struct Trace {
     isr_counts: u32,
     /// Sixteenths of a count that the marks made so far cost (wrapping).
     marks: u32,
+    /// Sixteenths of a count that the jobs ended so far executed themselves (wrapping).
+    jobs_own: u32,
 }
 
 /// Where a span or job started: its time stamp (counts), and the ISRs' and the marks'
@@ -183,12 +187,14 @@ struct Open {
     at: u32,
     isr_counts: u32,
     marks: u32,
+    jobs_own: u32,
 }
 
 const NOT_OPEN: Open = Open {
     at: 0,
     isr_counts: 0,
     marks: 0,
+    jobs_own: 0,
 };
 
 /// An unused slot: all zero bits, so the trace starts in `.bss` (no flash image).
@@ -205,6 +211,7 @@ impl Trace {
                 jobs: 0,
                 preempted: 0,
                 span: SpanRecord::EMPTY,
+                own: SpanRecord::EMPTY,
             }; MAX_TASKS],
             preemptions: [[0; MAX_TASKS]; MAX_TASKS],
             isr_over: [[0; MAX_TASKS + 1]; MAX_ISRS],
@@ -228,6 +235,7 @@ impl Trace {
             isr_spans: 0,
             isr_counts: 0,
             marks: 0,
+            jobs_own: 0,
         }
     }
 
@@ -239,6 +247,7 @@ impl Trace {
             at,
             isr_counts: self.isr_counts,
             marks: self.marks,
+            jobs_own: self.jobs_own,
         }
     }
 
@@ -289,8 +298,14 @@ impl Trace {
             self.depth -= 1;
             let open = self.stack.get(self.depth).map(|&(_, open)| open);
             let length = open.map_or(0, |open| self.net(open, at_us));
+            // What the jobs that ended inside it executed themselves (theirs nested in
+            // turn are in their own figures once).
+            let preempting = open.map_or(0, |open| self.jobs_own.wrapping_sub(open.jobs_own));
+            let own = length.saturating_sub(preempting);
+            self.jobs_own = self.jobs_own.wrapping_add(own);
             if let Some(r) = self.tasks.get_mut(usize::from(task)) {
                 r.span.add(length);
+                r.own.add(own);
             }
         }
         self.marks = self.marks.wrapping_add(self.costs.job_end);
@@ -391,32 +406,50 @@ impl Trace {
         self.depth = 0;
         self.isr_counts = 0;
         self.marks = 0;
+        self.jobs_own = 0;
         self.costs = costs;
     }
 }
 
-/// The record of job starts a measuring image writes for the evaluation (`cargo xtask
-/// eval`, the paper's Table 1): one 32-bit word per job start, the task's slot in the top
-/// four bits and the start's time stamp (counts since the OS started) in the low
-/// [`start_record::TIME_BITS`]. The image writes the words little-endian to a host file;
-/// [`start_record::Unwrapper`] gives the times back in full.
-pub mod start_record {
+/// The record of job starts and ends a measuring image writes for the evaluation (`cargo
+/// xtask eval`: the paper's Table 1 from the starts, the measured response times from
+/// both): one 32-bit word per start or end, the task's slot in the top four bits, whether
+/// it is an end in the next, and the time stamp (counts since the OS started) in the low
+/// [`job_record::TIME_BITS`]. The image writes the words little-endian to a host file;
+/// [`job_record::Unwrapper`] gives the times back in full.
+pub mod job_record {
     use super::MAX_TASKS;
 
     /// Bits of the time stamp a record keeps: at the Cortex-M port's 25 MHz SysTick they
-    /// wrap after 10.7 s, and every periodic task starts a job at least every 40 ms, so
-    /// two records in a row are never half that far apart ([`Unwrapper`]).
-    pub const TIME_BITS: u32 = 28;
+    /// wrap after 5.4 s, and every periodic task starts a job at least every 40 ms, so two
+    /// records in a row are never half that far apart ([`Unwrapper`]).
+    pub const TIME_BITS: u32 = 27;
     /// The time stamp's bits.
     pub const TIME_MASK: u32 = (1 << TIME_BITS) - 1;
+    /// The bit that marks a job's end.
+    pub const END: u32 = 1 << TIME_BITS;
+    /// Where the task's slot starts.
+    const TASK_SHIFT: u32 = TIME_BITS + 1;
 
-    // Every task slot fits in the four bits above the time stamp.
-    const _: () = assert!(MAX_TASKS <= 1 << (32 - TIME_BITS));
+    // Every task slot fits in the bits above the end bit.
+    const _: () = assert!(MAX_TASKS <= 1 << (32 - TASK_SHIFT));
 
-    /// The record of a job of task slot `task` that started at `at` (counts).
+    /// The record of a job of task slot `task` that started (or, if `end`, ended) at `at`
+    /// (counts).
     #[inline(always)]
-    pub const fn encode(task: u8, at: u32) -> u32 {
-        (task as u32) << TIME_BITS | at & TIME_MASK
+    pub const fn encode(task: u8, end: bool, at: u32) -> u32 {
+        (task as u32) << TASK_SHIFT | if end { END } else { 0 } | at & TIME_MASK
+    }
+
+    /// One record read back.
+    #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+    pub struct JobEdge {
+        /// The task's slot.
+        pub task: u8,
+        /// Whether the job ended here (else it started).
+        pub end: bool,
+        /// The time stamp in full: counts since the OS started.
+        pub at: u64,
     }
 
     /// Reads records in the order they were written, each time stamp unwrapped against
@@ -425,7 +458,7 @@ pub mod start_record {
     /// mark reads the time before it takes the lock that puts the record on the ring, so
     /// an interrupt between the two lets a later job's record in first): a step of half
     /// the range or more is read as backwards. Ahead, two records in a row must be less
-    /// than half the range apart (5.4 s at 25 MHz).
+    /// than half the range apart (2.7 s at 25 MHz).
     #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
     pub struct Unwrapper {
         last: Option<u64>,
@@ -440,9 +473,9 @@ pub mod start_record {
             Self { last: None }
         }
 
-        /// The next record: its task slot and its time stamp in full (a step back before
-        /// the first record's time is read as that time).
-        pub fn next(&mut self, word: u32) -> (u8, u64) {
+        /// The next record, its time stamp in full (a step back before the first record's
+        /// time is read as that time).
+        pub fn next(&mut self, word: u32) -> JobEdge {
             let low = word & TIME_MASK;
             let at = match self.last {
                 None => u64::from(low),
@@ -456,22 +489,32 @@ pub mod start_record {
                 }
             };
             self.last = Some(at);
-            ((word >> TIME_BITS) as u8, at)
+            JobEdge {
+                task: (word >> TASK_SHIFT) as u8,
+                end: word & END != 0,
+                at,
+            }
         }
     }
 
-    /// The contract: records of job starts at times `first`, then each `steps` later (a
-    /// step of either sign, less than [`HALF`] long; a step back that would go before
-    /// `first` is taken ahead), read back give every task and time in full, counted from
-    /// `first`'s low bits.
-    pub fn round_trip(first: u32, starts: &[(u8, i32)]) -> bool {
+    /// The contract: records of job starts and ends at times `first`, then each `steps`
+    /// later (a step of either sign, less than [`HALF`] long; a step back that would go
+    /// before `first` is taken ahead), read back give every task, edge and time in full,
+    /// counted from `first`'s low bits.
+    pub fn round_trip(first: u32, edges: &[(u8, bool, i32)]) -> bool {
         let mut reader = Unwrapper::new();
-        let (task0, at0) = reader.next(encode(0, first));
-        if task0 != 0 || at0 != u64::from(first & TIME_MASK) {
+        let first_edge = reader.next(encode(0, false, first));
+        if first_edge
+            != (JobEdge {
+                task: 0,
+                end: false,
+                at: u64::from(first & TIME_MASK),
+            })
+        {
             return false;
         }
-        let (mut at, mut expected) = (first, at0);
-        starts.iter().all(|&(task, step)| {
+        let (mut at, mut expected) = (first, first_edge.at);
+        edges.iter().all(|&(task, end, step)| {
             let task = task % MAX_TASKS as u8;
             let mut step = i64::from(step) % i64::from(HALF);
             if i64::try_from(expected).map_or(true, |e| e + step < 0) {
@@ -479,7 +522,12 @@ pub mod start_record {
             }
             at = at.wrapping_add(step as u32);
             expected = expected.wrapping_add(step as u64);
-            reader.next(encode(task, at)) == (task, expected)
+            reader.next(encode(task, end, at))
+                == JobEdge {
+                    task,
+                    end,
+                    at: expected,
+                }
         })
     }
 }

@@ -91,6 +91,7 @@ mod hooks;
 mod irq;
 mod kernel;
 mod queue;
+pub mod rta;
 pub mod spec;
 pub mod steps;
 

@@ -7,7 +7,7 @@
 use core::sync::atomic::{AtomicBool, AtomicU32};
 
 use cw_bsp::mps2::{self, FatalEnd, Led};
-use cw_bsp::port::Slot;
+use cw_bsp::port::{Slot, TaskLocal};
 use cw_core::sonar::SonarConfig;
 use cw_firmware::board::{BoardParts, Leds, ModeInputs, Stalls};
 use cw_firmware::config;
@@ -15,9 +15,11 @@ use cw_firmware::ecu::Ecu;
 use cw_firmware::mps2::{
     load, ImageScenario, ModeLine, Mps2App, Mps2Board, Mps2PortDriver, Mps2Sensor, ScenarioInput,
 };
+use cw_firmware::stack_probe::Stack;
 
 static APP: Slot<Mps2App> = Slot::new();
 static SCENARIO: Slot<ImageScenario> = Slot::new();
+static PROBES: Slot<Stack> = Slot::new();
 
 #[cortex_m_rt::entry]
 fn main() -> ! {
@@ -53,20 +55,30 @@ fn main() -> ! {
         },
     };
     let ecu = Ecu::new(cw_bsp::cortex_m::port(kernel), parts, SonarConfig::HC_SR04);
+    let probes = probes();
     let Some(app) = APP.init(Mps2App {
         ecu,
         end_ms,
         scenario,
         uart_sensor,
-        job_starts: start.job_starts,
-        starts_written: AtomicU32::new(0),
-        starts_lost: AtomicU32::new(0),
-        taking_starts: AtomicBool::new(false),
-        starts_in_flight: AtomicU32::new(0),
+        job_records: start.job_records,
+        records_written: AtomicU32::new(0),
+        records_lost: AtomicU32::new(0),
+        taking_records: AtomicBool::new(false),
+        records_in_flight: AtomicU32::new(0),
+        probes: TaskLocal::new(probes),
     }) else {
         mps2::fatal("started twice")
     };
     app.ecu.init();
     let app: &'static Mps2App = app;
     cw_bsp::cortex_m::start(app, app.ecu.port())
+}
+
+/// The layer probes' stack (the paper's Figure 10), measured before the OS starts, in its
+/// static. Never inlined: the stack is built in this function's frame, which is gone
+/// before `main`'s stack pointer becomes the main stack's top at the OS's start.
+#[inline(never)]
+fn probes() -> Option<&'static mut Stack> {
+    PROBES.init(Stack::started().ok()?)
 }

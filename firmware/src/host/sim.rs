@@ -13,7 +13,7 @@ use cw_bsp::host::{
 use cw_core::can::CanFrame;
 use cw_core::os::TaskId;
 use cw_core::sonar::{Echo, SonarConfig};
-use cw_core::warning::{Measurement, WarningLevel};
+use cw_core::warning::{Measurement, Thresholds, WarningLevel};
 
 use super::scenario::Scenario;
 use crate::board::{
@@ -74,6 +74,8 @@ struct SonarState {
     seen_edges: usize,
     /// Captures answered with no trigger pulse before them.
     untriggered: u32,
+    /// When each capture answered with an echo, µs (for the end-to-end latencies).
+    echoes_us: Vec<u64>,
 }
 
 /// The HC-SR04 on the board's Gpt capture: it answers a capture only for a trigger pulse
@@ -81,6 +83,7 @@ struct SonarState {
 pub struct HostSonar {
     trigger: SimPin,
     state: Rc<RefCell<SonarState>>,
+    clock: VirtualClock,
 }
 
 impl HostSonar {
@@ -107,7 +110,10 @@ impl PulseCapture for HostSonar {
         }
         let distance = state.true_distance_mm;
         match state.sensor.measure(distance) {
-            Echo::Pulse { width_us } if width_us <= timeout_us => Some(width_us),
+            Echo::Pulse { width_us } if width_us <= timeout_us => {
+                state.echoes_us.push(self.clock.now_us());
+                Some(width_us)
+            }
             _ => None,
         }
     }
@@ -180,6 +186,31 @@ impl std::fmt::Display for SimulationError {
 
 impl std::error::Error for SimulationError {}
 
+/// End-to-end latencies of a run, µs of virtual time (the evaluation's, `cargo xtask
+/// eval`).
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct EndToEnd {
+    /// For each echo the sensor gave: when the sonar job captured it (the echo's end, as
+    /// the capture sees it), and how long until the distance frame that carries it ended
+    /// on the bus (an echo whose frame did not leave before the next echo is left out).
+    pub echo_to_frame: Vec<(u64, u64)>,
+    /// Each threshold crossing and its latency to the LEDs; `None` where the scenario
+    /// sends the ECU frames (they may change the thresholds).
+    pub crossing_to_led: Option<Vec<Crossing>>,
+}
+
+/// The obstacle's true distance crossed a threshold.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Crossing {
+    /// When, µs (the first millisecond at the new level).
+    pub at_us: u64,
+    /// The level it entered.
+    pub level: WarningLevel,
+    /// How long until the LEDs showed that level (0: they already did), `None` if they had
+    /// not by the run's end.
+    pub latency_us: Option<u64>,
+}
+
 /// The ECU, its board, the bus with a PC on it, and the scenario.
 pub struct Simulation {
     scenario: Scenario,
@@ -224,6 +255,7 @@ impl Simulation {
             true_distance_mm: scenario.distance_at(0),
             seen_edges: 0,
             untriggered: 0,
+            echoes_us: Vec::new(),
         }));
         let port_inits = Rc::new(Cell::new(0));
         let stalls = Stalls::of(&scenario, config::OS.tasks()).map_err(|name| {
@@ -256,6 +288,7 @@ impl Simulation {
                 capture: HostSonar {
                     trigger: trigger.clone(),
                     state: sonar.clone(),
+                    clock: clock.clone(),
                 },
             },
         };
@@ -376,6 +409,7 @@ impl Simulation {
         let mut sonar = self.board.sonar.borrow_mut();
         self.board.trigger.forget_changes(sonar.seen_edges);
         sonar.seen_edges = 0;
+        sonar.echoes_us = Vec::new();
         drop(sonar);
         drop(self.pc.take_received());
     }
@@ -506,6 +540,97 @@ impl Simulation {
                 yellow: self.board.yellow.is_high_now(),
             });
         }
+    }
+
+    /// The run's end-to-end latencies ([`EndToEnd`]), in virtual time. The crossings are
+    /// of the paper's thresholds, [`Thresholds::PAPER`]: `None` where the scenario sends
+    /// the ECU frames (they may set other thresholds).
+    pub fn end_to_end(&self) -> EndToEnd {
+        let ecu_frames: Vec<u64> = self
+            .frames
+            .iter()
+            .filter(|r| r.frame.can_id() == config::DISTANCE_FRAME_ID)
+            .map(|r| r.time_us)
+            .collect();
+        let echoes = self.board.sonar.borrow().echoes_us.clone();
+        let echo_to_frame = echoes
+            .iter()
+            .enumerate()
+            .filter_map(|(i, &at)| {
+                let next_echo = echoes.get(i + 1).copied().unwrap_or(u64::MAX);
+                let k = ecu_frames.partition_point(|&f| f < at);
+                let frame = *ecu_frames.get(k)?;
+                (frame < next_echo).then_some((at, frame - at))
+            })
+            .collect();
+        let crossing_to_led = self
+            .scenario
+            .frames
+            .is_empty()
+            .then(|| self.crossings_to_leds());
+        EndToEnd {
+            echo_to_frame,
+            crossing_to_led,
+        }
+    }
+
+    /// Each time the scenario's true distance crosses a threshold of [`Thresholds::PAPER`]
+    /// (from one millisecond to the next, up to now), and how long after it the LEDs first
+    /// showed the level it entered (red alone, yellow alone, both dark).
+    fn crossings_to_leds(&self) -> Vec<Crossing> {
+        let thresholds = Thresholds::PAPER;
+        let level = |t: u64| thresholds.level_for_distance(self.scenario.distance_at(t));
+        let (red, yellow) = (self.board.red.history(), self.board.yellow.history());
+        // The LEDs' levels as they changed, in time order: (µs, red, yellow).
+        let mut leds: Vec<(u64, bool, bool)> = Vec::with_capacity(red.len() + yellow.len());
+        let (mut r, mut y, mut i, mut j) = (false, false, 0, 0);
+        while i < red.len() || j < yellow.len() {
+            let next_red = red.get(i).map_or(u64::MAX, |c| c.0);
+            let next_yellow = yellow.get(j).map_or(u64::MAX, |c| c.0);
+            let at = next_red.min(next_yellow);
+            if next_red == at {
+                r = red.get(i).is_some_and(|c| c.1);
+                i += 1;
+            }
+            if next_yellow == at {
+                y = yellow.get(j).is_some_and(|c| c.1);
+                j += 1;
+            }
+            leds.push((at, r, y));
+        }
+        let shows = |l: WarningLevel, r: bool, y: bool| match l {
+            WarningLevel::Red => r && !y,
+            WarningLevel::Yellow => y && !r,
+            WarningLevel::Off => !r && !y,
+            WarningLevel::Fault => false,
+        };
+        let mut crossings = Vec::new();
+        let mut before = level(0);
+        for t in 1..=self.now_ms {
+            let now = level(t);
+            if now != before {
+                let at_us = t * 1000;
+                // The LEDs' state at the crossing, then each change after it.
+                let k = leds.partition_point(|c| c.0 <= at_us);
+                let state_then = k.checked_sub(1).and_then(|k| leds.get(k));
+                let shown = if state_then.is_some_and(|&(_, r, y)| shows(now, r, y)) {
+                    Some(0)
+                } else {
+                    leds.get(k..)
+                        .unwrap_or(&[])
+                        .iter()
+                        .find(|&&(_, r, y)| shows(now, r, y))
+                        .map(|c| c.0 - at_us)
+                };
+                crossings.push(Crossing {
+                    at_us,
+                    level: now,
+                    latency_us: shown,
+                });
+            }
+            before = now;
+        }
+        crossings
     }
 
     /// Mode requests the ECU's RTE queue had no room for.

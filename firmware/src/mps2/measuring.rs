@@ -25,11 +25,11 @@
 //!
 //! For the evaluation (`cargo xtask eval`, the paper's Table 1), `--duration-ms N` runs
 //! the scenario for N ms instead of its own length (its last position held), and
-//! `--job-starts PATH` has the idle loop write every job's start to the host file PATH
-//! as it goes (`cw_bsp::cortex_m::trace::start_record`: the task's slot and the start's
-//! SysTick count in one little-endian word). The idle loop takes the starts off the
-//! trace's ring in every run, written or not, so that the job-start mark takes the same
-//! path in every run as in its calibration.
+//! `--job-records PATH` has the idle loop write every job's start and end to the host file
+//! PATH as it goes (`cw_bsp::cortex_m::trace::job_record`: the task's slot, start or end,
+//! and the SysTick count in one little-endian word). The idle loop takes the records off
+//! the trace's ring in every run, written or not, so that the job marks take the same
+//! path in every run as in their calibration.
 
 use core::sync::atomic::{AtomicBool, AtomicU32, Ordering};
 
@@ -37,7 +37,7 @@ use cw_bsp::cortex_m::{now_ms, App, CortexMPort};
 use cw_bsp::mps2::semihosting::HostFile;
 use cw_bsp::mps2::{self, CoreDelay, Led, SensorUart, SlcanCan, Unconnected};
 use cw_bsp::port::preempt::PortFault;
-use cw_bsp::port::Port;
+use cw_bsp::port::{Port, TaskLocal};
 use cw_core::os::TaskId;
 use cw_core::scenario::Scenario;
 use cw_core::sonar::model::{EchoModel, Noise};
@@ -51,6 +51,8 @@ use super::{
 use crate::board::{Board, DistanceSensor, EchoSensor, PulseCapture, SerialSensor, Stalls};
 use crate::config::{self, Kernel};
 use crate::ecu::{span, Ecu};
+use crate::schedulability;
+use crate::stack_probe::Stack;
 
 /// The mps2-an386 board's drivers.
 pub struct Mps2Board;
@@ -150,8 +152,8 @@ pub struct Start {
     pub seed: u64,
     /// How long the run lasts (`--duration-ms N`), else the scenario's own length.
     pub duration_ms: Option<u64>,
-    /// The host file the job starts go to (`--job-starts PATH`).
-    pub job_starts: Option<HostFile>,
+    /// The host file the job records go to (`--job-records PATH`).
+    pub job_records: Option<HostFile>,
 }
 
 /// The run the command line asks for: the scenario file named by `--scenario PATH`, read
@@ -197,16 +199,16 @@ pub fn load() -> Start {
             mps2::exit(false)
         }
     };
-    let job_starts = match option("--job-starts") {
+    let job_records = match option("--job-records") {
         None => None,
         Some(path) => match HostFile::create(path) {
             Ok(file) => {
-                defmt::println!("cw-qemu: job starts to {}", path);
+                defmt::println!("cw-qemu: job records to {}", path);
                 Some(file)
             }
             Err(e) => {
                 mps2::leds_safe();
-                defmt::println!("FATAL: job starts {}: {}", path, defmt::Display2Format(&e));
+                defmt::println!("FATAL: job records {}: {}", path, defmt::Display2Format(&e));
                 mps2::exit(false)
             }
         },
@@ -245,7 +247,7 @@ pub fn load() -> Start {
                 uart_sensor,
                 seed,
                 duration_ms,
-                job_starts,
+                job_records,
             }
         }
         Err(e) => {
@@ -348,17 +350,21 @@ pub struct Mps2App {
     pub scenario: &'static ImageScenario,
     /// The sensor is the UART ranging module.
     pub uart_sensor: bool,
-    /// Where the job starts go (`--job-starts`), else nowhere.
-    pub job_starts: Option<HostFile>,
-    /// Job starts written to [`Mps2App::job_starts`].
-    pub starts_written: AtomicU32,
-    /// Job starts the host failed to write.
-    pub starts_lost: AtomicU32,
-    /// A context is taking job starts off the ring (the ring has one reader: a task that
+    /// Where the job records go (`--job-records`), else nowhere.
+    pub job_records: Option<HostFile>,
+    /// Job records written to [`Mps2App::job_records`].
+    pub records_written: AtomicU32,
+    /// Job records the host failed to write.
+    pub records_lost: AtomicU32,
+    /// A context is taking job records off the ring (the ring has one reader: a task that
     /// ends the run while the idle loop was taking them finds this set).
-    pub taking_starts: AtomicBool,
-    /// Job starts taken off the ring and not yet written.
-    pub starts_in_flight: AtomicU32,
+    pub taking_records: AtomicBool,
+    /// Job records taken off the ring and not yet written.
+    pub records_in_flight: AtomicU32,
+    /// The communication stack the layer probes run on (the paper's Figure 10), in a
+    /// static: built on the main stack before the OS (`Stack::started`), measured once
+    /// before the OS starts.
+    pub probes: TaskLocal<Option<&'static mut Stack>>,
 }
 
 impl App for Mps2App {
@@ -372,6 +378,11 @@ impl App for Mps2App {
         mps2::start_measuring_clock();
         calibrate(self.ecu.port());
         measure_flexcan(self.ecu.port());
+        let _ = self.probes.with(|probes| {
+            if let Some(stack) = probes.as_deref_mut() {
+                measure_stack(self.ecu.port(), stack);
+            }
+        });
         mps2::start_tick(isr_priority(config::SYSTICK_ISR));
         cw_bsp::cortex_m::trace::set_isr_spans(span::ISR_SPANS);
         start_os_with_devices(&self.ecu, self.uart_sensor);
@@ -382,7 +393,7 @@ impl App for Mps2App {
     }
 
     fn idle(&self) {
-        let _ = self.take_job_starts();
+        let _ = self.take_job_records();
         report_supervision("cw-qemu", &self.ecu);
         if now_ms() < self.end_ms {
             return;
@@ -440,23 +451,23 @@ impl App for Mps2App {
 }
 
 impl Mps2App {
-    /// Takes the job starts off the trace's ring ([`cw_bsp::cortex_m::trace::take_start`])
+    /// Takes the job records off the trace's ring ([`cw_bsp::cortex_m::trace::take_job_record`])
     /// and writes them to the host file, if the run names one, 16 at a time: in the idle
     /// loop, without an interrupt lock (the ring's producer preempts it freely), and at
     /// the run's end. A semihosting call is one instruction of the run's virtual time.
     /// The ring has one reader at a time: `false` where another context was taking them
     /// (a task that ends the run while the idle loop was in here), nothing done.
     #[inline(never)]
-    fn take_job_starts(&self) -> bool {
-        use cw_bsp::cortex_m::trace::take_start;
-        if self.taking_starts.swap(true, Ordering::Acquire) {
+    fn take_job_records(&self) -> bool {
+        use cw_bsp::cortex_m::trace::take_job_record;
+        if self.taking_records.swap(true, Ordering::Acquire) {
             return false;
         }
         let mut bytes = [0u8; 64];
         loop {
             let mut len = 0;
             for chunk in bytes.chunks_exact_mut(4) {
-                let Some(word) = take_start() else { break };
+                let Some(word) = take_job_record() else { break };
                 chunk.copy_from_slice(&word.to_le_bytes());
                 len += 4;
             }
@@ -464,57 +475,57 @@ impl Mps2App {
                 break;
             };
             let count = (len / 4) as u32;
-            self.starts_in_flight.store(count, Ordering::Relaxed);
-            match &self.job_starts {
+            self.records_in_flight.store(count, Ordering::Relaxed);
+            match &self.job_records {
                 Some(file) if file.write(taken).is_ok() => {
-                    self.starts_written.fetch_add(count, Ordering::Relaxed);
+                    self.records_written.fetch_add(count, Ordering::Relaxed);
                 }
                 Some(_) => {
-                    self.starts_lost.fetch_add(count, Ordering::Relaxed);
+                    self.records_lost.fetch_add(count, Ordering::Relaxed);
                 }
                 None => {}
             }
-            self.starts_in_flight.store(0, Ordering::Relaxed);
+            self.records_in_flight.store(0, Ordering::Relaxed);
         }
-        self.taking_starts.store(false, Ordering::Release);
+        self.taking_records.store(false, Ordering::Release);
         true
     }
 
-    /// The job starts' report, where the run records them: the periodic tasks (slot,
+    /// The job records' report, where the run writes them: the periodic tasks (slot,
     /// name, period), the time base, and what the record holds and lost.
-    fn report_job_starts(&self) {
-        if !self.take_job_starts() {
-            // The run ends in a task that preempted the idle loop while it took starts
+    fn report_job_records(&self) {
+        if !self.take_job_records() {
+            // The run ends in a task that preempted the idle loop while it took records
             // off the ring: those it held, and those still on the ring, are not written.
-            let held = self.starts_in_flight.load(Ordering::Relaxed);
-            let left = cw_bsp::cortex_m::trace::starts_waiting();
-            self.starts_lost
+            let held = self.records_in_flight.load(Ordering::Relaxed);
+            let left = cw_bsp::cortex_m::trace::job_records_waiting();
+            self.records_lost
                 .fetch_add(held.saturating_add(left), Ordering::Relaxed);
         }
-        if self.job_starts.is_none() {
+        if self.job_records.is_none() {
             return;
         }
         let counts_per_ms = cw_bsp::cortex_m::trace::read(|t| t.counts_per_ms);
         defmt::println!(
-            "cw-qemu: job starts time base {} counts per ms",
+            "cw-qemu: job records time base {} counts per ms",
             counts_per_ms
         );
         for (slot, &period) in config::PERIOD_MS.iter().enumerate() {
             if period > 0 {
                 defmt::println!(
-                    "cw-qemu: job starts periodic {} {} {} ms",
+                    "cw-qemu: job records periodic {} {} {} ms",
                     slot,
                     task_name(slot),
                     period
                 );
             }
         }
-        let ring = cw_bsp::cortex_m::trace::starts_stats();
+        let ring = cw_bsp::cortex_m::trace::job_records_stats();
         defmt::println!(
-            "cw-qemu: job starts {} dropped, {} written, {} not written",
+            "cw-qemu: job records {} dropped, {} written, {} not written",
             ring.overruns,
-            self.starts_written.load(Ordering::Relaxed),
-            self.starts_lost.load(Ordering::Relaxed)
+            self.records_written.load(Ordering::Relaxed),
+            self.records_lost.load(Ordering::Relaxed)
         );
     }
 
@@ -525,7 +536,7 @@ impl Mps2App {
         let task_stack = cw_bsp::cortex_m::basic_stack_use();
         let main_stack = cw_bsp::cortex_m::main_stack_use();
         let schedule_ok = report_trace();
-        self.report_job_starts();
+        self.report_job_records();
         let link = mps2::slcan_stats();
         defmt::println!(
             "cw-qemu: slcan received {} frames, {} commands, {} malformed lines; {} overruns, {} replies dropped",
@@ -594,6 +605,7 @@ const CALIBRATION_REPEATS: u16 = 50;
 /// cost, as the length of an empty span around it less an empty span's. The trace's
 /// event list is filled first, as it is a few ms into every run, so that the job and ISR
 /// marks take the path they take in the run (an event counted, not kept).
+#[inline(never)]
 fn calibrate(port: &CortexMPort<Kernel>) {
     use cw_bsp::cortex_m::trace::{self, MarkCosts, SpanRecord};
     let slot = TaskId(CALIBRATION_SLOT as u8);
@@ -673,6 +685,7 @@ fn calibrate(port: &CortexMPort<Kernel>) {
 /// calls, this function does what the module would: it marks the written frame sent
 /// (code `INACTIVE` and its flag), then puts a received frame into the first receive
 /// buffer (code `FULL`, identifier, data and its flag).
+#[inline(never)]
 fn measure_flexcan(port: &CortexMPort<Kernel>) {
     use cw_bsp::chip::flexcan::regs::interfaces::Writeable;
     use cw_bsp::chip::flexcan::regs::MB_CS;
@@ -721,6 +734,77 @@ fn measure_flexcan(port: &CortexMPort<Kernel>) {
     }
 }
 
+/// The task set for the response-time analysis ([`schedulability`]) with this run's
+/// longest jobs and ISRs, net of the marks, in instructions: one line per task and ISR,
+/// `rta NAME slot S released-by R priority P raises-to X period T deadline D wcet C`
+/// (`S` the task's slot, 255 for an ISR; `R` `tick` for a task its alarm activates, the
+/// name of the task whose job activates it, `event` for an ISR). `cargo xtask eval`
+/// analyses it. Out of line, after the trace's report.
+#[inline(never)]
+fn report_schedulability(measured: &schedulability::Measured) {
+    defmt::println!("cw-qemu: rta unit instructions, {} per ms", measured.per_ms);
+    for (i, l) in schedulability::loads(measured).iter().enumerate() {
+        let Some((name, task)) = schedulability::item(i) else {
+            continue;
+        };
+        let released_by = match task {
+            None => "event",
+            Some(task) => schedulability::RELEASED_BY
+                .iter()
+                .find(|(t, _)| *t == task)
+                .map_or("tick", |&(_, by)| task_name(usize::from(by.0))),
+        };
+        defmt::println!(
+            "cw-qemu: rta {} slot {} released-by {} priority {} raises-to {} period {} deadline {} wcet {}",
+            name,
+            task.map_or(u8::MAX, |t| t.0),
+            released_by,
+            l.priority,
+            l.raises_to,
+            l.period,
+            l.deadline,
+            l.wcet
+        );
+    }
+}
+
+/// Calls of each stack probe measured: each probe's path is the same on every call (its
+/// input varies only in the distance's value), and twenty keep the ten probes within
+/// about 2 ms of virtual time with interrupts off, before the watchdog's first expiry.
+const STACK_REPEATS: u32 = 20;
+
+/// Counts each probe of the communication stack's layers (the paper's Figure 10,
+/// [`crate::stack_probe`]), [`STACK_REPEATS`] times each, before the OS starts, and prints
+/// `stack probe NAME: N times, instructions mean M min A max B` per probe: the same code
+/// callgrind counts on x86-64. The probes' stack is the image's static one
+/// ([`Mps2App::probes`]): the task stack, where the start runs, has no room for it.
+#[inline(never)]
+fn measure_stack(port: &CortexMPort<Kernel>, stack: &mut Stack) {
+    use crate::stack_probe::Probe;
+    use cw_bsp::cortex_m::trace;
+    use cw_bsp::icount;
+    let inside = trace::read(|t| t.costs.span_inside);
+    let mut sink = 0u64;
+    for probe in Probe::ALL {
+        let _ = trace::take_span(span::STACK_PROBE);
+        for i in 0..STACK_REPEATS {
+            sink ^= stack.call(probe, i, |start| port.span(span::STACK_PROBE, start));
+        }
+        let r = trace::take_span(span::STACK_PROBE);
+        let own = r.sum.saturating_sub(u64::from(inside) * u64::from(r.count));
+        let scale = |c: u32| icount::instructions(u64::from(c.saturating_sub(inside)));
+        defmt::println!(
+            "cw-qemu: stack probe {}: {} times, instructions mean {} min {} max {}",
+            probe.name(),
+            r.count,
+            icount::mean_instructions(own, r.count),
+            scale(r.min),
+            scale(r.max)
+        );
+    }
+    core::hint::black_box(sink);
+}
+
 /// The name of task `t` in the configuration.
 fn task_name(t: usize) -> &'static str {
     config::OS.tasks().get(t).map_or("?", |c| c.name)
@@ -752,7 +836,8 @@ fn report_trace() -> bool {
     use cw_bsp::icount;
     report_leds();
     let isr_name = |i: usize| config::OS.isrs().get(i).map_or("?", |c| c.name);
-    trace::read(|t| {
+    let mut measured = None;
+    let ok = trace::read(|t| {
         // Under the runs' `-icount` (`cw_bsp::icount`): a SysTick count is 40 ns, an
         // instruction 32 ns. The trace took every mark's cost off every span and job
         // open around it; what a span's or job's own marks leave inside it (calibrated at
@@ -788,18 +873,36 @@ fn report_trace() -> bool {
             cost(costs.job_end),
             cost(costs.isr_entered)
         );
+        let mut task_wcet = [0u64; 6];
         for (i, r) in t.tasks.iter().enumerate().take(config::OS.tasks().len()) {
             let (mean, min, max) = instructions(&r.span, costs.job_inside);
+            let (own_mean, _, own_max) = instructions(&r.own, costs.job_inside);
+            if let Some(wcet) = task_wcet.get_mut(i) {
+                *wcet = own_max;
+            }
             defmt::println!(
-                "cw-qemu: task {} jobs {} preempted {} instructions mean {} min {} max {}",
+                "cw-qemu: task {} jobs {} preempted {} instructions mean {} min {} max {}, own mean {} max {}",
                 task_name(i),
                 r.jobs,
                 r.preempted,
                 mean,
                 min,
-                max
+                max,
+                own_mean,
+                own_max
             );
         }
+        let span_max = |id: usize| {
+            t.spans
+                .get(id)
+                .map_or(0, |r| instructions(r, costs.span_inside).2)
+        };
+        measured = Some(schedulability::Measured {
+            per_ms: 1_000_000 / icount::NS_PER_INSTRUCTION,
+            task_wcet,
+            tick_wcet: span_max(span::TICK_ALARMS_DUE).max(span_max(span::TICK_NOTHING_DUE)),
+            can_isr_wcet: span_max(span::CAN_ISR),
+        });
         let flexcan = span::FLEXCAN_NAMES
             .iter()
             .chain(&span::MORE_NAMES)
@@ -874,5 +977,11 @@ fn report_trace() -> bool {
             defmt::println!("cw-qemu: event {} {} {}", at_us, what, name);
         }
         wrong == 0 && late == 0
-    })
+    });
+    // Out of the trace's lock and its closure's frame: the analysis's own frames are
+    // deep for the task stack the report runs on.
+    if let Some(measured) = measured {
+        report_schedulability(&measured);
+    }
+    ok
 }

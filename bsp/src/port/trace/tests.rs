@@ -131,55 +131,86 @@ fn calibration_forgets_the_records_and_keeps_the_isr_spans() {
 }
 
 #[test]
-fn job_start_records_come_back_whole_across_the_time_stamps_wrap() {
-    use super::start_record::{encode, Unwrapper, TIME_MASK};
+fn job_records_come_back_whole_across_the_time_stamps_wrap() {
+    use super::job_record::{encode, JobEdge, Unwrapper, TIME_MASK};
+    let edge = |task, end, at| JobEdge { task, end, at };
     let mut reader = Unwrapper::new();
-    // The first record as it is; 4 ms later across the 28 bits' wrap; 4 ms after that
+    // The first record as it is; 4 ms later across the 27 bits' wrap; 4 ms after that
     // across the u32 counter's own wrap.
     assert_eq!(
-        reader.next(encode(5, TIME_MASK - 10)),
-        (5, u64::from(TIME_MASK) - 10)
+        reader.next(encode(5, false, TIME_MASK - 10)),
+        edge(5, false, u64::from(TIME_MASK) - 10)
     );
     let at = u64::from(TIME_MASK) + 99_990;
     assert_eq!(
-        reader.next(encode(1, TIME_MASK.wrapping_add(99_990))),
-        (1, at)
+        reader.next(encode(1, true, TIME_MASK.wrapping_add(99_990))),
+        edge(1, true, at)
     );
     // A record out of order (a later job's start put on the ring first): read as a step
-    // back, not as 10.7 s ahead.
+    // back, not as 5.4 s ahead.
     let mut reader = Unwrapper::new();
-    assert_eq!(reader.next(encode(3, 1_000)), (3, 1_000));
-    assert_eq!(reader.next(encode(4, 900)), (4, 900));
-    assert_eq!(reader.next(encode(4, 0)), (4, 0));
+    assert_eq!(reader.next(encode(3, false, 1_000)), edge(3, false, 1_000));
+    assert_eq!(reader.next(encode(4, false, 900)), edge(4, false, 900));
+    assert_eq!(reader.next(encode(4, true, 0)), edge(4, true, 0));
     // Back past the first record's time: held there.
-    assert_eq!(reader.next(encode(4, TIME_MASK - 5)), (4, 0));
+    assert_eq!(
+        reader.next(encode(4, false, TIME_MASK - 5)),
+        edge(4, false, 0)
+    );
     let mut reader = Unwrapper::new();
     let first = u32::MAX - 50;
     assert_eq!(
-        reader.next(encode(15, first)),
-        (15, u64::from(TIME_MASK) - 50)
+        reader.next(encode(15, true, first)),
+        edge(15, true, u64::from(TIME_MASK) - 50)
     );
     assert_eq!(
-        reader.next(encode(2, first.wrapping_add(100_000))),
-        (2, u64::from(TIME_MASK) - 50 + 100_000)
+        reader.next(encode(2, false, first.wrapping_add(100_000))),
+        edge(2, false, u64::from(TIME_MASK) - 50 + 100_000)
     );
 }
 
-/// Any run of job starts, at any first time and with any steps ahead or back below half
-/// the time stamp's range, reads back whole.
+/// Any run of job starts and ends, at any first time and with any steps ahead or back
+/// below half the time stamp's range, reads back whole.
 #[test]
-fn job_start_records_round_trip() {
+fn job_records_round_trip() {
     bolero::check!()
-        .with_type::<(u32, Vec<(u8, i32)>)>()
-        .for_each(|(first, starts)| assert!(super::start_record::round_trip(*first, starts)));
+        .with_type::<(u32, Vec<(u8, bool, i32)>)>()
+        .for_each(|(first, edges)| assert!(super::job_record::round_trip(*first, edges)));
 }
 
-/// Kani: two records after the first, any times and tasks.
+/// Kani: two records after the first, any times, tasks and edges.
 #[cfg(kani)]
 #[kani::proof]
 #[kani::unwind(3)]
-fn every_two_job_start_records_round_trip() {
+fn every_two_job_records_round_trip() {
     let first: u32 = kani::any();
-    let starts: [(u8, i32); 2] = kani::any();
-    assert!(super::start_record::round_trip(first, &starts));
+    let edges: [(u8, bool, i32); 2] = kani::any();
+    assert!(super::job_record::round_trip(first, &edges));
+}
+
+#[test]
+fn a_jobs_own_time_is_net_of_the_jobs_that_preempted_it_once_each() {
+    let mut t = calibrated();
+    // Task 2 from 0 to 1000; task 1 preempts it from 100 to 400; task 0 preempts task 1
+    // from 200 to 250.
+    t.job_started(2, 0);
+    t.job_started(1, 100);
+    t.job_started(0, 200);
+    t.job_finished(0, 250);
+    t.job_finished(1, 400);
+    t.job_finished(2, 1000);
+    let marks = |starts: u32, ends: u32| (6 * starts + 11 * ends) * PER_COUNT;
+    let span = |task: usize| t.tasks[task].span.sum;
+    let own = |task: usize| t.tasks[task].own.sum;
+    // Task 0: nothing nested.
+    assert_eq!(span(0), u64::from(50 * PER_COUNT));
+    assert_eq!(own(0), span(0));
+    // Task 1: 300 less task 0's two marks; its own time less task 0's too.
+    assert_eq!(span(1), u64::from(300 * PER_COUNT - marks(1, 1)));
+    assert_eq!(own(1), span(1) - own(0));
+    // Task 2: the whole, less both jobs' marks; its own time less what each executed,
+    // task 0's counted once (not again inside task 1's).
+    assert_eq!(span(2), u64::from(1000 * PER_COUNT - marks(2, 2)));
+    assert_eq!(own(2), span(2) - own(1) - own(0));
+    assert_eq!(t.tasks[2].own.max, t.tasks[2].own.min);
 }

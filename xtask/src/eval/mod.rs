@@ -1,19 +1,25 @@
 //! `cargo xtask eval`: the paper's evaluation (its section 5) measured on this ECU, written
 //! as a report a reader can check and plot: Markdown, the raw samples as CSV, SVG plots.
 //!
-//! What it measures so far: the periodicity of the periodic tasks (the paper's Table 1),
-//! with the paper's definitions: `T_period` is the time between two consecutive starts of
-//! a task's jobs, each observed at the job's first line, and `T_jitter = |T_cycle -
-//! T_period|`. Every period of a run is a sample; none is summarised where it is measured.
-//! Two settings:
-//! - the Cortex-M4 image under QEMU (`-icount shift=5`: 32 ns of virtual time per
-//!   instruction, [`cw_bsp::icount`]), which writes every job's start to a host file as it
-//!   runs (`--job-starts`, over semihosting, from its idle loop:
-//!   `cw_bsp::cortex_m::trace::start_record`);
-//! - the host simulation paced to the wall clock (`cw-ecu --realtime --job-starts`): each
-//!   millisecond of ECU time stepped at its millisecond of the monotonic clock, by
-//!   absolute-deadline sleeps, in `SCHED_FIFO` where the system permits it
-//!   ([`cw_bsp::realtime`]), each job's start read on that clock.
+//! What it measures:
+//! - the periodicity of the periodic tasks (the paper's Table 1), with the paper's
+//!   definitions: `T_period` is the time between two consecutive starts of a task's jobs,
+//!   each observed at the job's first line, and `T_jitter = |T_cycle - T_period|`. Every
+//!   period of a run is a sample; none is summarised where it is measured. Two settings:
+//!   - the Cortex-M4 image under QEMU (`-icount shift=5`: 32 ns of virtual time per
+//!     instruction, [`cw_bsp::icount`]), which writes every job's start and end to a host
+//!     file as it runs (`--job-records`, over semihosting, from its idle loop:
+//!     `cw_bsp::cortex_m::trace::job_record`);
+//!   - the host simulation paced to the wall clock (`cw-ecu --realtime --job-starts`):
+//!     each millisecond of ECU time stepped at its millisecond of the monotonic clock, by
+//!     absolute-deadline sleeps, in `SCHED_FIFO` where the system permits it
+//!     ([`cw_bsp::realtime`]), each job's start read on that clock;
+//! - schedulability ([`schedule`]): the image's response-time analysis of its own task set
+//!   with the run's longest jobs and ISRs, beside each task's worst response measured from
+//!   the same run's job records;
+//! - the communication stack's latency per layer, the paper's Figure 10 ([`stack`]): the
+//!   same probes counted on the image and by callgrind on x86-64;
+//! - end-to-end latencies ([`end_to_end`]), from the host simulation in virtual time.
 //!
 //! The book's chapter ([`BOOK`]) is this command's report from a real run
 //! (`cargo xtask eval --book`).
@@ -23,11 +29,15 @@ use std::io::{Read, Seek, SeekFrom};
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
-use cw_bsp::port::trace::start_record::Unwrapper;
+use cw_bsp::port::trace::job_record::{JobEdge, Unwrapper};
 use plotters::prelude::*;
 
 use crate::process::{root, target_dir};
 use crate::Result;
+
+mod end_to_end;
+mod schedule;
+mod stack;
 
 /// The book's chapter the report becomes with `--book`, and its plots' folder.
 const BOOK: &str = "docs/src/evaluation.md";
@@ -139,6 +149,16 @@ pub fn run(options: &Options) -> Result {
         wall: started.elapsed(),
         tasks: periodicity(&host)?,
     };
+    let end_to_end = end_to_end::run(&scenario, duration_ms, &out)?;
+    let mut schedule = schedule::parse(&run.log)?;
+    schedule.analyse(
+        &run.records,
+        run.counts_per_ms,
+        schedule::isr_marks(&run.log)?,
+    );
+    let mut stack = stack::Stack::default();
+    stack::parse_image(&run.log, &mut stack)?;
+    stack::measure_x86(&mut stack)?;
     let report = Report {
         command: command_line(options),
         scenario: scenario
@@ -147,6 +167,9 @@ pub fn run(options: &Options) -> Result {
             .display()
             .to_string(),
         settings: vec![image_setting, host_setting],
+        schedule: Some(schedule),
+        stack: Some(stack),
+        end_to_end: Some(end_to_end),
     };
     // Written first, so that a report that fails its checks can be read.
     write_report(&report, &out, "plots")?;
@@ -201,8 +224,10 @@ struct ImageRun {
     counts_per_ms: u32,
     /// The periodic tasks: slot, name, period (ms).
     periodic: Vec<(u8, String, u32)>,
-    /// Every job start, in order: task slot and time (counts since the OS started).
-    starts: Vec<(u8, u64)>,
+    /// Every job start and end, in order (times in counts since the OS started).
+    records: Vec<JobEdge>,
+    /// Its log (the report's lines).
+    log: String,
 }
 
 /// A periodic task's job starts in one setting: its name, its cycle (ms) and each start
@@ -331,10 +356,10 @@ fn host_starts(text: &str) -> Result<Vec<TaskStarts>> {
 }
 
 /// Runs the measuring image for `duration_ms` of ECU time on `scenario`, its job starts
-/// to `out/job-starts.bin`, showing the ECU time reached (read from the file as it grows)
+/// and ends to `out/job-records.bin`, showing the ECU time reached (read from the file as it grows)
 /// and the time left; returns what it measured, or an error with the image's log.
 fn run_image(image: &Path, scenario: &Path, duration_ms: u64, out: &Path) -> Result<ImageRun> {
-    let starts_file = out.join("job-starts.bin");
+    let starts_file = out.join("job-records.bin");
     let _ = std::fs::remove_file(&starts_file);
     let (scenario_arg, starts_arg) = (
         scenario.display().to_string(),
@@ -349,7 +374,7 @@ fn run_image(image: &Path, scenario: &Path, duration_ms: u64, out: &Path) -> Res
             &scenario_arg,
             "--duration-ms",
             &duration_arg,
-            "--job-starts",
+            "--job-records",
             &starts_arg,
         ],
     ))
@@ -387,25 +412,26 @@ fn run_image(image: &Path, scenario: &Path, duration_ms: u64, out: &Path) -> Res
     let facts = image_facts(&log)?;
     let bytes = std::fs::read(&starts_file)
         .map_err(|e| format!("reading {}: {e}", starts_file.display()))?;
-    let starts = decode_starts(&bytes).map_err(|e| format!("{}: {e}", starts_file.display()))?;
-    if facts.dropped != 0 || facts.lost != 0 || facts.written != starts.len() as u64 {
+    let records = decode_records(&bytes).map_err(|e| format!("{}: {e}", starts_file.display()))?;
+    if facts.dropped != 0 || facts.lost != 0 || facts.written != records.len() as u64 {
         return Err(format!(
-            "eval: the record of job starts is not whole: the image dropped {}, failed to write {}, wrote {}; the file holds {}",
+            "eval: the record of job starts and ends is not whole: the image dropped {}, failed to write {}, wrote {}; the file holds {}",
             facts.dropped,
             facts.lost,
             facts.written,
-            starts.len()
+            records.len()
         ));
     }
     println!(
-        "eval: {} job starts over {} ms of ECU time",
-        starts.len(),
+        "eval: {} job starts and ends over {} ms of ECU time",
+        records.len(),
         duration_ms
     );
     Ok(ImageRun {
         counts_per_ms: facts.counts_per_ms,
         periodic: facts.periodic,
-        starts,
+        records,
+        log,
     })
 }
 
@@ -419,10 +445,10 @@ impl ImageRun {
                 name: name.clone(),
                 cycle_ms: *cycle,
                 starts_ms: self
-                    .starts
+                    .records
                     .iter()
-                    .filter(|(s, _)| s == slot)
-                    .map(|&(_, at)| at as f64 / per_ms)
+                    .filter(|r| r.task == *slot && !r.end)
+                    .map(|r| r.at as f64 / per_ms)
                     .collect(),
             })
             .collect()
@@ -451,7 +477,7 @@ impl Follower {
             file.read_exact(&mut bytes).ok()?;
             for word in bytes.chunks_exact(4) {
                 let word = u32::from_le_bytes([word[0], word[1], word[2], word[3]]);
-                self.last = self.unwrapper.next(word).1;
+                self.last = self.unwrapper.next(word).at;
             }
             self.read = whole;
         }
@@ -459,9 +485,10 @@ impl Follower {
     }
 }
 
-/// The job starts in a file the image wrote: little-endian words, each a task slot and a
-/// time stamp ([`cw_bsp::port::trace::start_record`]), unwrapped in order.
-fn decode_starts(bytes: &[u8]) -> Result<Vec<(u8, u64)>> {
+/// The job starts and ends in a file the image wrote: little-endian words, each a task
+/// slot, start or end, and a time stamp ([`cw_bsp::port::trace::job_record`]), unwrapped
+/// in order.
+fn decode_records(bytes: &[u8]) -> Result<Vec<JobEdge>> {
     if bytes.len() % 4 != 0 {
         return Err(format!(
             "{} bytes is not a whole number of 4-byte records (the last starts at byte {})",
@@ -476,7 +503,7 @@ fn decode_starts(bytes: &[u8]) -> Result<Vec<(u8, u64)>> {
         .collect())
 }
 
-/// What the image's log says of its job starts.
+/// What the image's log says of its job records.
 #[derive(Debug, PartialEq)]
 struct ImageFacts {
     counts_per_ms: u32,
@@ -486,7 +513,7 @@ struct ImageFacts {
     lost: u64,
 }
 
-/// Reads the image's `job starts` lines (`cw-qemu: job starts time base N counts per
+/// Reads the image's `job records` lines (`cw-qemu: job records time base N counts per
 /// ms`, `... periodic SLOT NAME PERIOD ms`, `... D dropped, W written, L not written`);
 /// an error names the line that is missing or malformed.
 fn image_facts(log: &str) -> Result<ImageFacts> {
@@ -494,7 +521,7 @@ fn image_facts(log: &str) -> Result<ImageFacts> {
     let mut periodic = Vec::new();
     let mut totals = None;
     for (n, line) in log.lines().enumerate() {
-        let Some(rest) = line.strip_prefix("cw-qemu: job starts ") else {
+        let Some(rest) = line.strip_prefix("cw-qemu: job records ") else {
             continue;
         };
         let bad = || format!("the image's log, line {}: `{line}` is malformed", n + 1);
@@ -518,9 +545,9 @@ fn image_facts(log: &str) -> Result<ImageFacts> {
     }
     let counts_per_ms = counts_per_ms
         .filter(|&c| c > 0)
-        .ok_or("the image's log has no `job starts time base` line")?;
+        .ok_or("the image's log has no `job records time base` line")?;
     let (dropped, written, lost) =
-        totals.ok_or("the image's log has no `job starts ... dropped` line")?;
+        totals.ok_or("the image's log has no `job records ... dropped` line")?;
     if periodic.is_empty() {
         return Err("the image's log names no periodic task".into());
     }
@@ -606,6 +633,12 @@ struct Report {
     command: String,
     scenario: String,
     settings: Vec<Setting>,
+    /// The image's response-time analysis and the measured responses.
+    schedule: Option<schedule::Schedule>,
+    /// The stack's layers (the paper's Figure 10).
+    stack: Option<stack::Stack>,
+    /// The end-to-end latencies.
+    end_to_end: Option<end_to_end::EndToEnd>,
 }
 
 /// The report's own checks, in every setting: every periodic task present with about as
@@ -616,6 +649,15 @@ struct Report {
 /// last start's delays move it by their difference over the periods, and a job lost or
 /// gained by a whole cycle over the periods.
 fn check(report: &Report) -> Result {
+    if let Some(s) = &report.schedule {
+        schedule::check(s)?;
+    }
+    if let Some(s) = &report.stack {
+        stack::check(s)?;
+    }
+    if let Some(e) = &report.end_to_end {
+        end_to_end::check(e)?;
+    }
     for setting in &report.settings {
         for t in &setting.tasks {
             let expected = setting.ecu_ms / u64::from(t.cycle_ms);
@@ -675,9 +717,25 @@ fn write_report(report: &Report, out: &Path, plots_dir: &str) -> Result {
 
 /// Every plot of the report is there and is an SVG document.
 fn check_plots(report: &Report, dir: &Path) -> Result {
-    for setting in &report.settings {
-        for t in &setting.tasks {
-            let path = dir.join(plot_name(setting.key, &t.name));
+    let stack_plots = report
+        .stack
+        .iter()
+        .flat_map(|_| ["Transmit", "Receive"].map(stack::plot_name))
+        .chain(
+            report
+                .end_to_end
+                .iter()
+                .flat_map(|_| end_to_end::PLOTS.map(String::from)),
+        );
+    let jitter_plots = report.settings.iter().flat_map(|setting| {
+        setting
+            .tasks
+            .iter()
+            .map(|t| plot_name(setting.key, &t.name))
+    });
+    for name in jitter_plots.chain(stack_plots) {
+        {
+            let path = dir.join(name);
             let text = std::fs::read_to_string(&path)
                 .map_err(|e| format!("eval: the plot {}: {e}", path.display()))?;
             if !(text.starts_with("<svg") && text.trim_end().ends_with("</svg>")) {
@@ -693,8 +751,15 @@ fn plot_name(setting: &str, task: &str) -> String {
     format!("jitter-{setting}-{task}.svg")
 }
 
-/// One histogram per periodic task and setting: its jobs by `T_jitter`, in µs.
+/// One histogram per periodic task and setting: its jobs by `T_jitter`, in µs; the
+/// stack's layers per direction.
 fn write_plots(report: &Report, dir: &Path) -> Result {
+    if let Some(s) = &report.stack {
+        stack::write_plots(s, dir)?;
+    }
+    if let Some(e) = &report.end_to_end {
+        end_to_end::write_plots(e, dir)?;
+    }
     for setting in &report.settings {
         for t in &setting.tasks {
             let path = dir.join(plot_name(setting.key, &t.name));
@@ -705,32 +770,53 @@ fn write_plots(report: &Report, dir: &Path) -> Result {
     Ok(())
 }
 
-/// A task's jobs by `T_jitter` in one setting: 40 bars from 0 to the 99.9th percentile
-/// (a rare long stall of the host would otherwise squeeze every other job into the first
-/// bar), the last bar also counting the jobs beyond it, which the caption names.
+/// A task's jobs by `T_jitter` in one setting ([`histogram_us`]).
 fn histogram(t: &TaskPeriodicity, setting: &str, path: &Path) -> std::result::Result<(), String> {
+    let jitters: Vec<f64> = t.samples.iter().map(|s| s.2 * 1000.0).collect();
+    histogram_us(
+        &jitters,
+        &format!(
+            "{} (T_cycle {} ms), {} jobs: {setting}",
+            t.name,
+            t.cycle_ms,
+            t.samples.len() + 1
+        ),
+        "T_jitter",
+        "jobs",
+        path,
+    )
+}
+
+/// Samples (µs) as 40 bars from 0 to the 99.9th percentile (a rare long stall of the host
+/// would otherwise squeeze every other sample into the first bar), the last bar also
+/// counting the samples beyond it, which the axis's label names.
+fn histogram_us(
+    values_us: &[f64],
+    caption: &str,
+    what: &str,
+    counted: &str,
+    path: &Path,
+) -> std::result::Result<(), String> {
     const BINS: usize = 40;
-    let mut sorted: Vec<f64> = t.samples.iter().map(|s| s.2 * 1000.0).collect();
+    let mut sorted = values_us.to_vec();
     sorted.sort_by(f64::total_cmp);
     let at = (sorted.len() * 999 / 1000).min(sorted.len().saturating_sub(1));
     let top_us = sorted.get(at).copied().unwrap_or(0.0).max(1.0);
+    let max_us = sorted.last().copied().unwrap_or(0.0);
     let width = top_us / BINS as f64;
     let mut counts = [0u32; BINS];
     let mut beyond = 0u32;
-    for jitter in &sorted {
-        if *jitter > top_us {
+    for value in &sorted {
+        if *value > top_us {
             beyond += 1;
         }
-        let bin = ((jitter / width) as usize).min(BINS - 1);
+        let bin = ((value / width) as usize).min(BINS - 1);
         if let Some(c) = counts.get_mut(bin) {
             *c += 1;
         }
     }
     let tail = if beyond > 0 {
-        format!(
-            "; last bar: {beyond} beyond {top_us:.1} µs, up to {:.1}",
-            t.jitter.max * 1000.0
-        )
+        format!("; last bar: {beyond} beyond {top_us:.1} µs, up to {max_us:.1}")
     } else {
         String::new()
     };
@@ -739,15 +825,7 @@ fn histogram(t: &TaskPeriodicity, setting: &str, path: &Path) -> std::result::Re
     let e = |e: &dyn std::fmt::Display| e.to_string();
     root.fill(&WHITE).map_err(|x| e(&x))?;
     let mut chart = ChartBuilder::on(&root)
-        .caption(
-            format!(
-                "{} (T_cycle {} ms), {} jobs: {setting}",
-                t.name,
-                t.cycle_ms,
-                t.samples.len() + 1
-            ),
-            ("sans-serif", 14),
-        )
+        .caption(caption, ("sans-serif", 14))
         .margin(12)
         .x_label_area_size(40)
         .y_label_area_size(60)
@@ -755,8 +833,8 @@ fn histogram(t: &TaskPeriodicity, setting: &str, path: &Path) -> std::result::Re
         .map_err(|x| e(&x))?;
     chart
         .configure_mesh()
-        .x_desc(format!("T_jitter (µs){tail}"))
-        .y_desc("jobs")
+        .x_desc(format!("{what} (µs){tail}"))
+        .y_desc(counted)
         .draw()
         .map_err(|x| e(&x))?;
     chart
@@ -929,10 +1007,20 @@ fn markdown(report: &Report, plots_dir: &str) -> String {
         md,
         "The samples: `periods.csv` beside the report (`setting,task,cycle_ms,start_ms,\
          period_ms,jitter_ms`, one row per job after each task's first; the start on the \
-         setting's clock), the image's record itself, `job-starts.bin` (little-endian words: \
-         the task's slot in the top four bits, the start's SysTick count in the low 28), and \
+         setting's clock), the image's record itself, `job-records.bin` (little-endian words: \
+         the task's slot in the top four bits, 1 in the next for a job's end and 0 for its \
+         start, the SysTick count in the low 27), and \
          the host's, `host-realtime-starts.csv` (`task,cycle_ms,virtual_us,wall_ns`)."
     );
+    if let Some(s) = &report.schedule {
+        schedule::markdown(s, &mut md);
+    }
+    if let Some(s) = &report.stack {
+        stack::markdown(s, plots_dir, &mut md);
+    }
+    if let Some(e) = &report.end_to_end {
+        end_to_end::markdown(e, plots_dir, &mut md);
+    }
     md
 }
 
@@ -985,13 +1073,13 @@ fn qemu_version() -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use cw_bsp::port::trace::start_record::encode;
+    use cw_bsp::port::trace::job_record::encode;
 
-    const LOG: &str = "cw-qemu: job starts to /tmp/x.bin\n\
-        cw-qemu: job starts time base 25000 counts per ms\n\
-        cw-qemu: job starts periodic 1 OsLEDTask 10 ms\n\
-        cw-qemu: job starts periodic 5 OsSonarTask 40 ms\n\
-        cw-qemu: job starts 0 dropped, 7 written, 0 not written\n";
+    const LOG: &str = "cw-qemu: job records to /tmp/x.bin\n\
+        cw-qemu: job records time base 25000 counts per ms\n\
+        cw-qemu: job records periodic 1 OsLEDTask 10 ms\n\
+        cw-qemu: job records periodic 5 OsSonarTask 40 ms\n\
+        cw-qemu: job records 0 dropped, 7 written, 0 not written\n";
 
     #[test]
     fn the_image_log_gives_the_time_base_the_tasks_and_the_totals() {
@@ -1008,13 +1096,13 @@ mod tests {
     fn a_malformed_or_missing_line_is_named() {
         let bad = LOG.replace("periodic 5 OsSonarTask 40", "periodic x OsSonarTask 40");
         assert!(image_facts(&bad).unwrap_err().contains("line 4"));
-        let missing = LOG.replace("cw-qemu: job starts time base 25000 counts per ms\n", "");
+        let missing = LOG.replace("cw-qemu: job records time base 25000 counts per ms\n", "");
         assert!(image_facts(&missing).unwrap_err().contains("time base"));
     }
 
     #[test]
     fn a_file_cut_inside_a_record_is_refused_with_where() {
-        assert!(decode_starts(&[0; 9]).unwrap_err().contains("byte 8"));
+        assert!(decode_records(&[0; 9]).unwrap_err().contains("byte 8"));
     }
 
     /// Starts every 10 ms, one of them 0.1 ms late: two periods off by 0.1 ms.
@@ -1025,13 +1113,15 @@ mod tests {
         let mut bytes = Vec::new();
         for (i, at) in times.iter().enumerate() {
             let at = if i == 2 { at + per_ms / 10 } else { *at };
-            bytes.extend(encode(1, at).to_le_bytes());
-            bytes.extend(encode(2, at + 7).to_le_bytes());
+            bytes.extend(encode(1, false, at).to_le_bytes());
+            bytes.extend(encode(1, true, at + 5).to_le_bytes());
+            bytes.extend(encode(2, false, at + 7).to_le_bytes());
         }
         let run = ImageRun {
             counts_per_ms: per_ms,
             periodic: vec![(1, "OsLEDTask".into(), 10)],
-            starts: decode_starts(&bytes).unwrap(),
+            records: decode_records(&bytes).unwrap(),
+            log: String::new(),
         };
         let tasks = periodicity(&run.task_starts()).unwrap();
         let t = &tasks[0];
@@ -1073,6 +1163,9 @@ mod tests {
         Report {
             command: String::new(),
             scenario: String::new(),
+            schedule: None,
+            stack: None,
+            end_to_end: None,
             settings: vec![Setting {
                 key: "test",
                 label: "test".into(),

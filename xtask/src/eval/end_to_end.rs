@@ -1,0 +1,321 @@
+//! End-to-end latencies, from the host simulation in virtual time (`cw-ecu
+//! --end-to-end`): from each echo to the distance frame that carries it on the bus, and
+//! from each time the obstacle's true distance crosses a threshold to the LEDs showing
+//! the level it entered.
+//!
+//! The run repeats the scenario for the evaluation's duration, the k-th repetition
+//! followed by a hold of its last position for `7k mod 40 + 1` ms, so that its crossings
+//! fall at every phase of the tasks' 40 ms hyperperiod (7 and 40 share no factor) instead
+//! of the same phase each time.
+
+use std::fmt::Write as _;
+use std::path::Path;
+
+use super::Stats;
+use crate::process::target_dir;
+use crate::Result;
+
+/// The step of the hold after each repetition, ms.
+const SHIFT_MS: u64 = 7;
+
+/// The latencies, ms.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub(super) struct EndToEnd {
+    /// Echo to its frame's end on the bus.
+    pub echo_to_frame: Vec<f64>,
+    /// (the level entered, the latency to the LEDs; `None`: never shown).
+    pub crossing_to_led: Vec<(String, Option<f64>)>,
+    /// ECU time run, ms.
+    pub ecu_ms: u64,
+    /// The scenario's repetitions.
+    pub repetitions: u64,
+}
+
+/// `scenario` (hold and ramp lines only: the others have absolute times) repeated to last
+/// at least `duration_ms`, each repetition followed by a hold of its last position, the
+/// k-th `k * SHIFT_MS mod 40 + 1` ms long; and the repetitions. An error names a line that cannot be
+/// repeated.
+pub(super) fn repeated(scenario: &str, duration_ms: u64) -> Result<(String, u64)> {
+    let mut moves = Vec::new();
+    let (mut length_ms, mut last_mm) = (0u64, None);
+    for (n, line) in scenario.lines().enumerate() {
+        let text = line.split('#').next().unwrap_or("").trim();
+        if text.is_empty() {
+            continue;
+        }
+        let words: Vec<&str> = text.split_whitespace().collect();
+        let bad = || {
+            format!(
+                "the end-to-end run repeats the scenario, and only its `hold` and `ramp` lines \
+                 can be repeated: line {} is `{line}`",
+                n + 1
+            )
+        };
+        let number = |w: &str| w.parse::<u64>().map_err(|_| bad());
+        match words.as_slice() {
+            ["hold", mm, ms] => {
+                last_mm = Some(number(mm)?);
+                length_ms += number(ms)?;
+            }
+            ["ramp", _, to, ms] => {
+                last_mm = Some(number(to)?);
+                length_ms += number(ms)?;
+            }
+            _ => return Err(bad()),
+        }
+        moves.push(text.to_string());
+    }
+    let last_mm = last_mm.ok_or("the scenario has no `hold` or `ramp` line to repeat")?;
+    let mut out = String::from(
+        "# Written by `cargo xtask eval`: the scenario repeated, the k-th repetition's last \
+         position held 7k mod 40 + 1 ms more.\n",
+    );
+    let (mut total, mut k) = (0u64, 0u64);
+    while total < duration_ms {
+        for m in &moves {
+            out.push_str(m);
+            out.push('\n');
+        }
+        k += 1;
+        let shift = k * SHIFT_MS % 40 + 1;
+        let _ = writeln!(out, "hold {last_mm} {shift}");
+        total += length_ms + shift;
+    }
+    Ok((out, k))
+}
+
+/// Runs `cw-ecu` (built by the caller) in virtual time on `scenario` repeated for
+/// `duration_ms`, and reads its latencies.
+pub(super) fn run(scenario: &Path, duration_ms: u64, out: &Path) -> Result<EndToEnd> {
+    let text = std::fs::read_to_string(scenario)
+        .map_err(|e| format!("reading {}: {e}", scenario.display()))?;
+    let (text, repetitions) =
+        repeated(&text, duration_ms).map_err(|e| format!("{}: {e}", scenario.display()))?;
+    let repeated_path = out.join("end-to-end-scenario.txt");
+    std::fs::write(&repeated_path, text)
+        .map_err(|e| format!("writing {}: {e}", repeated_path.display()))?;
+    let csv = out.join("end-to-end.csv");
+    let ecu = target_dir().join("release").join("cw-ecu");
+    let mut command = std::process::Command::new(&ecu);
+    command
+        .arg("--scenario")
+        .arg(&repeated_path)
+        .arg("--duration")
+        .arg(format!("{}", duration_ms as f64 / 1000.0))
+        .arg("--end-to-end")
+        .arg(&csv)
+        .stdin(std::process::Stdio::null());
+    println!("$ {}", crate::process::shown(&command));
+    let output = command
+        .output()
+        .map_err(|e| format!("starting {}: {e}", ecu.display()))?;
+    if !output.status.success() {
+        return Err(format!(
+            "eval: cw-ecu --end-to-end failed ({}):\n{}{}",
+            output.status,
+            String::from_utf8_lossy(&output.stdout),
+            String::from_utf8_lossy(&output.stderr)
+        ));
+    }
+    let text =
+        std::fs::read_to_string(&csv).map_err(|e| format!("reading {}: {e}", csv.display()))?;
+    let mut e2e = parse(&text).map_err(|e| format!("{}: {e}", csv.display()))?;
+    e2e.ecu_ms = duration_ms;
+    e2e.repetitions = repetitions;
+    Ok(e2e)
+}
+
+/// Reads `cw-ecu --end-to-end`'s CSV; an error names the line.
+pub(super) fn parse(text: &str) -> Result<EndToEnd> {
+    let mut lines = text.lines().enumerate();
+    match lines.next() {
+        Some((_, "path,at_us,level,latency_us")) => {}
+        _ => return Err("line 1 is not the header `path,at_us,level,latency_us`".into()),
+    }
+    let mut e2e = EndToEnd::default();
+    for (n, line) in lines {
+        let bad = || {
+            format!(
+                "line {}: `{line}` is not path,at_us,level,latency_us",
+                n + 1
+            )
+        };
+        let fields: Vec<&str> = line.split(',').collect();
+        let [path, at, level, latency] = fields.as_slice() else {
+            return Err(bad());
+        };
+        at.parse::<u64>().map_err(|_| bad())?;
+        let latency_ms = match *latency {
+            "" => None,
+            l => Some(l.parse::<u64>().map_err(|_| bad())? as f64 / 1000.0),
+        };
+        match (*path, latency_ms) {
+            ("echo_to_frame", Some(ms)) if level.is_empty() => e2e.echo_to_frame.push(ms),
+            ("crossing_to_led", ms) if !level.is_empty() => {
+                e2e.crossing_to_led.push(((*level).to_string(), ms))
+            }
+            _ => return Err(bad()),
+        }
+    }
+    Ok(e2e)
+}
+
+/// The check: both paths measured, every crossing shown on the LEDs, the figures finite
+/// and in order.
+pub(super) fn check(e2e: &EndToEnd) -> Result {
+    if e2e.echo_to_frame.is_empty() {
+        return Err("eval: no echo reached the bus in the end-to-end run".into());
+    }
+    if e2e.crossing_to_led.is_empty() {
+        return Err("eval: the end-to-end run crossed no threshold".into());
+    }
+    if let Some((level, _)) = e2e.crossing_to_led.iter().find(|(_, l)| l.is_none()) {
+        return Err(format!(
+            "eval: a crossing into {level} never showed on the LEDs in the end-to-end run"
+        ));
+    }
+    for (what, samples) in [
+        ("echo to frame", e2e.echo_to_frame.clone()),
+        ("crossing to LEDs", shown(e2e)),
+    ] {
+        let s = Stats::of(&samples).ok_or_else(|| format!("eval: no {what} latency"))?;
+        let finite = s.row().iter().all(|x| x.is_finite());
+        if !finite || s.max < s.avg || s.avg < s.min || s.min < 0.0 {
+            return Err(format!(
+                "eval: the {what} latencies are inconsistent: {s:?}"
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// The crossings' latencies, ms.
+fn shown(e2e: &EndToEnd) -> Vec<f64> {
+    e2e.crossing_to_led.iter().filter_map(|(_, l)| *l).collect()
+}
+
+/// The plots' file names.
+pub(super) const PLOTS: [&str; 2] = [
+    "end-to-end-echo-to-frame.svg",
+    "end-to-end-crossing-to-led.svg",
+];
+
+/// The two histograms.
+pub(super) fn write_plots(e2e: &EndToEnd, dir: &Path) -> Result {
+    let us = |v: &[f64]| v.iter().map(|ms| ms * 1000.0).collect::<Vec<_>>();
+    for (name, samples, caption, what, counted) in [
+        (
+            PLOTS[0],
+            us(&e2e.echo_to_frame),
+            "an echo to its distance frame's end on the bus (host simulation, virtual time)",
+            "latency",
+            "echoes",
+        ),
+        (
+            PLOTS[1],
+            us(&shown(e2e)),
+            "a threshold crossed to the LEDs showing it (host simulation, virtual time)",
+            "latency",
+            "crossings",
+        ),
+    ] {
+        let path = dir.join(name);
+        super::histogram_us(&samples, caption, what, counted, &path)
+            .map_err(|e| format!("plotting {}: {e}", path.display()))?;
+    }
+    Ok(())
+}
+
+/// The report's section.
+pub(super) fn markdown(e2e: &EndToEnd, plots_dir: &str, md: &mut String) {
+    let _ = writeln!(
+        md,
+        "\n## End to end\n\n\
+         From the host simulation in virtual time (`cw-ecu --end-to-end`), {} ms of ECU time: \
+         the scenario repeated {} times, the k-th repetition's last position held 7k mod 40 \
+         + 1 ms more, so that the obstacle's moves fall at every phase of the tasks' 40 ms \
+         hyperperiod. Two paths: from each echo (its capture in `OsSonarTask`) to the \
+         end of the distance frame that carries it on the 500 kbit/s bus; and from each \
+         time the obstacle's true distance crosses the paper's 1 m or 2 m to both LEDs \
+         showing the level it entered. The host simulation's jobs take no virtual time \
+         (only the sensor's trigger pulse and the bus do): these are the latencies the \
+         schedule makes (the tasks' periods and order, the bus), without the execution \
+         times, which add a few µs on the image ([the schedulability \
+         table](#schedulability-response-time-analysis)).\n",
+        e2e.ecu_ms, e2e.repetitions
+    );
+    let _ = writeln!(
+        md,
+        "| path | samples | avg (ms) | max | min | σ |\n|---|---|---|---|---|---|"
+    );
+    let row = |md: &mut String, what: &str, samples: &[f64]| {
+        if let Some(s) = Stats::of(samples) {
+            let _ = writeln!(
+                md,
+                "| {what} | {} | {:.3} | {:.3} | {:.3} | {:.3} |",
+                samples.len(),
+                s.avg,
+                s.max,
+                s.min,
+                s.sd
+            );
+        }
+    };
+    row(md, "echo to its frame on the bus", &e2e.echo_to_frame);
+    row(md, "threshold crossed to the LEDs", &shown(e2e));
+    for level in ["Red", "Yellow", "Off"] {
+        let samples: Vec<f64> = e2e
+            .crossing_to_led
+            .iter()
+            .filter(|(l, _)| l == level)
+            .filter_map(|(_, ms)| *ms)
+            .collect();
+        row(md, &format!("... into {level}"), &samples);
+    }
+    let _ = writeln!(
+        md,
+        "\nWhy these figures: a crossing is seen at the next sonar job (every 40 ms), \
+         its level decided at the next `OsObstacleDetectionTask` job (every 20 ms) and \
+         shown at the next `OsLEDTask` job (every 10 ms), so the latency spreads over about \
+         70 ms by the phases alone; an echo's frame leaves as soon as `OsComTask` runs \
+         after the sonar job, and its latency is the bus's: arbitration and the frame's \
+         bits at 500 kbit/s. The paper gives no end-to-end figure.\n"
+    );
+    for name in PLOTS {
+        let _ = writeln!(md, "![{name}]({plots_dir}/{name})\n");
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_scenario_repeats_with_a_growing_hold_and_other_lines_are_refused() {
+        let (text, k) = repeated("# c\nhold 500 100\nramp 500 900 50 # x\n", 400).unwrap();
+        assert_eq!(k, 3);
+        let holds: Vec<&str> = text.lines().filter(|l| l.starts_with("hold 900")).collect();
+        assert_eq!(holds, ["hold 900 8", "hold 900 15", "hold 900 22"]);
+        assert_eq!(text.lines().filter(|l| l.starts_with("ramp")).count(), 3);
+        let error = repeated("hold 500 100\nnoise 5\n", 400).unwrap_err();
+        assert!(error.contains("line 2"), "{error}");
+        assert!(repeated("# only\n", 10).is_err());
+    }
+
+    #[test]
+    fn the_latencies_are_read_and_a_crossing_never_shown_fails_the_check() {
+        let text = "path,at_us,level,latency_us\n\
+            echo_to_frame,40000,,260\n\
+            crossing_to_led,3000000,Yellow,41000\n";
+        let e2e = parse(text).unwrap();
+        assert_eq!(e2e.echo_to_frame, [0.26]);
+        assert_eq!(e2e.crossing_to_led, [("Yellow".to_string(), Some(41.0))]);
+        assert_eq!(check(&e2e), Ok(()));
+        let never = parse(&text.replace(",41000", ",")).unwrap();
+        assert!(check(&never).unwrap_err().contains("never showed"));
+        assert!(parse(&text.replace(",,260", ",Red,260"))
+            .unwrap_err()
+            .contains("line 2"));
+        assert!(parse("x\n").unwrap_err().contains("line 1"));
+    }
+}
