@@ -22,9 +22,12 @@
 //! them. Those sections are not measured one by one, so each is bounded by the task's
 //! whole execution time: the analysis is an upper bound, pessimistic in its blocking.
 //! The kernel's lock (every category-2 ISR masked for one kernel call) is one more
-//! section any item may wait for, which the analysis adds with the kernel's own figure. `OsStartupTask` runs once, before any alarm; the category-1 `SensorRxIsr`
-//! serves only the UART ranging module and is left out where that sensor is not used
-//! (the measuring runs use the scenario's sensor).
+//! section any item may wait for: not in this table, the analysis adds it with a figure
+//! of the kernel's own (`cargo xtask eval`: the longest dispatch a run shows).
+//!
+//! `OsStartupTask` runs once, before any alarm; the category-1 `SensorRxIsr` serves only
+//! the UART ranging module and is left out where that sensor is not used (the measuring
+//! runs use the scenario's sensor).
 
 use cw_core::os::rta::Load;
 use cw_core::os::TaskId;
@@ -48,17 +51,14 @@ const TASKS: [TaskId; 5] = [
     config::SONAR_TASK,
 ];
 
-/// What the analysis takes from a measurement, in one unit of time. Each figure is all
-/// the CPU spends for the item in the image measured: a measuring image's marks
-/// included, since they run there too, so that the analysis bounds the responses that
-/// image shows.
+/// What the analysis takes from a measurement, in one unit of time: the measuring
+/// image's own figures, net of its measuring marks (`cargo xtask eval` analyses the
+/// measuring image itself with figures from its job records instead, marks included).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Measured {
     /// Units per ms.
     pub per_ms: u64,
-    /// Per task slot of [`config::OS`]: its longest job without what preempted it, plus
-    /// the longest dispatch (the kernel's termination of the job before and the start of
-    /// this one).
+    /// Per task slot of [`config::OS`]: its longest job without what preempted it.
     pub task_wcet: [u64; 6],
     /// `SysTickIsr`'s longest run.
     pub tick_wcet: u64,
@@ -132,28 +132,16 @@ pub fn loads(measured: &Measured) -> [Load; ITEMS] {
             .iter()
             .find(|(t, _)| *t == id)
             .map(|&(_, by)| by);
-        let period = period_of(released_by.unwrap_or(id));
-        Load {
+        Load::periodic(
             priority,
-            period,
-            jitter: 0,
+            period_of(released_by.unwrap_or(id)),
             wcet,
-            deadline: period,
-            section: wcet,
             raises_to,
-        }
+        )
     };
     let isr = |index: usize, period: u64, wcet: u64| {
         let priority = u16::from(config::OS.isr_level(index).unwrap_or(0));
-        Load {
-            priority,
-            period,
-            jitter: 0,
-            wcet,
-            deadline: period,
-            section: wcet,
-            raises_to: priority,
-        }
+        Load::periodic(priority, period, wcet, priority)
     };
     [
         task(TASKS[0]),

@@ -228,7 +228,7 @@ impl Stack {
     }
 
     /// Call `i` of `probe`: its inputs made opaque to the compiler (as the ECU's own would
-    /// be) before `around(true)`, the probe, then `around(false)`. Returns what the probe
+    /// be), then `around(true)`, the probe's function, `around(false)`. Returns what the probe
     /// read (receive probes), for the caller to keep.
     #[inline(always)]
     pub fn call(&mut self, probe: Probe, i: u32, mut around: impl FnMut(bool)) -> u64 {
@@ -245,38 +245,64 @@ impl Stack {
             return 0;
         };
         let (rx, tx, sdu) = (black_box(rx), black_box(tx), black_box(SDU));
-        around(true);
-        let read = match probe {
+        // The span brackets the probe's call alone (the choice of the probe before it),
+        // as callgrind collects inside the probe's function alone.
+        match probe {
             Probe::TxPath => {
+                around(true);
                 probe_tx_path(self, distance);
+                around(false);
                 0
             }
             Probe::TxComDown => {
+                around(true);
                 probe_tx_com_down(self, distance);
+                around(false);
                 0
             }
             Probe::TxComOnly => {
+                around(true);
                 probe_tx_com_only(self, distance);
+                around(false);
                 0
             }
             Probe::TxPdurDown => {
+                around(true);
                 probe_tx_pdur_down(self, &sdu);
+                around(false);
                 0
             }
             Probe::TxCan => {
+                around(true);
                 probe_tx_can(self, &tx);
+                around(false);
                 0
             }
-            Probe::RxPath => probe_rx_path(self, &rx),
-            Probe::RxCanif => u64::from(probe_rx_canif(self, &rx)),
+            Probe::RxPath => {
+                around(true);
+                let read = probe_rx_path(self, &rx);
+                around(false);
+                read
+            }
+            Probe::RxCanif => {
+                around(true);
+                let read = probe_rx_canif(self, &rx);
+                around(false);
+                u64::from(read)
+            }
             Probe::RxPdurCom => {
+                around(true);
                 probe_rx_pdur_com(self, rx.bytes());
+                around(false);
                 0
             }
-            Probe::RxComRead => probe_rx_com_read(self),
-        };
-        around(false);
-        read
+            Probe::RxComRead => {
+                around(true);
+                let read = probe_rx_com_read(self);
+                around(false);
+                read
+            }
+        }
     }
 }
 

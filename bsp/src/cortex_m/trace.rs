@@ -182,7 +182,7 @@ pub fn take_jobs(task: u8) -> SpanRecord {
     with(|t| t.take_jobs(task))
 }
 
-/// The marks' costs are measured ([`Trace::calibrated`]); the calibration's job starts
+/// The marks' costs are measured ([`Trace::calibrated`]); the calibration's job records
 /// are taken off the ring.
 pub fn calibrated(costs: MarkCosts) {
     with(|t| t.calibrated(costs));

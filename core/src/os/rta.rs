@@ -18,9 +18,11 @@
 //! `B_i` is the longest section a lower-priority item runs at a priority at or above
 //! `i`'s ([`Load::section`], [`Load::raises_to`]).
 //!
-//! The result is exact for independent items released together at their worst phase with
-//! deadlines within their periods (the tests compare it with a simulation of that
-//! schedule), and an upper bound otherwise. Every figure is in one unit of time the caller
+//! The result is exact for independent items released together at their worst phase (the
+//! tests compare it with a simulation of that schedule), and an upper bound with blocking
+//! and jitter, for deadlines within the periods: a response past an item's period (where a
+//! later job of the same busy period could respond later still) is reported as a miss,
+//! whatever the deadline. Every figure is in one unit of time the caller
 //! chooses; the arithmetic saturates (a response that reaches `u64::MAX` is a miss), and
 //! an item whose response would pass its deadline is reported as missing it at the first
 //! iterate past the deadline, so the iteration always ends.
@@ -38,13 +40,31 @@ pub struct Load {
     pub jitter: u64,
     /// Its longest execution, alone (without what preempts it).
     pub wcet: u64,
-    /// Its deadline, from the time its period counts from.
+    /// Its deadline, from the time its period counts from (the analysis holds it to the
+    /// period where it is longer).
     pub deadline: u64,
     /// The longest it runs at a raised priority: a resource held, the kernel's lock, all of
     /// a non-preemptive job. Zero when it never raises its priority.
     pub section: u64,
     /// The highest priority it raises to in such a section (a resource's ceiling).
     pub raises_to: u16,
+}
+
+impl Load {
+    /// An item released every `period` without jitter, its deadline its period, its whole
+    /// execution one section at `raises_to` (the bound where its sections are not
+    /// measured one by one).
+    pub const fn periodic(priority: u16, period: u64, wcet: u64, raises_to: u16) -> Self {
+        Self {
+            priority,
+            period,
+            jitter: 0,
+            wcet,
+            deadline: period,
+            section: wcet,
+            raises_to,
+        }
+    }
 }
 
 /// The analysis of one item.
@@ -115,8 +135,9 @@ pub fn response_time(set: &[Load], i: usize) -> Response {
     }
     let blocking = blocking(set, i);
     let own = me.wcet.saturating_add(blocking);
-    // The longest `w` that still meets the deadline; past it the item misses.
-    let limit = me.deadline.saturating_sub(me.jitter);
+    // The longest `w` that still meets the deadline (held to the period); past it the
+    // item misses.
+    let limit = me.deadline.min(me.period).saturating_sub(me.jitter);
     let mut w = own;
     loop {
         let next = preempting().fold(own, |sum, other| {
@@ -125,7 +146,7 @@ pub fn response_time(set: &[Load], i: usize) -> Response {
         });
         let response = me.jitter.saturating_add(next);
         // (A sum that saturated is past any deadline: the true response overflows.)
-        if next > limit || me.jitter > me.deadline || response == u64::MAX {
+        if next > limit || me.jitter > me.deadline.min(me.period) || response == u64::MAX {
             return Response::Misses {
                 at_least: response,
                 blocking,
@@ -143,9 +164,8 @@ pub fn response_time(set: &[Load], i: usize) -> Response {
 /// Sets the release jitter of every item another item's job releases, `(released,
 /// releaser)` by index, to its releaser's worst-case response time (the job may release
 /// it as late as its last line), again until no jitter changes: each depends on the
-/// others' interference. The jitters only grow; `false` (the set as it stood) where a
-/// releaser misses its deadline or the jitters have not settled after `4 * set.len()`
-/// rounds.
+/// others' interference. The jitters only grow; `false` where a releaser misses its deadline or the jitters have not settled after `4 * set.len()`
+/// rounds (the jitters then stand as the last round left them).
 pub fn settle_jitter(set: &mut [Load], released_by: &[(usize, usize)]) -> bool {
     for _ in 0..4 * set.len().max(1) {
         let mut changed = false;
@@ -181,16 +201,12 @@ mod tests {
     use super::*;
     use std::vec::Vec;
 
-    /// An independent periodic item: its deadline its period, no jitter, no section.
+    /// An independent periodic item: its deadline its period, no jitter, no section that
+    /// blocks another.
     fn periodic(priority: u16, period: u64, wcet: u64) -> Load {
         Load {
-            priority,
-            period,
-            jitter: 0,
-            wcet,
-            deadline: period,
             section: 0,
-            raises_to: 0,
+            ..Load::periodic(priority, period, wcet, 0)
         }
     }
 
@@ -325,6 +341,14 @@ mod tests {
         let mut missed = [periodic(2, 40, 3), periodic(1, 40, 50)];
         assert!(!settle_jitter(&mut missed, &[(0, 1)]));
         assert_eq!(missed[0].jitter, 0);
+    }
+
+    #[test]
+    fn a_response_past_the_period_is_a_miss_whatever_the_deadline() {
+        let mut low = periodic(1, 10, 6);
+        low.deadline = 100;
+        let set = [periodic(2, 10, 5), low];
+        assert!(!response_time(&set, 1).meets());
     }
 
     #[test]

@@ -207,7 +207,7 @@ pub struct Crossing {
     /// The level it entered.
     pub level: WarningLevel,
     /// How long until the LEDs showed that level (0: they already did), `None` if they had
-    /// not by the run's end.
+    /// not by the next crossing or the run's end.
     pub latency_us: Option<u64>,
 }
 
@@ -575,8 +575,9 @@ impl Simulation {
     }
 
     /// Each time the scenario's true distance crosses a threshold of [`Thresholds::PAPER`]
-    /// (from one millisecond to the next, up to now), and how long after it the LEDs first
-    /// showed the level it entered (red alone, yellow alone, both dark).
+    /// (from one millisecond to the next, up to now), and how long after it, and before the
+    /// next crossing, the LEDs first showed the level it entered (red alone, yellow alone,
+    /// both dark).
     fn crossings_to_leds(&self) -> Vec<Crossing> {
         let thresholds = Thresholds::PAPER;
         let level = |t: u64| thresholds.level_for_distance(self.scenario.distance_at(t));
@@ -604,13 +605,22 @@ impl Simulation {
             WarningLevel::Off => !r && !y,
             WarningLevel::Fault => false,
         };
-        let mut crossings = Vec::new();
+        let mut crossings: Vec<(u64, WarningLevel)> = Vec::new();
         let mut before = level(0);
         for t in 1..=self.now_ms {
             let now = level(t);
             if now != before {
-                let at_us = t * 1000;
-                // The LEDs' state at the crossing, then each change after it.
+                crossings.push((t * 1000, now));
+            }
+            before = now;
+        }
+        crossings
+            .iter()
+            .enumerate()
+            .map(|(i, &(at_us, now))| {
+                // The LEDs' state at the crossing, then each change after it, up to the next
+                // crossing (a level that the next crossing superseded is never shown).
+                let until = crossings.get(i + 1).map_or(u64::MAX, |c| c.0);
                 let k = leds.partition_point(|c| c.0 <= at_us);
                 let state_then = k.checked_sub(1).and_then(|k| leds.get(k));
                 let shown = if state_then.is_some_and(|&(_, r, y)| shows(now, r, y)) {
@@ -619,18 +629,17 @@ impl Simulation {
                     leds.get(k..)
                         .unwrap_or(&[])
                         .iter()
+                        .take_while(|c| c.0 < until)
                         .find(|&&(_, r, y)| shows(now, r, y))
                         .map(|c| c.0 - at_us)
                 };
-                crossings.push(Crossing {
+                Crossing {
                     at_us,
                     level: now,
                     latency_us: shown,
-                });
-            }
-            before = now;
-        }
-        crossings
+                }
+            })
+            .collect()
     }
 
     /// Mode requests the ECU's RTE queue had no room for.

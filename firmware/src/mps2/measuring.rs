@@ -769,7 +769,7 @@ fn report_schedulability(measured: &schedulability::Measured) {
 }
 
 /// Calls of each stack probe measured: each probe's path is the same on every call (its
-/// input varies only in the distance's value), and twenty keep the ten probes within
+/// input varies only in the distance's value), and twenty keep the nine probes within
 /// about 2 ms of virtual time with interrupts off, before the watchdog's first expiry.
 const STACK_REPEATS: u32 = 20;
 

@@ -3,10 +3,10 @@
 //! from each time the obstacle's true distance crosses a threshold to the LEDs showing
 //! the level it entered.
 //!
-//! The run repeats the scenario for the evaluation's duration, the k-th repetition
-//! followed by a hold of its last position for `7k mod 40 + 1` ms, so that its crossings
-//! fall at every phase of the tasks' 40 ms hyperperiod (7 and 40 share no factor) instead
-//! of the same phase each time.
+//! The run repeats the scenario for the evaluation's duration, each repetition followed
+//! by a hold of its last position for 40 to 79 ms, so that the next, the k-th, starts at
+//! `7k mod 40` ms into the tasks' 40 ms hyperperiod: its crossings fall at every phase of
+//! it (7 and 40 share no factor) instead of the same phase each time.
 
 use std::fmt::Write as _;
 use std::path::Path;
@@ -29,13 +29,21 @@ pub(super) struct EndToEnd {
     pub ecu_ms: u64,
     /// The scenario's repetitions.
     pub repetitions: u64,
+    /// The runs they were split into.
+    pub runs: usize,
 }
 
+/// Movement lines per run: the host simulation's scenarios hold at most 64
+/// (`cw_firmware::host::Scenario`), so the repetitions are split over several runs, each
+/// from power-on.
+const LINES_PER_RUN: usize = 64;
+
 /// `scenario` (hold and ramp lines only: the others have absolute times) repeated to last
-/// at least `duration_ms`, each repetition followed by a hold of its last position, the
-/// k-th `k * SHIFT_MS mod 40 + 1` ms long; and the repetitions. An error names a line that cannot be
-/// repeated.
-pub(super) fn repeated(scenario: &str, duration_ms: u64) -> Result<(String, u64)> {
+/// at least `duration_ms`, each repetition followed by a hold of its last position long
+/// enough (40 to 79 ms) that the next, the k-th, starts `k * SHIFT_MS mod 40` ms into a
+/// 40 ms period of its run, split into runs of at most [`LINES_PER_RUN`] lines (each from
+/// power-on, its first repetition at 0); and the repetitions. An error names a line that cannot be repeated.
+pub(super) fn repeated(scenario: &str, duration_ms: u64) -> Result<(Vec<String>, u64)> {
     let mut moves = Vec::new();
     let (mut length_ms, mut last_mm) = (0u64, None);
     for (n, line) in scenario.lines().enumerate() {
@@ -66,62 +74,103 @@ pub(super) fn repeated(scenario: &str, duration_ms: u64) -> Result<(String, u64)
         moves.push(text.to_string());
     }
     let last_mm = last_mm.ok_or("the scenario has no `hold` or `ramp` line to repeat")?;
-    let mut out = String::from(
-        "# Written by `cargo xtask eval`: the scenario repeated, the k-th repetition's last \
-         position held 7k mod 40 + 1 ms more.\n",
-    );
-    let (mut total, mut k) = (0u64, 0u64);
+    let per_run = LINES_PER_RUN / (moves.len() + 1);
+    if per_run == 0 {
+        return Err(format!(
+            "the scenario has {} movement lines: a repetition and its hold must fit in {LINES_PER_RUN}",
+            moves.len()
+        ));
+    }
+    let header = "# Written by `cargo xtask eval`: the scenario repeated, the k-th repetition \
+                  starting 7k mod 40 ms into a 40 ms period.\n";
+    let (mut runs, mut total, mut k) = (Vec::new(), 0u64, 0u64);
+    let mut run = String::from(header);
+    let (mut in_run, mut t_run) = (0, 0u64);
     while total < duration_ms {
         for m in &moves {
-            out.push_str(m);
-            out.push('\n');
+            run.push_str(m);
+            run.push('\n');
         }
         k += 1;
-        let shift = k * SHIFT_MS % 40 + 1;
-        let _ = writeln!(out, "hold {last_mm} {shift}");
-        total += length_ms + shift;
+        t_run += length_ms;
+        let target = k * SHIFT_MS % 40;
+        let hold = (target + 40 - t_run % 40) % 40 + 40;
+        let _ = writeln!(run, "hold {last_mm} {hold}");
+        t_run += hold;
+        total += length_ms + hold;
+        in_run += 1;
+        if in_run == per_run {
+            runs.push(std::mem::replace(&mut run, String::from(header)));
+            (in_run, t_run) = (0, 0);
+        }
     }
-    Ok((out, k))
+    if in_run > 0 {
+        runs.push(run);
+    }
+    Ok((runs, k))
 }
 
 /// Runs `cw-ecu` (built by the caller) in virtual time on `scenario` repeated for
-/// `duration_ms`, and reads its latencies.
+/// `duration_ms` (several runs, [`repeated`]), showing the runs left, and reads its
+/// latencies.
 pub(super) fn run(scenario: &Path, duration_ms: u64, out: &Path) -> Result<EndToEnd> {
     let text = std::fs::read_to_string(scenario)
         .map_err(|e| format!("reading {}: {e}", scenario.display()))?;
-    let (text, repetitions) =
+    let (runs, repetitions) =
         repeated(&text, duration_ms).map_err(|e| format!("{}: {e}", scenario.display()))?;
-    let repeated_path = out.join("end-to-end-scenario.txt");
-    std::fs::write(&repeated_path, text)
-        .map_err(|e| format!("writing {}: {e}", repeated_path.display()))?;
-    let csv = out.join("end-to-end.csv");
     let ecu = target_dir().join("release").join("cw-ecu");
-    let mut command = std::process::Command::new(&ecu);
-    command
-        .arg("--scenario")
-        .arg(&repeated_path)
-        .arg("--duration")
-        .arg(format!("{}", duration_ms as f64 / 1000.0))
-        .arg("--end-to-end")
-        .arg(&csv)
-        .stdin(std::process::Stdio::null());
-    println!("$ {}", crate::process::shown(&command));
-    let output = command
-        .output()
-        .map_err(|e| format!("starting {}: {e}", ecu.display()))?;
-    if !output.status.success() {
-        return Err(format!(
-            "eval: cw-ecu --end-to-end failed ({}):\n{}{}",
-            output.status,
-            String::from_utf8_lossy(&output.stdout),
-            String::from_utf8_lossy(&output.stderr)
-        ));
+    let bar = indicatif::ProgressBar::new(runs.len() as u64);
+    bar.set_style(
+        indicatif::ProgressStyle::with_template(
+            "eval: end to end, host simulation {bar:30} {pos}/{len} runs, about {eta} left",
+        )
+        .map_err(|e| format!("the progress bar's template: {e}"))?,
+    );
+    let mut e2e = EndToEnd::default();
+    let mut csv_all = String::from("path,at_us,level,latency_us\n");
+    for (i, text) in runs.iter().enumerate() {
+        let path = out.join(format!("end-to-end-scenario-{i}.txt"));
+        std::fs::write(&path, text).map_err(|e| format!("writing {}: {e}", path.display()))?;
+        let csv = out.join("end-to-end-run.csv");
+        let mut command = std::process::Command::new(&ecu);
+        command
+            .arg("--scenario")
+            .arg(&path)
+            .arg("--end-to-end")
+            .arg(&csv)
+            .stdin(std::process::Stdio::null());
+        if i == 0 {
+            println!(
+                "$ {}   (and {} more runs like it)",
+                crate::process::shown(&command),
+                runs.len() - 1
+            );
+        }
+        let output = command
+            .output()
+            .map_err(|e| format!("starting {}: {e}", ecu.display()))?;
+        if !output.status.success() {
+            return Err(format!(
+                "eval: cw-ecu --end-to-end failed ({}):\n{}{}",
+                output.status,
+                String::from_utf8_lossy(&output.stdout),
+                String::from_utf8_lossy(&output.stderr)
+            ));
+        }
+        let text =
+            std::fs::read_to_string(&csv).map_err(|e| format!("reading {}: {e}", csv.display()))?;
+        let part = parse(&text).map_err(|e| format!("{}: {e}", csv.display()))?;
+        csv_all.extend(text.lines().skip(1).map(|l| format!("{l}\n")));
+        e2e.echo_to_frame.extend(part.echo_to_frame);
+        e2e.crossing_to_led.extend(part.crossing_to_led);
+        bar.inc(1);
     }
-    let text =
-        std::fs::read_to_string(&csv).map_err(|e| format!("reading {}: {e}", csv.display()))?;
-    let mut e2e = parse(&text).map_err(|e| format!("{}: {e}", csv.display()))?;
+    bar.finish_and_clear();
+    let all = out.join("end-to-end.csv");
+    std::fs::write(&all, csv_all).map_err(|e| format!("writing {}: {e}", all.display()))?;
     e2e.ecu_ms = duration_ms;
     e2e.repetitions = repetitions;
+    e2e.runs = runs.len();
     Ok(e2e)
 }
 
@@ -171,7 +220,7 @@ pub(super) fn check(e2e: &EndToEnd) -> Result {
     }
     if let Some((level, _)) = e2e.crossing_to_led.iter().find(|(_, l)| l.is_none()) {
         return Err(format!(
-            "eval: a crossing into {level} never showed on the LEDs in the end-to-end run"
+            "eval: a crossing into {level} did not show on the LEDs before the next crossing or the run's end, in the end-to-end run"
         ));
     }
     for (what, samples) in [
@@ -231,10 +280,11 @@ pub(super) fn markdown(e2e: &EndToEnd, plots_dir: &str, md: &mut String) {
     let _ = writeln!(
         md,
         "\n## End to end\n\n\
-         From the host simulation in virtual time (`cw-ecu --end-to-end`), {} ms of ECU time: \
-         the scenario repeated {} times, the k-th repetition's last position held 7k mod 40 \
-         + 1 ms more, so that the obstacle's moves fall at every phase of the tasks' 40 ms \
-         hyperperiod. Two paths: from each echo (its capture in `OsSonarTask`) to the \
+         From the host simulation in virtual time (`cw-ecu --end-to-end`), about {} ms of \
+         ECU time: the scenario repeated {} times over {} runs from power-on, each \
+         repetition's last position held 40 to 79 ms more so that the k-th starts 7k mod 40 \
+         ms into the tasks' 40 ms hyperperiod: the obstacle's moves fall at every phase of \
+         it. Two paths: from each echo (its capture in `OsSonarTask`) to the \
          end of the distance frame that carries it on the 500 kbit/s bus; and from each \
          time the obstacle's true distance crosses the paper's 1 m or 2 m to both LEDs \
          showing the level it entered. The host simulation's jobs take no virtual time \
@@ -242,7 +292,7 @@ pub(super) fn markdown(e2e: &EndToEnd, plots_dir: &str, md: &mut String) {
          schedule makes (the tasks' periods and order, the bus), without the execution \
          times, which add a few µs on the image ([the schedulability \
          table](#schedulability-response-time-analysis)).\n",
-        e2e.ecu_ms, e2e.repetitions
+        e2e.ecu_ms, e2e.repetitions, e2e.runs
     );
     let _ = writeln!(
         md,
@@ -292,14 +342,36 @@ mod tests {
 
     #[test]
     fn the_scenario_repeats_with_a_growing_hold_and_other_lines_are_refused() {
-        let (text, k) = repeated("# c\nhold 500 100\nramp 500 900 50 # x\n", 400).unwrap();
-        assert_eq!(k, 3);
+        // 150 ms a repetition: held 57 ms each time, the next starts at 207 (7 into its
+        // 40 ms), then at 414 (14).
+        let (runs, k) = repeated("# c\nhold 500 100\nramp 500 900 50 # x\n", 400).unwrap();
+        assert_eq!(k, 2);
+        let text = runs.concat();
         let holds: Vec<&str> = text.lines().filter(|l| l.starts_with("hold 900")).collect();
-        assert_eq!(holds, ["hold 900 8", "hold 900 15", "hold 900 22"]);
-        assert_eq!(text.lines().filter(|l| l.starts_with("ramp")).count(), 3);
+        assert_eq!(holds, ["hold 900 57", "hold 900 57"]);
+        assert_eq!(text.lines().filter(|l| l.starts_with("ramp")).count(), 2);
         let error = repeated("hold 500 100\nnoise 5\n", 400).unwrap_err();
         assert!(error.contains("line 2"), "{error}");
         assert!(repeated("# only\n", 10).is_err());
+    }
+
+    #[test]
+    fn long_runs_are_split_within_the_simulations_64_movements() {
+        // 5 lines and a hold per repetition: 10 repetitions per run.
+        let figure7 =
+            "hold 500 3000\nhold 1000 3000\nhold 1500 3000\nhold 2000 3000\nhold 2500 3000\n";
+        let (runs, k) = repeated(figure7, 1_800_000).unwrap();
+        assert_eq!(k, 120);
+        assert_eq!(runs.len(), 12);
+        // Every phase of the 40 ms period is a repetition's start.
+        let mut phases: Vec<u64> = (1..k).map(|k| k * SHIFT_MS % 40).collect();
+        phases.sort_unstable();
+        phases.dedup();
+        assert_eq!(phases.len(), 40);
+        for run in &runs {
+            let moves = run.lines().filter(|l| !l.starts_with('#')).count();
+            assert!(moves <= LINES_PER_RUN, "{moves}");
+        }
     }
 
     #[test]
@@ -312,7 +384,7 @@ mod tests {
         assert_eq!(e2e.crossing_to_led, [("Yellow".to_string(), Some(41.0))]);
         assert_eq!(check(&e2e), Ok(()));
         let never = parse(&text.replace(",41000", ",")).unwrap();
-        assert!(check(&never).unwrap_err().contains("never showed"));
+        assert!(check(&never).unwrap_err().contains("did not show"));
         assert!(parse(&text.replace(",,260", ",Red,260"))
             .unwrap_err()
             .contains("line 2"));

@@ -155,7 +155,7 @@ pub fn run(options: &Options) -> Result {
         &run.records,
         run.counts_per_ms,
         schedule::isr_marks(&run.log)?,
-    );
+    )?;
     let mut stack = stack::Stack::default();
     stack::parse_image(&run.log, &mut stack)?;
     stack::measure_x86(&mut stack)?;
@@ -218,7 +218,7 @@ struct Setting {
     tasks: Vec<TaskPeriodicity>,
 }
 
-/// What the image's run gave: its log's facts and every job start.
+/// What the image's run gave: its log's facts and every job's start and end.
 struct ImageRun {
     /// SysTick counts per OS tick (1 ms).
     counts_per_ms: u32,
@@ -887,8 +887,8 @@ fn markdown(report: &Report, plots_dir: &str) -> String {
          **The Cortex-M4 image** runs on QEMU's mps2-an386 with `-icount shift=5`: every \
          instruction takes 32 ns of virtual time (31.25 million instructions per second) and \
          SysTick counts at 25 MHz, so a time here is the image's own instructions, one count \
-         40 ns. The image writes each job's start (the port's job-start mark, a SysTick count) \
-         to a host file as it runs, from its idle loop. The paper's MPC5748G runs at 160 MHz: \
+         40 ns. The image writes each job's start and end (the port's job marks, a SysTick \
+         count) to a host file as it runs, from its idle loop. The paper's MPC5748G runs at 160 MHz: \
          at one instruction per cycle the same instructions would take a fifth of the time (an \
          assumption, not a measurement: the e200z4's pipeline and memories differ).\n\n\
          **The host in real time** is the host simulation (`cw-ecu --realtime`, release build) \

@@ -15,9 +15,9 @@
 //! dispatch for its entry and return.
 //!
 //! A measured response runs from the job's release to its last line: for a task its alarm
-//! activates, the tick the alarm fell due on (the millisecond boundary at or before the
-//! job's start: every job here starts within its tick, which the jitter's maximum shows);
-//! for a task another task's job activates, that job's release.
+//! activates, the tick the alarm fell due on (the last multiple of its period from the
+//! OS's start, where its alarm expires, at or before the job's start); for a task another
+//! task's job activates, that job's release.
 
 use std::fmt::Write as _;
 
@@ -136,9 +136,13 @@ pub(super) fn isr_marks(log: &str) -> Result<u64> {
 }
 
 /// From the job records (times in counts, `counts_per_ms` to a millisecond, converted at
-/// `per_ms` instructions per ms): each task's longest job less the jobs that preempted
-/// it, the longest dispatch within a millisecond, and the longest time from a
-/// millisecond to the first job it released.
+/// `per_ms` instructions per ms): each task's longest job less the jobs that preempted it,
+/// the longest dispatch within a millisecond, and the longest time from a millisecond to
+/// the first job it released while the CPU was idle. `tick_released` names the tasks an
+/// alarm releases (only their jobs start at a dispatch). Records may be out of order by a
+/// little (a mark reads the time before it takes the lock that puts its record on the
+/// ring): a nested job counts only for its part inside its outer job, and a gap that comes
+/// out negative is no sample.
 pub(super) fn demands(
     records: &[JobEdge],
     counts_per_ms: u32,
@@ -147,19 +151,24 @@ pub(super) fn demands(
 ) -> (Vec<(u8, u64)>, u64, u64) {
     let cpm = u64::from(counts_per_ms.max(1));
     let to_instructions = |counts: u64| (counts * per_ms).div_ceil(cpm);
-    // Open jobs: (task, start, time of the jobs nested in it).
-    let mut open: Vec<(u8, u64, u64)> = Vec::new();
+    // Open jobs: (task, start, the jobs that ended inside it: (start, end)).
+    type Open = (u8, u64, Vec<(u64, u64)>);
+    let mut open: Vec<Open> = Vec::new();
     let mut gross: Vec<(u8, u64)> = Vec::new();
     let (mut dispatch, mut tick) = (0u64, 0u64);
     let mut previous: Option<&JobEdge> = None;
     for r in records {
         if r.end {
-            if let Some(pos) = open.iter().rposition(|&(t, _, _)| t == r.task) {
+            if let Some(pos) = open.iter().rposition(|(t, _, _)| *t == r.task) {
                 let (task, start, nested) = open.remove(pos);
-                let length = r.at.saturating_sub(start);
-                let own = length.saturating_sub(nested);
+                // Each nested job's part between this job's start and its end.
+                let inside: u64 = nested
+                    .iter()
+                    .map(|&(s, e)| e.min(r.at).saturating_sub(s.max(start)))
+                    .sum();
+                let own = r.at.saturating_sub(start).saturating_sub(inside);
                 if let Some(outer) = open.last_mut() {
-                    outer.2 += length;
+                    outer.2.push((start, r.at));
                 }
                 match gross.iter_mut().find(|(t, _)| *t == task) {
                     Some(g) => g.1 = g.1.max(own),
@@ -172,14 +181,18 @@ pub(super) fn demands(
             // starts where that job's own code put it.
             if tick_released.contains(&r.task) {
                 match previous {
-                    Some(p) if p.at >= boundary && p.end => {
-                        dispatch = dispatch.max(r.at - p.at);
+                    Some(p) if p.end && p.at >= boundary => {
+                        if let Some(gap) = r.at.checked_sub(p.at) {
+                            dispatch = dispatch.max(gap);
+                        }
                     }
-                    Some(p) if p.at < boundary => tick = tick.max(r.at - boundary),
+                    Some(p) if p.end && open.is_empty() && p.at < boundary => {
+                        tick = tick.max(r.at - boundary);
+                    }
                     _ => {}
                 }
             }
-            open.push((r.task, r.at, 0));
+            open.push((r.task, r.at, Vec::new()));
         }
         previous = Some(r);
     }
@@ -197,7 +210,12 @@ impl Schedule {
     /// The analysis with the run's figures ([`demands`]; `CanIsr` and any other ISR: its
     /// longest span, `isr_marks` and one dispatch), then each task's worst measured
     /// response.
-    pub(super) fn analyse(&mut self, records: &[JobEdge], counts_per_ms: u32, isr_marks: u64) {
+    pub(super) fn analyse(
+        &mut self,
+        records: &[JobEdge],
+        counts_per_ms: u32,
+        isr_marks: u64,
+    ) -> Result {
         let tick_released: Vec<u8> = self
             .items
             .iter()
@@ -240,14 +258,21 @@ impl Schedule {
             section: dispatch,
             raises_to: u16::MAX,
         });
-        let _ = rta::settle_jitter(&mut set, &released_by);
+        let settled = rta::settle_jitter(&mut set, &released_by);
         for (i, item) in self.items.iter_mut().enumerate() {
             item.response = rta::response_time(&set, i);
             if let Some(l) = set.get(i) {
                 item.load = *l;
             }
         }
+        if !settled && self.items.iter().all(|i| i.response.meets()) {
+            return Err(
+                "eval: the release jitters of the tasks another task releases did not settle"
+                    .into(),
+            );
+        }
         self.measure(records, counts_per_ms);
+        Ok(())
     }
 
     /// Each task's worst measured response time, from the job records (times in counts,
@@ -260,8 +285,10 @@ impl Schedule {
                 .find(|i| i.name == name)
                 .and_then(|i| i.slot)
         };
-        // Per slot: the releaser (None: its tick).
-        let releaser: Vec<(u8, Option<u8>)> = self
+        // Per slot: the releaser (None: its alarm), and its period in counts (its alarm's
+        // releases fall on the multiples of it from the OS's start: the alarms are set
+        // relative to it, their first expiry one period on).
+        let releaser: Vec<(u8, Option<u8>, u64)> = self
             .items
             .iter()
             .filter_map(|i| {
@@ -269,12 +296,13 @@ impl Schedule {
                     "tick" => None,
                     other => Some(slot_of(other)?),
                 };
-                Some((i.slot?, by))
+                let period = (i.load.period * cpm / self.per_ms).max(1);
+                Some((i.slot?, by, period))
             })
             .collect();
         let slots = 1 + releaser
             .iter()
-            .map(|&(s, _)| usize::from(s))
+            .map(|&(s, _, _)| usize::from(s))
             .max()
             .unwrap_or(0);
         let mut open: Vec<Option<u64>> = vec![None; slots];
@@ -282,12 +310,13 @@ impl Schedule {
         let mut worst: Vec<(u64, usize)> = vec![(0, 0); slots];
         for r in records {
             let s = usize::from(r.task);
-            let Some(&(_, by)) = releaser.iter().find(|&&(slot, _)| slot == r.task) else {
+            let Some(&(_, by, period)) = releaser.iter().find(|&&(slot, _, _)| slot == r.task)
+            else {
                 continue;
             };
             if !r.end {
                 let release = match by {
-                    None => Some(r.at / cpm * cpm),
+                    None => Some(r.at / period * period),
                     Some(b) => last.get(usize::from(b)).copied().flatten(),
                 };
                 if let (Some(o), Some(l)) = (open.get_mut(s), last.get_mut(s)) {
@@ -382,12 +411,13 @@ pub(super) fn markdown(s: &Schedule, md: &mut String) {
          marks included. A task's: its longest job from its first line to its last, less the \
          jobs that preempted it, plus the longest dispatch seen (a job's end to the next \
          job's start within a millisecond: {} instructions). The tick's: the longest time \
-         from a millisecond to the first job it released ({} instructions: the ISR with its \
-         alarms, and that job's dispatch). `CanIsr`'s: its longest span with its marks and \
+         from a millisecond to the first job it released with the CPU idle before it ({} \
+         instructions: the ISR with its alarms, and that job's dispatch). `CanIsr`'s: its longest span with its marks and \
          one dispatch for its entry and return. The image's own figures without the marks \
          (its jobs' and ISRs' net instructions, as the production image runs them) are in \
          the \"net\" column. A measured response runs from the release (the tick the \
-         alarm fell due on, or the activator's release) to the job's last line. Figures in \
+         alarm fell due on: the last multiple of its period, or the activator's release) to \
+         the job's last line. Figures in \
          the image's instructions ({} per ms under QEMU's `-icount shift=5`), times in ms of \
          that virtual clock.\n",
         s.items
@@ -464,7 +494,8 @@ mod tests {
 
     /// 25,000 counts per ms (a count is 40 ns, 1.25 instructions at 31,250 per ms): the
     /// sonar (5) released at 40 ms, the LED task (1) preempting it, the sonar's job
-    /// releasing OsComTask (4); then the LED task alone at 50 ms.
+    /// releasing OsComTask (4); then the LED task alone at 50 ms; the LED task and the
+    /// sonar at 80 ms.
     fn records() -> Vec<JobEdge> {
         let ms = 25_000;
         vec![
@@ -476,8 +507,10 @@ mod tests {
             edge(5, true, 40 * ms + 4_000),
             edge(1, false, 50 * ms + 100),
             edge(1, true, 50 * ms + 200),
-            edge(5, false, 50 * ms + 260),
-            edge(5, true, 50 * ms + 300),
+            edge(1, false, 80 * ms + 100),
+            edge(1, true, 80 * ms + 200),
+            edge(5, false, 80 * ms + 260),
+            edge(5, true, 80 * ms + 300),
         ]
     }
 
@@ -503,20 +536,22 @@ mod tests {
         let of = |t: u8| gross.iter().find(|g| g.0 == t).map(|g| g.1);
         assert_eq!(of(5), Some(2_300 * 5 / 4));
         assert_eq!(of(1), Some(200 * 5 / 4));
-        // Dispatch: the LED job's end at 50 ms + 200 to the sonar's start, 60 counts.
+        // Dispatch: the LED job's end at 80 ms + 200 to the sonar's start, 60 counts
+        // (OsComTask's start, which the sonar's job makes, is none).
         assert_eq!(dispatch, 60 * 5 / 4);
-        // The tick: 100 counts from 50 ms to the LED job's start (the first record has
-        // nothing before it to tell whether the CPU was busy).
+        // The tick: 100 counts from 50 ms (and from 80 ms) to the LED job's start, the CPU
+        // idle before (the first record has nothing before it to tell).
         assert_eq!(tick, 100 * 5 / 4);
     }
 
     #[test]
     fn responses_run_from_the_tick_or_from_the_activators_release() {
         let mut s = parse(LOG).unwrap();
-        s.analyse(&records(), 25_000, isr_marks(LOG).unwrap());
+        s.analyse(&records(), 25_000, isr_marks(LOG).unwrap())
+            .unwrap();
         let measured = |name: &str| s.items.iter().find(|i| i.name == name).unwrap().measured;
-        // The LED task: 1,200 counts after its tick at 40 ms, then 200.
-        assert_eq!(measured("OsLEDTask"), Some((1_200 * 5 / 4, 2)));
+        // The LED task: 1,200 counts after its tick at 40 ms, then 200 twice.
+        assert_eq!(measured("OsLEDTask"), Some((1_200 * 5 / 4, 3)));
         // OsComTask from the sonar's release (the 40 ms tick), not from its own start.
         assert_eq!(measured("OsComTask"), Some((3_000 * 5 / 4, 1)));
         assert_eq!(measured("OsSonarTask"), Some((4_000 * 5 / 4, 2)));
@@ -530,7 +565,8 @@ mod tests {
     #[test]
     fn a_miss_or_a_measurement_above_the_analysis_fails_naming_the_item() {
         let mut s = parse(LOG).unwrap();
-        s.analyse(&records(), 25_000, isr_marks(LOG).unwrap());
+        s.analyse(&records(), 25_000, isr_marks(LOG).unwrap())
+            .unwrap();
         assert_eq!(check(&s), Ok(()));
         let mut late = s.clone();
         late.items[2].measured = Some((u64::MAX, 3));

@@ -1,8 +1,10 @@
 //! The communication stack's latency per layer (the paper's Figure 10): the same probes
 //! (`cw_firmware::stack_probe`) counted on the Cortex-M4 image by its trace and on x86-64
-//! by callgrind, each layer's share the difference between a probe from that layer down
-//! and the probe from the next layer down (the paper's method: its Figure 9), beside the
-//! paper's totals and Arctic Core's layers counted on x86-64.
+//! by callgrind, beside the paper's totals and Arctic Core's layers counted on x86-64. A
+//! transmit layer's share is the difference between a probe from that layer down and the
+//! probe from the next layer down (the paper's method: its Figure 9); the receive layers
+//! are probed each alone (receiving runs up the stack, so no probe ends at a layer's
+//! call), and their sum is not the whole path's, which inlines them into each other.
 
 use std::fmt::Write as _;
 use std::path::Path;
