@@ -352,6 +352,19 @@ mod tests {
     }
 
     #[test]
+    fn jitter_past_the_deadline_is_a_miss_and_indices_outside_the_set_change_nothing() {
+        // (Even with nothing to execute: released after its deadline.)
+        let mut late = periodic(1, 10, 0);
+        late.jitter = 11;
+        assert!(!response_time(&[late], 0).meets());
+        let mut set = [periodic(2, 40, 3), periodic(1, 40, 10)];
+        assert_eq!(blocking(&set, 7), 0);
+        // A released item outside the set: nothing to set, the releaser analysed.
+        assert!(settle_jitter(&mut set, &[(7, 1)]));
+        assert_eq!(set.map(|l| l.jitter), [0, 0]);
+    }
+
+    #[test]
     fn an_item_without_a_period_cannot_be_analysed() {
         let set = [periodic(2, 0, 1), periodic(1, 10, 1)];
         assert_eq!(response_time(&set, 1), Response::NoPeriod);
@@ -373,15 +386,16 @@ mod tests {
 
     /// Every set of up to three items with periods 1..=6 and execution times 0..=3, at
     /// every assignment of distinct priorities given by their order: the analysis equals
-    /// the simulated schedule.
+    /// the simulated schedule. (Under Miri: the single items.)
     #[test]
     fn every_small_set_agrees_with_its_simulated_schedule() {
         let items: Vec<(u64, u64)> = (1..=6).flat_map(|t| (0..=3).map(move |c| (t, c))).collect();
         for &a in &items {
             agrees_with_the_schedule(&[periodic(1, a.0, a.1)]);
+            // (Miri, which interprets every step of the simulation, checks single items.)
+            #[cfg(not(miri))]
             for &b in &items {
                 agrees_with_the_schedule(&[periodic(2, a.0, a.1), periodic(1, b.0, b.1)]);
-                #[cfg(not(miri))]
                 for &c in &items {
                     agrees_with_the_schedule(&[
                         periodic(3, a.0, a.1),
