@@ -41,7 +41,8 @@ struct Options {
     /// permitted)
     #[arg(long)]
     realtime: bool,
-    /// Write every job's start as CSV (task,cycle_ms,virtual_us,wall_ns)
+    /// Write every job's start as CSV (task,cycle_ms,virtual_us,wall_ns), and each entry
+    /// into CanIsr (cycle 0)
     #[arg(long, value_name = "FILE")]
     job_starts: Option<String>,
     /// Write the end-to-end latencies as CSV (path,at_us,level,latency_us): each echo to
@@ -229,8 +230,15 @@ fn run_in_real_time(_: &mut Simulation, _: u64, _: bool) -> Result<String, Strin
 /// `--job-starts`: every job's start, in order, as CSV (`task,cycle_ms,virtual_us,
 /// wall_ns`): the task's name, its period (0: not periodic), the start in virtual time
 /// and, where the run was paced to the wall clock, on the monotonic clock (then from the
-/// first paced millisecond on: the start-up before it is not paced).
+/// first paced millisecond on: the start-up before it is not paced). Each entry into
+/// `CanIsr` is a row too, its cycle 0 and no wall time (the evaluation's timing model
+/// replays them, `cargo xtask eval`).
 fn write_job_starts(sim: &mut Simulation, path: &str) -> Result<(), String> {
+    let can_isr = cw_firmware::config::OS
+        .isrs()
+        .get(usize::from(cw_firmware::config::CAN_ISR.0))
+        .map_or("?", |i| i.name);
+    let mut isr_entries = sim.can_isr_entries().to_vec().into_iter().peekable();
     let port = sim.ecu().port();
     let wall = port.wall_job_starts();
     let starts: Vec<(cw_core::os::TaskId, u64, Option<u64>)> = if wall.is_empty() {
@@ -243,6 +251,9 @@ fn write_job_starts(sim: &mut Simulation, path: &str) -> Result<(), String> {
     };
     let mut text = String::from("task,cycle_ms,virtual_us,wall_ns\n");
     for (task, at_us, wall_ns) in starts {
+        while let Some(isr_us) = isr_entries.next_if(|&isr_us| isr_us <= at_us) {
+            text.push_str(&format!("{can_isr},0,{isr_us},\n"));
+        }
         let slot = usize::from(task.0);
         let name = cw_firmware::config::OS
             .tasks()
@@ -254,6 +265,9 @@ fn write_job_starts(sim: &mut Simulation, path: &str) -> Result<(), String> {
             .unwrap_or(0);
         let wall_ns = wall_ns.map(|ns| ns.to_string()).unwrap_or_default();
         text.push_str(&format!("{name},{cycle},{at_us},{wall_ns}\n"));
+    }
+    for isr_us in isr_entries {
+        text.push_str(&format!("{can_isr},0,{isr_us},\n"));
     }
     std::fs::write(path, text).map_err(|e| format!("cannot write job starts {path}: {e}"))
 }

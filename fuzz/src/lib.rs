@@ -279,6 +279,22 @@ mod targets {
             });
     }
 
+    /// Any releases of four tasks or ISRs of any priorities and limits, at any times and
+    /// costs: the OS's timing model (`cw_core::os::timeline`, which times the evaluation's
+    /// host setting) keeps its promises (`spec::replay_keeps_its_promises`).
+    #[test]
+    fn os_timeline() {
+        bolero::check!()
+            .with_type::<([(u16, u8); 4], Vec<(u32, u8, u32)>)>()
+            .for_each(|(items, releases)| {
+                let items =
+                    items.map(|(priority, limit)| cw_core::os::timeline::Item { priority, limit });
+                assert!(cw_core::os::timeline::spec::replay_keeps_its_promises(
+                    &items, releases
+                ));
+            });
+    }
+
     /// Any frame, standard or extended, of any length and payload: its stuff bits counted
     /// eight bits at a time through the tables are those its bits one by one get
     /// (`cw_core::can::timing::spec::stuffing_agrees`, the CRC-15 included).

@@ -94,6 +94,7 @@ mod queue;
 pub mod rta;
 pub mod spec;
 pub mod steps;
+pub mod timeline;
 
 pub use call::{Returned, ServiceCall};
 pub use callevel::Context;

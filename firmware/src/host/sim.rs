@@ -225,6 +225,8 @@ pub struct Simulation {
     watchdog: SimWatchdog,
     /// The watchdog's reset, µs: the run ended there.
     reset_at_us: Option<u64>,
+    /// When `CanIsr` was entered, µs.
+    can_isr_entries: Vec<u64>,
 }
 
 impl Simulation {
@@ -317,6 +319,7 @@ impl Simulation {
             frames: Vec::new(),
             watchdog,
             reset_at_us: None,
+            can_isr_entries: Vec::new(),
         };
         sim.ecu.init();
         sim.ecu.start_os();
@@ -351,6 +354,12 @@ impl Simulation {
     /// Task starts so far: (task, virtual time in us).
     pub fn task_starts(&self) -> Vec<(TaskId, u64)> {
         self.ecu.port().job_starts().clone()
+    }
+
+    /// When `CanIsr` was entered so far, µs of virtual time (the controller's events: a
+    /// frame sent, received, an error).
+    pub fn can_isr_entries(&self) -> &[u64] {
+        &self.can_isr_entries
     }
 
     /// The red LED pin (with its history).
@@ -400,6 +409,7 @@ impl Simulation {
     /// time holds constant memory. Frames not yet taken stay.
     pub fn forget_history(&mut self) {
         self.trace = Vec::new();
+        self.can_isr_entries = Vec::new();
         self.ecu.port().forget_job_starts();
         for pin in [&self.board.red, &self.board.yellow] {
             pin.forget_changes(pin.change_count());
@@ -663,7 +673,10 @@ impl Simulation {
             let next = self.ecu.port().take_interrupt(config::OS.isrs());
             match next {
                 Some(config::SYSTICK_ISR) => self.ecu.tick(),
-                Some(config::CAN_ISR) => self.ecu.can_isr(),
+                Some(config::CAN_ISR) => {
+                    self.can_isr_entries.push(self.clock.now_us());
+                    self.ecu.can_isr();
+                }
                 _ => return,
             }
         }

@@ -119,13 +119,7 @@ pub(super) fn run(scenario: &Path, duration_ms: u64, out: &Path) -> Result<EndTo
     let (runs, repetitions) =
         repeated(&text, duration_ms).map_err(|e| format!("{}: {e}", scenario.display()))?;
     let ecu = target_dir().join("release").join("cw-ecu");
-    let bar = indicatif::ProgressBar::new(runs.len() as u64);
-    bar.set_style(
-        indicatif::ProgressStyle::with_template(
-            "eval: end to end, host simulation {bar:30} {pos}/{len} runs, about {eta} left",
-        )
-        .map_err(|e| format!("the progress bar's template: {e}"))?,
-    );
+    let bar = super::progress(runs.len() as u64, "end to end, host simulation", "runs")?;
     let mut e2e = EndToEnd::default();
     let mut csv_all = String::from("path,at_us,level,latency_us\n");
     for (i, text) in runs.iter().enumerate() {

@@ -5,7 +5,10 @@
 //! - the periodicity of the periodic tasks (the paper's Table 1), with the paper's
 //!   definitions: `T_period` is the time between two consecutive starts of a task's jobs,
 //!   each observed at the job's first line, and `T_jitter = |T_cycle - T_period|`. Every
-//!   period of a run is a sample; none is summarised where it is measured. Two settings:
+//!   period of a run is a sample; none is summarised where it is measured. Three settings:
+//!   - the host simulation in virtual time with the image's execution times ([`timed`]):
+//!     its releases replayed through the OS's timing model (`cw_core::os::timeline`),
+//!     each job taking what the image's run measured for it;
 //!   - the Cortex-M4 image under QEMU (`-icount shift=5`: 32 ns of virtual time per
 //!     instruction, [`cw_bsp::icount`]), which writes every job's start and end to a host
 //!     file as it runs (`--job-records`, over semihosting, from its idle loop:
@@ -38,6 +41,7 @@ use crate::Result;
 mod end_to_end;
 mod schedule;
 mod stack;
+mod timed;
 
 /// The book's chapter the report becomes with `--book`, and its plots' folder.
 const BOOK: &str = "docs/src/evaluation.md";
@@ -156,6 +160,16 @@ pub fn run(options: &Options) -> Result {
         run.counts_per_ms,
         schedule::isr_marks(&run.log)?,
     )?;
+    let started = Instant::now();
+    let costs = timed::Costs::measure(&run, &schedule, schedule::isr_marks(&run.log)?)?;
+    let timed = timed::run(&scenario, duration_ms, &out, &schedule, &costs)?;
+    let timed_setting = Setting {
+        key: "host-timed",
+        label: "host simulation, the image's times".into(),
+        ecu_ms: duration_ms,
+        wall: started.elapsed(),
+        tasks: periodicity(&timed.starts)?,
+    };
     let mut stack = stack::Stack::default();
     stack::parse_image(&run.log, &mut stack)?;
     stack::measure_x86(&mut stack)?;
@@ -166,7 +180,8 @@ pub fn run(options: &Options) -> Result {
             .unwrap_or(&scenario)
             .display()
             .to_string(),
-        settings: vec![image_setting, host_setting],
+        settings: vec![timed_setting, image_setting, host_setting],
+        timed: Some((costs, timed.refused, timed.load)),
         schedule: Some(schedule),
         stack: Some(stack),
         end_to_end: Some(end_to_end),
@@ -269,13 +284,7 @@ fn run_host_realtime(
         .spawn()
         .map_err(|e| format!("starting {}: {e}", ecu.display()))?;
     let waiter = std::thread::spawn(move || child.wait_with_output());
-    let bar = indicatif::ProgressBar::new(duration_ms);
-    bar.set_style(
-        indicatif::ProgressStyle::with_template(
-            "eval: host in real time {bar:30} {pos}/{len} ms, about {eta} left",
-        )
-        .map_err(|e| format!("the progress bar's template: {e}"))?,
-    );
+    let bar = progress(duration_ms, "host in real time", "ms")?;
     let started = Instant::now();
     while !waiter.is_finished() {
         std::thread::sleep(Duration::from_millis(200));
@@ -334,11 +343,12 @@ fn host_starts(text: &str) -> Result<Vec<TaskStarts>> {
             return Err(bad());
         };
         let cycle: u32 = cycle.parse().map_err(|_| bad())?;
-        let wall: u64 = wall.parse().map_err(|_| bad())?;
-        let first = *first_ns.get_or_insert(wall);
         if cycle == 0 {
+            // Not periodic (the start-up task, an ISR's entry).
             continue;
         }
+        let wall: u64 = wall.parse().map_err(|_| bad())?;
+        let first = *first_ns.get_or_insert(wall);
         let at_ms = wall.saturating_sub(first) as f64 / 1e6;
         match tasks.iter_mut().find(|t| t.name == *name) {
             Some(t) => t.starts_ms.push(at_ms),
@@ -386,13 +396,7 @@ fn run_image(image: &Path, scenario: &Path, duration_ms: u64, out: &Path) -> Res
     println!("$ {}", crate::process::shown(&qemu));
     let image_path = image.to_path_buf();
     let runner = std::thread::spawn(move || cw_tests::qemu::run(qemu, &image_path));
-    let bar = indicatif::ProgressBar::new(duration_ms);
-    bar.set_style(
-        indicatif::ProgressStyle::with_template(
-            "eval: Cortex-M4 image {bar:30} {pos}/{len} ms of ECU time, {elapsed} so far, about {eta} left",
-        )
-        .map_err(|e| format!("the progress bar's template: {e}"))?,
-    );
+    let bar = progress(duration_ms, "Cortex-M4 image", "ms of ECU time")?;
     let mut follower = Follower::default();
     while !runner.is_finished() {
         std::thread::sleep(Duration::from_millis(200));
@@ -633,6 +637,8 @@ struct Report {
     command: String,
     scenario: String,
     settings: Vec<Setting>,
+    /// The timed host setting's costs, its releases refused and its CPU load.
+    timed: Option<(timed::Costs, u64, f64)>,
     /// The image's response-time analysis and the measured responses.
     schedule: Option<schedule::Schedule>,
     /// The stack's layers (the paper's Figure 10).
@@ -657,6 +663,14 @@ fn check(report: &Report) -> Result {
     }
     if let Some(e) = &report.end_to_end {
         end_to_end::check(e)?;
+    }
+    if let Some((_, refused, _)) = &report.timed {
+        if *refused != 0 {
+            return Err(format!(
+                "eval: the timed host setting refused {refused} releases: a job was still \
+                 running at its next release"
+            ));
+        }
     }
     for setting in &report.settings {
         for t in &setting.tasks {
@@ -787,6 +801,19 @@ fn histogram(t: &TaskPeriodicity, setting: &str, path: &Path) -> std::result::Re
     )
 }
 
+/// A progress bar for a part that takes more than a few seconds: `len` steps of `unit`,
+/// with the time so far and the time left.
+fn progress(len: u64, what: &str, unit: &str) -> Result<indicatif::ProgressBar> {
+    let bar = indicatif::ProgressBar::new(len);
+    bar.set_style(
+        indicatif::ProgressStyle::with_template(&format!(
+            "eval: {what} {{bar:30}} {{pos}}/{{len}} {unit}, {{elapsed}} so far, about {{eta}} left"
+        ))
+        .map_err(|e| format!("the progress bar's template: {e}"))?,
+    );
+    Ok(bar)
+}
+
 /// Samples (µs) as 40 bars from 0 to the 99.9th percentile (a rare long stall of the host
 /// would otherwise squeeze every other sample into the first bar), the last bar also
 /// counting the samples beyond it, which the axis's label names.
@@ -899,6 +926,9 @@ fn markdown(report: &Report, plots_dir: &str) -> String {
          that clock. Its jitter is the host's: the kernel's wake-up latency, the other \
          processes and the machine's virtualisation, plus the jobs' own time on the host.\n"
     );
+    if let Some((costs, refused, load)) = &report.timed {
+        timed::markdown(costs, *refused, *load, &mut md);
+    }
     let _ = writeln!(
         md,
         "| task | setting | jobs | T_period avg | max | min | σ | T_jitter avg | max | min | σ |\n\
@@ -1166,6 +1196,7 @@ mod tests {
             schedule: None,
             stack: None,
             end_to_end: None,
+            timed: None,
             settings: vec![Setting {
                 key: "test",
                 label: "test".into(),

@@ -135,27 +135,31 @@ pub(super) fn isr_marks(log: &str) -> Result<u64> {
     }
 }
 
-/// From the job records (times in counts, `counts_per_ms` to a millisecond, converted at
-/// `per_ms` instructions per ms): each task's longest job less the jobs that preempted it,
-/// the longest dispatch within a millisecond, and the longest time from a millisecond to
-/// the first job it released while the CPU was idle. `tick_released` names the tasks an
-/// alarm releases (only their jobs start at a dispatch). Records may be out of order by a
-/// little (a mark reads the time before it takes the lock that puts its record on the
-/// ring): a nested job counts only for its part inside its outer job, and a gap that comes
-/// out negative is no sample.
-pub(super) fn demands(
-    records: &[JobEdge],
-    counts_per_ms: u32,
-    per_ms: u64,
-    tick_released: &[u8],
-) -> (Vec<(u8, u64)>, u64, u64) {
+/// Each job's and each gap's time in the job records, in counts.
+#[derive(Debug, Default, PartialEq, Eq)]
+pub(super) struct JobTimes {
+    /// Each job's time from its first line to its last, less the jobs that preempted it,
+    /// with its task, in the order the jobs ended.
+    pub(super) own: Vec<(u8, u64)>,
+    /// Each dispatch within a millisecond: a job's end to the start of the next job a tick
+    /// released.
+    pub(super) dispatch: Vec<u64>,
+    /// Each millisecond (its index) whose tick released a job while the CPU was idle, and
+    /// the time from the millisecond to that job's start.
+    pub(super) tick: Vec<(u64, u64)>,
+}
+
+/// The times of [`JobTimes`] in the job records (times in counts, `counts_per_ms` to a
+/// millisecond). `tick_released` names the tasks an alarm releases (only their jobs start
+/// at a dispatch). Records may be out of order by a little (a mark reads the time before
+/// it takes the lock that puts its record on the ring): a nested job counts only for its
+/// part inside its outer job, and a gap that comes out negative is no sample.
+pub(super) fn job_times(records: &[JobEdge], counts_per_ms: u32, tick_released: &[u8]) -> JobTimes {
     let cpm = u64::from(counts_per_ms.max(1));
-    let to_instructions = |counts: u64| (counts * per_ms).div_ceil(cpm);
     // Open jobs: (task, start, the jobs that ended inside it: (start, end)).
     type Open = (u8, u64, Vec<(u64, u64)>);
     let mut open: Vec<Open> = Vec::new();
-    let mut gross: Vec<(u8, u64)> = Vec::new();
-    let (mut dispatch, mut tick) = (0u64, 0u64);
+    let mut times = JobTimes::default();
     let mut previous: Option<&JobEdge> = None;
     for r in records {
         if r.end {
@@ -170,10 +174,7 @@ pub(super) fn demands(
                 if let Some(outer) = open.last_mut() {
                     outer.2.push((start, r.at));
                 }
-                match gross.iter_mut().find(|(t, _)| *t == task) {
-                    Some(g) => g.1 = g.1.max(own),
-                    None => gross.push((task, own)),
-                }
+                times.own.push((task, own));
             }
         } else {
             let boundary = r.at / cpm * cpm;
@@ -183,11 +184,11 @@ pub(super) fn demands(
                 match previous {
                     Some(p) if p.end && p.at >= boundary => {
                         if let Some(gap) = r.at.checked_sub(p.at) {
-                            dispatch = dispatch.max(gap);
+                            times.dispatch.push(gap);
                         }
                     }
                     Some(p) if p.end && open.is_empty() && p.at < boundary => {
-                        tick = tick.max(r.at - boundary);
+                        times.tick.push((boundary / cpm, r.at - boundary));
                     }
                     _ => {}
                 }
@@ -196,13 +197,36 @@ pub(super) fn demands(
         }
         previous = Some(r);
     }
+    times
+}
+
+/// From the job records ([`job_times`]), converted at `per_ms` instructions per ms: each
+/// task's longest job less the jobs that preempted it, the longest dispatch within a
+/// millisecond, and the longest time from a millisecond to the first job it released
+/// while the CPU was idle.
+pub(super) fn demands(
+    records: &[JobEdge],
+    counts_per_ms: u32,
+    per_ms: u64,
+    tick_released: &[u8],
+) -> (Vec<(u8, u64)>, u64, u64) {
+    let cpm = u64::from(counts_per_ms.max(1));
+    let to_instructions = |counts: u64| (counts * per_ms).div_ceil(cpm);
+    let times = job_times(records, counts_per_ms, tick_released);
+    let mut gross: Vec<(u8, u64)> = Vec::new();
+    for &(task, own) in &times.own {
+        match gross.iter_mut().find(|(t, _)| *t == task) {
+            Some(g) => g.1 = g.1.max(own),
+            None => gross.push((task, own)),
+        }
+    }
     (
         gross
             .into_iter()
             .map(|(t, g)| (t, to_instructions(g)))
             .collect(),
-        to_instructions(dispatch),
-        to_instructions(tick),
+        to_instructions(times.dispatch.into_iter().max().unwrap_or(0)),
+        to_instructions(times.tick.into_iter().map(|t| t.1).max().unwrap_or(0)),
     )
 }
 
@@ -477,10 +501,11 @@ pub(super) fn markdown(s: &Schedule, md: &mut String) {
 }
 
 #[cfg(test)]
-mod tests {
+pub(super) mod tests {
     use super::*;
 
-    const LOG: &str = "cw-qemu: marks seen from a span around them (calibration, taken off every span and job they fall in): span start 59 end 110, job start 116 end 199, ISR entry 80\n\
+    /// An image's calibration and `rta` lines.
+    pub(in crate::eval) const LOG: &str = "cw-qemu: marks seen from a span around them (calibration, taken off every span and job they fall in): span start 59 end 110, job start 116 end 199, ISR entry 80\n\
         cw-qemu: rta unit instructions, 31250 per ms\n\
         cw-qemu: rta OsLEDTask slot 1 released-by tick priority 6 raises-to 6 period 312500 deadline 312500 wcet 100\n\
         cw-qemu: rta OsComTask slot 4 released-by OsSonarTask priority 3 raises-to 65 period 1250000 deadline 1250000 wcet 300\n\

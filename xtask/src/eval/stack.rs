@@ -137,13 +137,11 @@ pub(super) fn parse_image(log: &str, stack: &mut Stack) -> Result {
 pub(super) fn measure_x86(stack: &mut Stack) -> Result {
     let binary = crate::callgrind::stack_probe_binary()?;
     let probes = crate::callgrind::STACK_PROBES;
-    let bar = indicatif::ProgressBar::new(probes.len() as u64);
-    bar.set_style(
-        indicatif::ProgressStyle::with_template(
-            "eval: stack probes on x86-64 (callgrind) {bar:30} {pos}/{len}, about {eta} left",
-        )
-        .map_err(|e| format!("the progress bar's template: {e}"))?,
-    );
+    let bar = super::progress(
+        probes.len() as u64,
+        "stack probes on x86-64 (callgrind)",
+        "probes",
+    )?;
     stack.x86.clear();
     for &(op, _) in probes {
         stack
