@@ -321,40 +321,70 @@ fn run_host_realtime(
     Ok((starts, scheduling))
 }
 
-/// The periodic tasks' starts in `cw-ecu --job-starts`'s CSV (`task,cycle_ms,virtual_us,
-/// wall_ns`), on the wall clock, in ms since the first start; an error names the line.
-fn host_starts(text: &str) -> Result<Vec<TaskStarts>> {
+/// One row of `cw-ecu --job-starts`'s CSV: its line, the task's (or ISR's) name, its cycle
+/// (ms; 0 where not periodic), the time in virtual µs and, in a real-time run, on the wall
+/// clock (ns).
+#[derive(Debug, Clone, PartialEq, Eq)]
+struct StartRow {
+    line: usize,
+    name: String,
+    cycle_ms: u32,
+    at_us: u64,
+    wall_ns: Option<u64>,
+}
+
+/// Reads `cw-ecu --job-starts`'s CSV (`task,cycle_ms,virtual_us,wall_ns`, the wall time
+/// empty where there is none); an error names the line.
+fn start_rows(text: &str) -> Result<Vec<StartRow>> {
     let mut lines = text.lines().enumerate();
     match lines.next() {
         Some((_, "task,cycle_ms,virtual_us,wall_ns")) => {}
         _ => return Err("line 1 is not the header `task,cycle_ms,virtual_us,wall_ns`".into()),
     }
+    lines
+        .map(|(n, line)| {
+            let bad = || {
+                format!(
+                    "line {}: `{line}` is not task,cycle_ms,virtual_us,wall_ns",
+                    n + 1
+                )
+            };
+            let fields: Vec<&str> = line.split(',').collect();
+            let [name, cycle, at, wall] = fields.as_slice() else {
+                return Err(bad());
+            };
+            Ok(StartRow {
+                line: n + 1,
+                name: (*name).to_string(),
+                cycle_ms: cycle.parse().map_err(|_| bad())?,
+                at_us: at.parse().map_err(|_| bad())?,
+                wall_ns: match *wall {
+                    "" => None,
+                    w => Some(w.parse().map_err(|_| bad())?),
+                },
+            })
+        })
+        .collect()
+}
+
+/// The periodic tasks' starts in `cw-ecu --job-starts`'s CSV, on the wall clock, in ms
+/// since the first start; an error names the line (a periodic task's start without a wall
+/// time among them).
+fn host_starts(text: &str) -> Result<Vec<TaskStarts>> {
     let mut tasks: Vec<TaskStarts> = Vec::new();
     let mut first_ns = None;
-    for (n, line) in lines {
-        let bad = || {
-            format!(
-                "line {}: `{line}` is not task,cycle_ms,virtual_us,wall_ns with a wall time",
-                n + 1
-            )
-        };
-        let fields: Vec<&str> = line.split(',').collect();
-        let [name, cycle, _virtual, wall] = fields.as_slice() else {
-            return Err(bad());
-        };
-        let cycle: u32 = cycle.parse().map_err(|_| bad())?;
-        if cycle == 0 {
-            // Not periodic (the start-up task, an ISR's entry).
-            continue;
-        }
-        let wall: u64 = wall.parse().map_err(|_| bad())?;
+    // Not periodic: the start-up task, an ISR's entry.
+    for row in start_rows(text)?.into_iter().filter(|r| r.cycle_ms > 0) {
+        let wall = row
+            .wall_ns
+            .ok_or_else(|| format!("line {}: {} has no wall time", row.line, row.name))?;
         let first = *first_ns.get_or_insert(wall);
         let at_ms = wall.saturating_sub(first) as f64 / 1e6;
-        match tasks.iter_mut().find(|t| t.name == *name) {
+        match tasks.iter_mut().find(|t| t.name == row.name) {
             Some(t) => t.starts_ms.push(at_ms),
             None => tasks.push(TaskStarts {
-                name: (*name).to_string(),
-                cycle_ms: cycle,
+                name: row.name,
+                cycle_ms: row.cycle_ms,
                 starts_ms: vec![at_ms],
             }),
         }

@@ -25,50 +25,12 @@ use std::path::Path;
 use cw_core::os::timeline::{Item, Timeline};
 
 use super::schedule::{job_times, Analysed, Schedule};
-use super::{ImageRun, TaskStarts};
+use super::{start_rows, ImageRun, StartRow, TaskStarts};
 use crate::process::target_dir;
 use crate::Result;
 
 /// The most tasks and ISRs the model holds.
 const ITEMS: usize = 8;
-
-/// One row of `cw-ecu --job-starts`: the item's name, its cycle (ms; 0 where not periodic),
-/// the time in virtual µs.
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub(super) struct Row {
-    name: String,
-    cycle_ms: u32,
-    at_us: u64,
-}
-
-/// Reads `cw-ecu --job-starts`'s CSV (`task,cycle_ms,virtual_us,wall_ns`), virtual times
-/// only; an error names the line.
-pub(super) fn rows(text: &str) -> Result<Vec<Row>> {
-    let mut lines = text.lines().enumerate();
-    match lines.next() {
-        Some((_, "task,cycle_ms,virtual_us,wall_ns")) => {}
-        _ => return Err("line 1 is not the header `task,cycle_ms,virtual_us,wall_ns`".into()),
-    }
-    lines
-        .map(|(n, line)| {
-            let bad = || {
-                format!(
-                    "line {}: `{line}` is not task,cycle_ms,virtual_us,wall_ns",
-                    n + 1
-                )
-            };
-            let fields: Vec<&str> = line.split(',').collect();
-            let [name, cycle, at, _wall] = fields.as_slice() else {
-                return Err(bad());
-            };
-            Ok(Row {
-                name: (*name).to_string(),
-                cycle_ms: cycle.parse().map_err(|_| bad())?,
-                at_us: at.parse().map_err(|_| bad())?,
-            })
-        })
-        .collect()
-}
 
 /// The image's times the model gives its jobs, ns.
 #[derive(Debug, Clone, PartialEq)]
@@ -266,7 +228,7 @@ impl Replay<'_> {
 /// Replays the host's releases (`rows`, over `duration_ms`) through the image's task set
 /// (`schedule`) with `costs`. An error names a task or ISR the image did not measure.
 pub(super) fn replay(
-    rows: &[Row],
+    rows: &[StartRow],
     duration_ms: u64,
     schedule: &Schedule,
     costs: &Costs,
@@ -403,7 +365,7 @@ pub(super) fn run(
     }
     let text =
         std::fs::read_to_string(&csv).map_err(|e| format!("reading {}: {e}", csv.display()))?;
-    let rows = rows(&text).map_err(|e| format!("{}: {e}", csv.display()))?;
+    let rows = start_rows(&text).map_err(|e| format!("{}: {e}", csv.display()))?;
     let timed = replay(&rows, duration_ms, schedule, costs)?;
     println!(
         "eval: the host's releases timed with the image's costs: {} periodic tasks, {} releases refused, CPU load {:.2} %",
@@ -471,7 +433,7 @@ mod tests {
         }
     }
 
-    fn host(can_isr_us: u64) -> Vec<Row> {
+    fn host(can_isr_us: u64) -> Vec<StartRow> {
         let text = format!(
             "task,cycle_ms,virtual_us,wall_ns\n\
              OsStartupTask,0,0,\n\
@@ -483,7 +445,7 @@ mod tests {
              OsComTask,0,40000,\n\
              CanIsr,0,{can_isr_us},\n"
         );
-        rows(&text).unwrap()
+        start_rows(&text).unwrap()
     }
 
     fn starts(timed: &Timed, name: &str) -> Vec<f64> {
@@ -502,9 +464,9 @@ mod tests {
     #[test]
     fn the_host_rows_are_read_and_a_bad_line_is_named() {
         assert_eq!(host(40300).len(), 8);
-        assert!(rows("task\n").unwrap_err().contains("line 1"));
+        assert!(start_rows("task\n").unwrap_err().contains("line 1"));
         let bad = "task,cycle_ms,virtual_us,wall_ns\nOsLEDTask,10,x,\n";
-        assert!(rows(bad).unwrap_err().contains("line 2"));
+        assert!(start_rows(bad).unwrap_err().contains("line 2"));
     }
 
     #[test]
@@ -533,7 +495,7 @@ mod tests {
         // CanIsr at 40.010 ms, inside the sonar's job (40.0055 to 40.011 alone).
         let mut costs = costs();
         // OsComTask made periodic for the test, to see its start.
-        let rows: Vec<Row> = host(40010)
+        let rows: Vec<StartRow> = host(40010)
             .into_iter()
             .map(|mut r| {
                 if r.name == "OsComTask" {
