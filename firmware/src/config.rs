@@ -38,6 +38,10 @@
 //! not); `SysTickIsr` takes no resource. The ceilings are derived
 //! by `OsConfig::new` from the `uses` declarations below, never written by hand.
 //!
+//! With the feature `extended-tasks` (the measuring image only, for the evaluation), the
+//! four periodic tasks have the paper's structure instead: extended tasks, started with the
+//! OS, each waiting for the event [`EV_PERIOD`] its alarm sets, in conformance class ECC1.
+//!
 //! The OS runs in conformance class BCC1 (basic tasks, one activation each, one task per
 //! priority: the paper's task set needs no more), with extended status (every misuse is
 //! refused and reported to `ErrorHook`, which the ECU counts; the call-level check is one
@@ -56,8 +60,8 @@ use cw_core::com::ipdu::{
 };
 use cw_core::com::signal::{ByteOrder, Signedness};
 use cw_core::os::{
-    AlarmAction, AlarmConfig, ConformanceClass, CounterConfig, CounterId, Dialect, HookSet,
-    IsrConfig, IsrId, OsConfig, OsDescription, ResourceId, Status, TaskConfig, TaskId,
+    AlarmAction, AlarmConfig, ConformanceClass, CounterConfig, CounterId, Dialect, EventMask,
+    HookSet, IsrConfig, IsrId, OsConfig, OsDescription, ResourceId, Status, TaskConfig, TaskId,
 };
 use cw_core::pdur::{PduRConfig, RxRoute};
 use cw_core::wdgm::AliveSupervision;
@@ -110,9 +114,33 @@ pub const SENSOR_SILENT_AFTER_SAMPLES: u8 = {
     samples as u8
 };
 
+/// Whether the periodic tasks have the paper's structure (feature `extended-tasks`):
+/// extended tasks that wait for [`EV_PERIOD`], which their alarms set, instead of basic
+/// tasks their alarms activate.
+pub const EXTENDED_TASKS: bool = cfg!(feature = "extended-tasks");
+
+/// The event a periodic task's alarm sets where the tasks are extended
+/// ([`EXTENDED_TASKS`]).
+pub const EV_PERIOD: EventMask = 1;
+
+/// A periodic task: basic, or extended and started with the OS ([`EXTENDED_TASKS`]).
+const fn periodic(name: &'static str, priority: u8) -> TaskConfig {
+    if EXTENDED_TASKS {
+        TaskConfig::extended(name, priority).autostart()
+    } else {
+        TaskConfig::basic(name, priority)
+    }
+}
+
+/// A periodic task's alarm: it activates the task, or sets [`EV_PERIOD`] on it where the
+/// tasks are extended.
 const fn cyclic(name: &'static str, task: TaskId, period_ms: u32) -> AlarmConfig {
-    AlarmConfig::new(name, SYSTEM_COUNTER, AlarmAction::ActivateTask(task))
-        .relative(period_ms, period_ms)
+    let action = if EXTENDED_TASKS {
+        AlarmAction::SetEvent(task, EV_PERIOD)
+    } else {
+        AlarmAction::ActivateTask(task)
+    };
+    AlarmConfig::new(name, SYSTEM_COUNTER, action).relative(period_ms, period_ms)
 }
 
 /// The OS's status: extended (every check OSEK defines, errors to `ErrorHook`), or
@@ -134,11 +162,11 @@ pub static OS: OsConfig<6, 3, 1, 4, 3> = match OsConfig::new(
                 .non_preemptive()
                 .autostart()
                 .uses(USES_COM),
-            TaskConfig::basic("OsLEDTask", 6).uses(USES_RTE | USES_LEDS),
-            TaskConfig::basic("OsBswServiceTask", 5).uses(USES_COM | USES_RTE | USES_LEDS),
-            TaskConfig::basic("OsObstacleDetectionTask", 4).uses(USES_COM | USES_RTE),
+            periodic("OsLEDTask", 6).uses(USES_RTE | USES_LEDS),
+            periodic("OsBswServiceTask", 5).uses(USES_COM | USES_RTE | USES_LEDS),
+            periodic("OsObstacleDetectionTask", 4).uses(USES_COM | USES_RTE),
             TaskConfig::basic("OsComTask", 3).uses(USES_COM | USES_RTE),
-            TaskConfig::basic("OsSonarTask", 2).uses(USES_RTE),
+            periodic("OsSonarTask", 2).uses(USES_RTE),
         ],
         [CounterConfig {
             max_allowed_value: 0xFFFF,
@@ -157,7 +185,11 @@ pub static OS: OsConfig<6, 3, 1, 4, 3> = match OsConfig::new(
             IsrConfig::cat1("SensorRxIsr", 3),
         ],
     )
-    .class(ConformanceClass::Bcc1)
+    .class(if EXTENDED_TASKS {
+        ConformanceClass::Ecc1
+    } else {
+        ConformanceClass::Bcc1
+    })
     .status(STATUS)
     .dialect(Dialect::Autosar)
     .hooks(HookSet {

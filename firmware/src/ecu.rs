@@ -572,8 +572,40 @@ impl<P: Port<Kernel = Kernel>, B: Board> Ecu<P, B> {
     }
 
     /// One job of `task`: its body, then `TerminateTask`. The Cortex-M port's task entry
-    /// and the host port's dispatch call it.
+    /// and the host port's dispatch call it. Where the periodic tasks are extended
+    /// ([`config::EXTENDED_TASKS`], the paper's structure), one of them never ends: it
+    /// waits for its alarm's event, clears it, runs one job, and waits again.
     pub fn run_job(&self, task: TaskId) {
+        if config::EXTENDED_TASKS && config::PERIOD_MS.get(usize::from(task.0)) > Some(&0) {
+            // A refused wait (the OS shut down, or a call from the wrong level) ends the loop,
+            // and the task's TerminateTask below reports it.
+            while self
+                .port
+                .kernel(|os| os.wait_event(config::EV_PERIOD))
+                .is_ok()
+            {
+                let _ = self.port.kernel(|os| os.clear_event(config::EV_PERIOD));
+                if !self.job(task) {
+                    return;
+                }
+            }
+        } else if !self.job(task) {
+            return;
+        }
+        // After ShutdownOS inside the body the OS is gone and nothing terminates; an
+        // error here reaches ErrorHook, which counts it.
+        let _ = self.port.end_job(|os| {
+            if os.is_shut_down() {
+                Err(OsError::State)
+            } else {
+                os.terminate_task()
+            }
+        });
+    }
+
+    /// One job's body between its marks, and its alive indication; `false` where the board
+    /// made it hang (it never ends: no `TerminateTask` follows).
+    fn job(&self, task: TaskId) -> bool {
         if task == config::COM_TASK {
             self.port.span(span::ACTIVATE_TO_FIRST_LINE, false);
         }
@@ -582,7 +614,7 @@ impl<P: Port<Kernel = Kernel>, B: Board> Ecu<P, B> {
             // A fault the board injects: the job hangs here, never ending (the port keeps
             // it running at its priority); it reports no alive indication.
             self.port.hang();
-            return;
+            return false;
         }
         match task {
             config::STARTUP_TASK => self.startup_task(),
@@ -601,18 +633,10 @@ impl<P: Port<Kernel = Kernel>, B: Board> Ecu<P, B> {
         {
             alive.fetch_add(1, Ordering::Relaxed);
         }
-        // The job's last line: where the port switches stacks, a successful
-        // TerminateTask never returns here.
+        // The job's last line (where the port switches stacks, the TerminateTask after it
+        // never returns).
         self.port.job_finished(task);
-        // After ShutdownOS inside the body the OS is gone and nothing terminates; an
-        // error here reaches ErrorHook, which counts it.
-        let _ = self.port.end_job(|os| {
-            if os.is_shut_down() {
-                Err(OsError::State)
-            } else {
-                os.terminate_task()
-            }
-        });
+        true
     }
 
     /// Runs an ISR as the port does: the kernel is told of its entry, `body` runs, the

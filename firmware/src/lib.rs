@@ -8,6 +8,12 @@
 #![cfg_attr(not(any(test, feature = "host")), no_std)]
 #![forbid(unsafe_code)]
 
+// The host port runs each job to its end: an extended task's wait would return at once.
+#[cfg(all(feature = "extended-tasks", feature = "host"))]
+compile_error!(
+    "feature `extended-tasks` is for the Cortex-M measuring image (build with --no-default-features --features extended-tasks)"
+);
+
 pub mod board;
 pub mod config;
 #[cfg(all(target_arch = "arm", target_os = "none"))]

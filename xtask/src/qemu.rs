@@ -109,6 +109,13 @@ pub fn build() -> Result<PathBuf> {
     build_bin("cw-qemu", "scenario", "release")
 }
 
+/// Builds the scenario image with the paper's task structure (feature `extended-tasks`:
+/// the periodic tasks wait for their alarms' events); returns its path, the same as
+/// [`build`]'s (the build replaces that image).
+pub fn build_extended() -> Result<PathBuf> {
+    build_bin("cw-qemu", "scenario,extended-tasks", "release")
+}
+
 /// The production image's flash and RAM goals, in bytes.
 const FLASH_GOAL: u64 = 24 * 1024;
 const RAM_GOAL: u64 = 8 * 1024;

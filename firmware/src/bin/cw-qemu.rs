@@ -1,6 +1,8 @@
 //! The collision-warning ECU as a bare-metal image for QEMU's mps2-an386 (Cortex-M4).
 //!
-//! Build and run: `cargo xtask qemu` (the book: `docs/src/cortex-m4.md`).
+//! Build and run: `cargo xtask qemu` (the book: `docs/src/cortex-m4.md`). With the feature
+//! `extended-tasks`, the periodic tasks have the paper's structure (extended tasks waiting
+//! for their alarms' events, each on its own stack): `cargo xtask eval` measures both.
 #![no_std]
 #![no_main]
 
@@ -20,6 +22,12 @@ use cw_firmware::stack_probe::Stack;
 static APP: Slot<Mps2App> = Slot::new();
 static SCENARIO: Slot<ImageScenario> = Slot::new();
 static PROBES: Slot<Stack> = Slot::new();
+
+/// The periodic tasks' own stacks where they are extended tasks (the paper's structure,
+/// feature `extended-tasks`): each keeps its context while it waits for its alarm's event.
+#[cfg(feature = "extended-tasks")]
+static EXTENDED_STACKS: [cw_bsp::cortex_m::TaskStack<512>; 4] =
+    [const { cw_bsp::cortex_m::TaskStack::new() }; 4];
 
 #[cortex_m_rt::entry]
 fn main() -> ! {
@@ -72,6 +80,18 @@ fn main() -> ! {
     };
     app.ecu.init();
     let app: &'static Mps2App = app;
+    #[cfg(feature = "extended-tasks")]
+    for (task, stack) in [
+        config::LED_TASK,
+        config::BSW_TASK,
+        config::OBSTACLE_TASK,
+        config::SONAR_TASK,
+    ]
+    .into_iter()
+    .zip(&EXTENDED_STACKS)
+    {
+        cw_bsp::cortex_m::set_task_stack(app.ecu.port(), task, stack);
+    }
     cw_bsp::cortex_m::start(app, app.ecu.port())
 }
 

@@ -579,6 +579,19 @@ impl Mps2App {
             (cw_bsp::cortex_m::BASIC_STACK_WORDS - cw_bsp::cortex_m::GUARD_WORDS) * 4,
             main_stack
         );
+        if config::EXTENDED_TASKS {
+            // The periodic tasks' own stacks (the paper's structure).
+            for (slot, task) in (0u8..).zip(config::OS.tasks()) {
+                if let Some(used) = cw_bsp::cortex_m::task_stack_use(self.ecu.port(), TaskId(slot))
+                {
+                    defmt::println!(
+                        "cw-qemu: extended task {=str}: own stack used {} bytes",
+                        task.name,
+                        used
+                    );
+                }
+            }
+        }
         mps2::exit(ok && schedule_ok && hooks.errors == 0 && hooks.port_errors == 0);
     }
 }

@@ -12,7 +12,9 @@
 //!   - the Cortex-M4 image under QEMU (`-icount shift=5`: 32 ns of virtual time per
 //!     instruction, [`cw_bsp::icount`]), which writes every job's start and end to a host
 //!     file as it runs (`--job-records`, over semihosting, from its idle loop:
-//!     `cw_bsp::cortex_m::trace::job_record`);
+//!     `cw_bsp::cortex_m::trace::job_record`), with the ECU's basic tasks and again with
+//!     the paper's extended tasks (feature `extended-tasks`), whose costs [`structure`]
+//!     sets side by side;
 //!   - the host simulation paced to the wall clock (`cw-ecu --realtime --job-starts`):
 //!     each millisecond of ECU time stepped at its millisecond of the monotonic clock, by
 //!     absolute-deadline sleeps, in `SCHED_FIFO` where the system permits it
@@ -41,6 +43,7 @@ use crate::Result;
 mod end_to_end;
 mod schedule;
 mod stack;
+mod structure;
 mod timed;
 
 /// The book's chapter the report becomes with `--book`, and its plots' folder.
@@ -135,7 +138,7 @@ pub fn run(options: &Options) -> Result {
         .map_or(duration_ms, |s| (s * 1000.0).round() as u64);
     let image = crate::qemu::build()?;
     let started = Instant::now();
-    let run = run_image(&image, &scenario, duration_ms, &out)?;
+    let run = run_image(&image, &scenario, duration_ms, &out, "")?;
     let image_wall = started.elapsed();
     let image_setting = Setting {
         key: "cortex-m4-qemu",
@@ -170,6 +173,17 @@ pub fn run(options: &Options) -> Result {
         wall: started.elapsed(),
         tasks: periodicity(&timed.starts)?,
     };
+    let image = crate::qemu::build_extended()?;
+    let started = Instant::now();
+    let extended = run_image(&image, &scenario, duration_ms, &out, "extended-")?;
+    let extended_setting = Setting {
+        key: "cortex-m4-qemu-extended",
+        label: "Cortex-M4 image, extended tasks (the paper's structure), QEMU".into(),
+        ecu_ms: duration_ms,
+        wall: started.elapsed(),
+        tasks: periodicity(&extended.task_starts())?,
+    };
+    let structures = structure::Structures::measure(&run, &extended, &schedule)?;
     let mut stack = stack::Stack::default();
     stack::parse_image(&run.log, &mut stack)?;
     stack::measure_x86(&mut stack)?;
@@ -180,7 +194,8 @@ pub fn run(options: &Options) -> Result {
             .unwrap_or(&scenario)
             .display()
             .to_string(),
-        settings: vec![timed_setting, image_setting, host_setting],
+        settings: vec![timed_setting, image_setting, extended_setting, host_setting],
+        structures: Some(structures),
         timed: Some((costs, timed.refused, timed.load)),
         schedule: Some(schedule),
         stack: Some(stack),
@@ -398,8 +413,14 @@ fn host_starts(text: &str) -> Result<Vec<TaskStarts>> {
 /// Runs the measuring image for `duration_ms` of ECU time on `scenario`, its job starts
 /// and ends to `out/job-records.bin`, showing the ECU time reached (read from the file as it grows)
 /// and the time left; returns what it measured, or an error with the image's log.
-fn run_image(image: &Path, scenario: &Path, duration_ms: u64, out: &Path) -> Result<ImageRun> {
-    let starts_file = out.join("job-records.bin");
+fn run_image(
+    image: &Path,
+    scenario: &Path,
+    duration_ms: u64,
+    out: &Path,
+    prefix: &str,
+) -> Result<ImageRun> {
+    let starts_file = out.join(format!("{prefix}job-records.bin"));
     let _ = std::fs::remove_file(&starts_file);
     let (scenario_arg, starts_arg) = (
         scenario.display().to_string(),
@@ -420,13 +441,20 @@ fn run_image(image: &Path, scenario: &Path, duration_ms: u64, out: &Path) -> Res
     ))
     .args(["-icount", cw_bsp::icount::VIRTUAL])
     .arg("-serial")
-    .arg(format!("file:{}", out.join("slcan.txt").display()))
+    .arg(format!(
+        "file:{}",
+        out.join(format!("{prefix}slcan.txt")).display()
+    ))
     .arg("-kernel")
     .arg(image);
     println!("$ {}", crate::process::shown(&qemu));
     let image_path = image.to_path_buf();
     let runner = std::thread::spawn(move || cw_tests::qemu::run(qemu, &image_path));
-    let bar = progress(duration_ms, "Cortex-M4 image", "ms of ECU time")?;
+    let what = match prefix.trim_end_matches('-') {
+        "" => "Cortex-M4 image".to_string(),
+        variant => format!("Cortex-M4 image, {variant} tasks"),
+    };
+    let bar = progress(duration_ms, &what, "ms of ECU time")?;
     let mut follower = Follower::default();
     while !runner.is_finished() {
         std::thread::sleep(Duration::from_millis(200));
@@ -438,7 +466,7 @@ fn run_image(image: &Path, scenario: &Path, duration_ms: u64, out: &Path) -> Res
     let (success, log) = runner
         .join()
         .map_err(|_| "the thread running QEMU panicked".to_string())??;
-    std::fs::write(out.join("image.txt"), &log)
+    std::fs::write(out.join(format!("{prefix}image.txt")), &log)
         .map_err(|e| format!("writing {}: {e}", out.display()))?;
     if !success {
         return Err(format!("eval: the image on QEMU failed:\n{log}"));
@@ -667,6 +695,8 @@ struct Report {
     command: String,
     scenario: String,
     settings: Vec<Setting>,
+    /// What each task structure costs on the image (basic and extended tasks).
+    structures: Option<structure::Structures>,
     /// The timed host setting's costs, its releases refused and its CPU load.
     timed: Option<(timed::Costs, u64, f64)>,
     /// The image's response-time analysis and the measured responses.
@@ -693,6 +723,9 @@ fn check(report: &Report) -> Result {
     }
     if let Some(e) = &report.end_to_end {
         end_to_end::check(e)?;
+    }
+    if let Some(s) = &report.structures {
+        structure::check(s)?;
     }
     if let Some((_, refused, _)) = &report.timed {
         if *refused != 0 {
@@ -1072,6 +1105,9 @@ fn markdown(report: &Report, plots_dir: &str) -> String {
          start, the SysTick count in the low 27), and \
          the host's, `host-realtime-starts.csv` (`task,cycle_ms,virtual_us,wall_ns`)."
     );
+    if let Some(s) = &report.structures {
+        structure::markdown(s, &mut md);
+    }
     if let Some(s) = &report.schedule {
         schedule::markdown(s, &mut md);
     }
@@ -1226,6 +1262,7 @@ mod tests {
             schedule: None,
             stack: None,
             end_to_end: None,
+            structures: None,
             timed: None,
             settings: vec![Setting {
                 key: "test",
