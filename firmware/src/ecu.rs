@@ -573,7 +573,7 @@ impl<P: Port<Kernel = Kernel>, B: Board> Ecu<P, B> {
 
     /// One job of `task`: its body, then `TerminateTask`. The Cortex-M port's task entry
     /// and the host port's dispatch call it. Where the periodic tasks are extended
-    /// ([`config::EXTENDED_TASKS`], the paper's structure), one of them never ends: it
+    /// ([`config::EXTENDED_TASKS`], the paper's structure), each of them never ends: it
     /// waits for its alarm's event, clears it, runs one job, and waits again.
     pub fn run_job(&self, task: TaskId) {
         if config::EXTENDED_TASKS && config::PERIOD_MS.get(usize::from(task.0)) > Some(&0) {

@@ -11,7 +11,7 @@
 // The host port runs each job to its end: an extended task's wait would return at once.
 #[cfg(all(feature = "extended-tasks", feature = "host"))]
 compile_error!(
-    "feature `extended-tasks` is for the Cortex-M measuring image (build with --no-default-features --features extended-tasks)"
+    "feature `extended-tasks` is for the Cortex-M measuring image `cw-qemu` (build it with --no-default-features --features scenario,extended-tasks)"
 );
 
 pub mod board;

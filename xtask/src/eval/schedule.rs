@@ -230,7 +230,41 @@ pub(super) fn demands(
     )
 }
 
+/// The latencies of [`JobTimes::tick`] by the number of alarms due at each tick (the
+/// tick-released tasks of `periodic`, `(slot, name, cycle in ms)`, whose cycle divides its
+/// millisecond): `(alarms, latencies)`, fewest alarms first.
+pub(super) fn by_alarms_due(
+    ticks: &[(u64, u64)],
+    periodic: &[(u8, String, u32)],
+    tick_released: &[u8],
+) -> Vec<(usize, Vec<u64>)> {
+    let cycles: Vec<u64> = periodic
+        .iter()
+        .filter(|(slot, _, cycle)| tick_released.contains(slot) && *cycle > 0)
+        .map(|(_, _, cycle)| u64::from(*cycle))
+        .collect();
+    let mut by_due: Vec<(usize, Vec<u64>)> = Vec::new();
+    for &(ms, latency) in ticks {
+        let n = cycles.iter().filter(|&&c| ms % c == 0).count();
+        match by_due.iter_mut().find(|(k, _)| *k == n) {
+            Some(b) => b.1.push(latency),
+            None => by_due.push((n, vec![latency])),
+        }
+    }
+    by_due.sort_by_key(|b| b.0);
+    by_due
+}
+
 impl Schedule {
+    /// The slots of the tasks an alarm releases.
+    pub(super) fn tick_released(&self) -> Vec<u8> {
+        self.items
+            .iter()
+            .filter(|i| i.released_by == "tick")
+            .filter_map(|i| i.slot)
+            .collect()
+    }
+
     /// The analysis with the run's figures ([`demands`]; `CanIsr` and any other ISR: its
     /// longest span, `isr_marks` and one dispatch), then each task's worst measured
     /// response.
@@ -240,12 +274,7 @@ impl Schedule {
         counts_per_ms: u32,
         isr_marks: u64,
     ) -> Result {
-        let tick_released: Vec<u8> = self
-            .items
-            .iter()
-            .filter(|i| i.released_by == "tick")
-            .filter_map(|i| i.slot)
-            .collect();
+        let tick_released = self.tick_released();
         let (gross, dispatch, tick) = demands(records, counts_per_ms, self.per_ms, &tick_released);
         self.dispatch = dispatch;
         self.tick = tick;
@@ -552,6 +581,22 @@ pub(super) mod tests {
         assert!(parse(&bad).unwrap_err().contains("line 4"));
         assert!(parse("").unwrap_err().contains("rta unit"));
         assert!(isr_marks("").is_err());
+    }
+
+    #[test]
+    fn ticks_are_grouped_by_the_alarms_due() {
+        // The LED task (slot 1, 10 ms) and the sonar (5, 40 ms) released by the tick;
+        // OsComTask (4) by the sonar's job: not an alarm.
+        let periodic = vec![
+            (1, "OsLEDTask".to_string(), 10),
+            (4, "OsComTask".to_string(), 0),
+            (5, "OsSonarTask".to_string(), 40),
+        ];
+        let ticks = [(10, 100), (40, 300), (20, 120), (80, 310)];
+        assert_eq!(
+            by_alarms_due(&ticks, &periodic, &[1, 5]),
+            [(1, vec![100, 120]), (2, vec![300, 310])]
+        );
     }
 
     #[test]

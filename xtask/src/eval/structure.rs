@@ -12,7 +12,7 @@
 
 use std::fmt::Write as _;
 
-use super::schedule::{job_times, Schedule};
+use super::schedule::{by_alarms_due, job_times, Schedule};
 use super::ImageRun;
 use crate::Result;
 
@@ -36,43 +36,21 @@ pub(super) struct Structures {
 
 /// The figures of one run, converted at `per_ms` instructions per ms.
 fn figures(run: &ImageRun, schedule: &Schedule) -> Figures {
-    let tick_released: Vec<u8> = schedule
-        .items
-        .iter()
-        .filter(|i| i.released_by == "tick")
-        .filter_map(|i| i.slot)
-        .collect();
+    let tick_released = schedule.tick_released();
     let cpm = f64::from(run.counts_per_ms.max(1));
     let per_count = schedule.per_ms as f64 / cpm;
     let times = job_times(&run.records, run.counts_per_ms, &tick_released);
-    let cycles: Vec<u32> = run
-        .periodic
-        .iter()
-        .filter(|(slot, _, _)| tick_released.contains(slot))
-        .map(|(_, _, cycle)| *cycle)
+    let first_line = by_alarms_due(&times.tick, &run.periodic, &tick_released)
+        .into_iter()
+        .map(|(n, l)| {
+            let mean = l.iter().map(|&x| x as f64).sum::<f64>() / l.len().max(1) as f64;
+            (n, mean * per_count, l.len())
+        })
         .collect();
-    let mut by_due: Vec<(usize, f64, usize)> = Vec::new();
-    for &(ms, latency) in &times.tick {
-        let n = cycles
-            .iter()
-            .filter(|&&c| c > 0 && ms % u64::from(c) == 0)
-            .count();
-        match by_due.iter_mut().find(|b| b.0 == n) {
-            Some(b) => {
-                b.1 += latency as f64;
-                b.2 += 1;
-            }
-            None => by_due.push((n, latency as f64, 1)),
-        }
-    }
-    for b in &mut by_due {
-        b.1 = b.1 / b.2 as f64 * per_count;
-    }
-    by_due.sort_by_key(|b| b.0);
     let n = times.dispatch.len();
     let dispatch = times.dispatch.iter().map(|&d| d as f64).sum::<f64>() / n.max(1) as f64;
     Figures {
-        first_line: by_due,
+        first_line,
         dispatch: (dispatch * per_count, n),
     }
 }
@@ -177,7 +155,9 @@ pub(super) fn markdown(s: &Structures, md: &mut String) {
         md,
         "\nThe first figure holds the tick's ISR with its alarms (an activation each, or an \
          event set) and the switch to the first job; the second, the end of one job \
-         (`TerminateTask`, or the next `WaitEvent`) and the switch to the next. The extended \
+         (`TerminateTask`, or the next `WaitEvent`) and the switch to the next; for the \
+         extended tasks both also hold the `ClearEvent` between the wait's return and the \
+         job's first line. The extended \
          tasks' own stacks, deepest use: {} (2,048 B each in this image, its 256-byte guard included; the basic tasks \
          share one).\n",
         stacks.join(", ")

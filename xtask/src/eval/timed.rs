@@ -24,7 +24,7 @@ use std::path::Path;
 
 use cw_core::os::timeline::{Item, Timeline};
 
-use super::schedule::{job_times, Analysed, Schedule};
+use super::schedule::{by_alarms_due, job_times, Analysed, Schedule};
 use super::{start_rows, ImageRun, StartRow, TaskStarts};
 use crate::process::target_dir;
 use crate::Result;
@@ -73,12 +73,7 @@ impl Costs {
         let cpm = u64::from(run.counts_per_ms.max(1));
         let counts = |c: u64| c * 1_000_000 / cpm;
         let instructions = |i: u64| i * 1_000_000 / schedule.per_ms.max(1);
-        let tick_released: Vec<u8> = schedule
-            .items
-            .iter()
-            .filter(|i| i.released_by == "tick")
-            .filter_map(|i| i.slot)
-            .collect();
+        let tick_released = schedule.tick_released();
         let times = job_times(&run.records, run.counts_per_ms, &tick_released);
         let mut own: Vec<(u8, Vec<u64>)> = Vec::new();
         for &(task, t) in &times.own {
@@ -90,26 +85,7 @@ impl Costs {
         let dispatch = counts(mean(times.dispatch.iter().copied()));
         // The number of alarms due at each millisecond: the tick-released periodic tasks
         // whose cycle divides it.
-        let cycles: Vec<u32> = run
-            .periodic
-            .iter()
-            .filter(|(slot, _, _)| tick_released.contains(slot))
-            .map(|(_, _, cycle)| *cycle)
-            .collect();
-        let due = |ms: u64| {
-            cycles
-                .iter()
-                .filter(|&&c| c > 0 && ms % u64::from(c) == 0)
-                .count()
-        };
-        let mut by_due: Vec<(usize, Vec<u64>)> = Vec::new();
-        for &(ms, latency) in &times.tick {
-            let n = due(ms);
-            match by_due.iter_mut().find(|(k, _)| *k == n) {
-                Some(b) => b.1.push(latency),
-                None => by_due.push((n, vec![latency])),
-            }
-        }
+        let by_due = by_alarms_due(&times.tick, &run.periodic, &tick_released);
         let tick_due = by_due
             .into_iter()
             .map(|(n, l)| (n, counts(mean(l.into_iter())).saturating_sub(dispatch)))
@@ -150,7 +126,7 @@ struct Replay<'a> {
     /// Per item, its jobs released and not ended, in order: the item each releases at its
     /// end, if any.
     chains: Vec<VecDeque<Option<usize>>>,
-    /// Per item, its jobs released so far.
+    /// Per item, its jobs released so far (and accepted).
     released: [usize; ITEMS],
     /// Per item, its jobs' first lines, ms.
     starts: Vec<Vec<f64>>,
@@ -185,11 +161,11 @@ impl Replay<'_> {
 
     /// Releases a job of `i` taking `cost` now, which releases `then` at its end.
     fn release(&mut self, i: usize, cost: u64, then: Option<usize>) {
-        if let Some(n) = self.released.get_mut(i) {
-            *n += 1;
-        }
         match self.timeline.release(i, cost) {
             Ok(()) => {
+                if let Some(n) = self.released.get_mut(i) {
+                    *n += 1;
+                }
                 if let Some(c) = self.chains.get_mut(i) {
                     c.push_back(then);
                 }
@@ -260,11 +236,27 @@ pub(super) fn replay(
     // by (releaser, the releaser's start in µs).
     let mut events: Vec<(u64, usize)> = Vec::with_capacity(rows.len());
     let mut due: BTreeMap<u64, usize> = BTreeMap::new();
-    let mut chained: BTreeMap<(usize, u64), usize> = BTreeMap::new();
+    let mut chained: BTreeMap<(usize, u64), (usize, usize)> = BTreeMap::new();
     let mut cycles: Vec<(usize, u32)> = Vec::new();
+    // Each item's job starts on the host, for the jobs another's job releases: that job
+    // is the releaser's last one started by then (on the host its jobs take no time but
+    // their delays, such as the sonar's trigger pulse).
+    let mut host_starts: BTreeMap<usize, Vec<u64>> = BTreeMap::new();
+    for row in rows {
+        if let Some(i) = index(&row.name) {
+            host_starts.entry(i).or_default().push(row.at_us);
+        }
+    }
     for row in rows {
         let Some(i) = index(&row.name) else {
-            continue;
+            // The start-up task runs at 0, before the first tick, and is not in the set.
+            if row.at_us == 0 {
+                continue;
+            }
+            return Err(format!(
+                "eval: line {}: {} is not in the image's task set",
+                row.line, row.name
+            ));
         };
         if row.cycle_ms > 0 && !cycles.iter().any(|&(c, _)| c == i) {
             cycles.push((i, row.cycle_ms));
@@ -282,7 +274,22 @@ pub(super) fn replay(
                         row.name
                     )
                 })?;
-                chained.insert((r, row.at_us), i);
+                let started = host_starts
+                    .get(&r)
+                    .and_then(|s| s.iter().rev().find(|&&at| at <= row.at_us))
+                    .copied()
+                    .ok_or_else(|| {
+                        format!(
+                            "eval: line {}: {} released by {releaser}, which has not started",
+                            row.line, row.name
+                        )
+                    })?;
+                if chained.insert((r, started), (i, row.line)).is_some() {
+                    return Err(format!(
+                        "eval: line {}: {} released a second time by {releaser}'s job of {started} µs",
+                        row.line, row.name
+                    ));
+                }
             }
         }
     }
@@ -312,9 +319,18 @@ pub(super) fn replay(
             };
             replay.release(i, cost, None);
         } else {
-            let then = chained.get(&(i, at_us)).copied();
+            let then = chained.remove(&(i, at_us)).map(|(released, _)| released);
             replay.release_job(i, then)?;
         }
+    }
+    if let Some((&(r, at_us), &(i, line))) = chained.iter().next() {
+        return Err(format!(
+            "eval: line {line}: {} released by {} at {at_us} µs, where no job of {} was \
+             released",
+            set.get(i).map_or("?", |a| a.name.as_str()),
+            set.get(r).map_or("?", |a| a.name.as_str()),
+            set.get(r).map_or("?", |a| a.name.as_str()),
+        ));
     }
     let end = duration_ms.saturating_add(1) * 1_000_000;
     replay.run_to(end)?;
@@ -492,6 +508,7 @@ mod tests {
     #[test]
     fn an_interrupt_inside_a_job_delays_its_end_and_what_it_releases() {
         let schedule = parse(LOG).unwrap();
+        // (OsComTask starts 10 µs into the sonar's job on the host: the trigger pulse.)
         // CanIsr at 40.010 ms, inside the sonar's job (40.0055 to 40.011 alone).
         let mut costs = costs();
         // OsComTask made periodic for the test, to see its start.
@@ -500,6 +517,7 @@ mod tests {
             .map(|mut r| {
                 if r.name == "OsComTask" {
                     r.cycle_ms = 40;
+                    r.at_us = 40010;
                 }
                 r
             })
@@ -520,6 +538,28 @@ mod tests {
         // comes after the first job's end (and its job has not ended by the run's).
         assert_eq!(timed.refused, 2);
         assert!(close(&starts(&timed, "OsLEDTask"), &[10.0035]));
+    }
+
+    #[test]
+    fn a_row_outside_the_set_or_released_by_no_job_is_named() {
+        let schedule = parse(LOG).unwrap();
+        let mut rows = host(40300);
+        rows[2].name = "OsUnknownTask".into();
+        let e = replay(&rows, 41, &schedule, &costs()).unwrap_err();
+        assert!(e.contains("line 4") && e.contains("OsUnknownTask"), "{e}");
+        let mut rows = host(40300);
+        // OsComTask at 30 ms: no sonar job had started.
+        rows[6].at_us = 30000;
+        let e = replay(&rows, 41, &schedule, &costs()).unwrap_err();
+        assert!(e.contains("line 8") && e.contains("OsComTask"), "{e}");
+        // Two releases of OsComTask by the one sonar job: the second names its line.
+        let mut rows = host(40300);
+        let mut again = rows[6].clone();
+        again.line = 9;
+        again.at_us = 40020;
+        rows.insert(7, again);
+        let e = replay(&rows, 41, &schedule, &costs()).unwrap_err();
+        assert!(e.contains("line 9") && e.contains("second time"), "{e}");
     }
 
     #[test]
