@@ -8,16 +8,20 @@ seeded generator and compares), as
 
 CASES.jsonl holds one JSON object per line:
 
-    {"id", "dbc": path of a DBC file, "message": name, "op": "decode", "data": hex}
-    {"id", "dbc", "message", "op": "encode", "values": {signal: text}}
+    {"id", "dbc": path of a DBC file, "strict": bool, "message": name, "op": "decode",
+     "data": hex}
+    {"id", "dbc", "strict", "message", "op": "encode", "values": {signal: text}}
+    {"id", "dbc", "strict", "op": "load"}
 
 A value's text is an integer, a float (Python's repr) or a value-table name. For each case
-cantools (loaded strict, as `cantools decode` does) decodes the bytes (scaled, with value
+cantools (loaded strict, as `cantools decode` does, or with `strict=False` where the case
+says so, as `cantools decode --no-strict` does) decodes the bytes (scaled, with value
 table names, no truncated frames) or encodes the values (scaled, strict: ranges checked,
 every signal needed). OUT.jsonl gets one object per case:
 
     {"id", "ok": true, "signals": {name: ["int", "123"] | ["float", repr] | ["choice", name]}}
     {"id", "ok": true, "data": hex}
+    {"id", "ok": true, "loaded": true}
     {"id", "ok": false, "error": text}
 
 Numbers travel as text so that 64-bit integers and NaN survive JSON.
@@ -59,17 +63,26 @@ def main(argv):
     with open(argv[1], encoding="utf-8") as f:
         for line in f:
             case = json.loads(line)
-            path = case["dbc"]
-            if path not in dbs:
-                dbs[path] = cantools.database.load_file(path, strict=True)
-            msg = dbs[path].get_message_by_name(case["message"])
+            key = (case["dbc"], case.get("strict", True))
+            if key not in dbs:
+                try:
+                    dbs[key] = cantools.database.load_file(key[0], strict=key[1])
+                except Exception as e:  # noqa: BLE001 - a refused DBC is a verdict too
+                    dbs[key] = e
+            db = dbs[key]
             result = {"id": case["id"]}
             try:
-                if case["op"] == "decode":
+                if isinstance(db, Exception):
+                    raise db
+                if case["op"] == "load":
+                    result["loaded"] = True
+                elif case["op"] == "decode":
+                    msg = db.get_message_by_name(case["message"])
                     decoded = msg.decode(bytes.fromhex(case["data"]), decode_choices=True,
                                          scaling=True, allow_truncated=False)
                     result["signals"] = {k: number(v) for k, v in decoded.items()}
                 else:
+                    msg = db.get_message_by_name(case["message"])
                     values = {k: value_of(v) for k, v in case["values"].items()}
                     result["data"] = msg.encode(values, scaling=True, strict=True).hex().upper()
                 result["ok"] = True

@@ -8,7 +8,7 @@ use std::fmt;
 
 use cw_core::com::signal::{spec::value_range, Signedness};
 
-use crate::dbc::{Encoding, MessageDef, SignalDef};
+use crate::dbc::{Encoding, LayoutFault, MessageDef, SignalDef};
 use crate::frame::{Frame, FrameKind};
 
 /// A signal's raw value: the integer its bits hold, or the IEEE value.
@@ -76,14 +76,19 @@ pub enum DecodeError {
         /// The message's size.
         size: usize,
     },
-    /// A present multiplexer holds a value that selects no signal (cantools refuses
-    /// these too).
+    /// A present multiplexer holds a value that selects no signal and that its value
+    /// table does not name (cantools refuses these too).
     UnknownMux {
         /// The multiplexer signal.
         signal: String,
         /// Its raw value.
         value: i128,
     },
+    /// The frame carries signals that a lenient DBC placed where they cannot be read
+    /// together: two of one byte order and multiplexing level that share bits, or one
+    /// beyond the message (cantools' `strict=False` refuses these frames too: "unpacking
+    /// failed").
+    Unplaceable(String),
 }
 
 impl fmt::Display for DecodeError {
@@ -96,6 +101,10 @@ impl fmt::Display for DecodeError {
             Self::UnknownMux { signal, value } => write!(
                 f,
                 "multiplexer {signal} = {value} selects no signal of the message"
+            ),
+            Self::Unplaceable(fault) => write!(
+                f,
+                "{fault} (kept by --no-strict): the frame carries them and cannot be decoded"
             ),
         }
     }
@@ -165,13 +174,17 @@ pub fn decode<'a>(message: &'a MessageDef, data: &[u8]) -> Result<Vec<Decoded<'a
         Some((_, Raw::Int(v))) => *v,
         _ => -1,
     };
+    let present = |i: usize| message.present(i, &raw_int);
+    if let Some(fault) = message.fault_in(&present) {
+        return Err(DecodeError::Unplaceable(message.describe(fault)));
+    }
     let mut out = Vec::new();
     for (i, (signal, &(bits, raw))) in message.signals.iter().zip(&unpacked).enumerate() {
-        if !message.present(i, &raw_int) {
+        if !present(i) {
             continue;
         }
         if let (true, Raw::Int(v)) = (signal.is_multiplexer, raw) {
-            if message.has_children(i) && !message.selects(i, v) {
+            if !message.mux_value_known(i, v) {
                 return Err(DecodeError::UnknownMux {
                     signal: signal.name.clone(),
                     value: v,
@@ -343,9 +356,22 @@ pub fn encode(message: &MessageDef, values: &[(String, Input)]) -> Result<Vec<u8
         Some(Some((_, Raw::Int(r)))) => *r,
         _ => -1,
     };
+    let present = |i: usize| message.present(i, &mux_raw);
+    // Lenient faults among the frame's signals: whatever their level or byte order, two
+    // signals that share bits cannot both be written.
+    if let Some(fault) = message.faults.iter().find(|f| match **f {
+        LayoutFault::Outside(i) => present(i),
+        LayoutFault::Overlap(a, b) => present(a) && present(b),
+        LayoutFault::Unselectable(_) => false,
+    }) {
+        return Err(format!(
+            "{} (kept by --no-strict): a frame that carries them cannot be encoded",
+            message.describe(fault)
+        ));
+    }
     let mut pdu = [0u8; 64];
     for (i, signal) in message.signals.iter().enumerate() {
-        let present = message.present(i, &mux_raw);
+        let present = present(i);
         let name = &signal.name;
         match (given.get(i).copied().flatten(), present) {
             (None, false) => {}
@@ -359,7 +385,16 @@ pub fn encode(message: &MessageDef, values: &[(String, Input)]) -> Result<Vec<u8
                     "{name} is not in the frame: its multiplexer does not select it"
                 ))
             }
-            (Some((value, raw)), true) => pack(signal, raw, value, &mut pdu)?,
+            (Some((value, raw)), true) => {
+                if let (true, Raw::Int(v)) = (signal.is_multiplexer, raw) {
+                    if !message.mux_value_known(i, v) {
+                        return Err(format!(
+                            "{name} = {value} selects no signal of {mname} and its value table does not name it"
+                        ));
+                    }
+                }
+                pack(signal, raw, value, &mut pdu)?
+            }
         }
     }
     Ok(pdu.get(..message.size).unwrap_or(&pdu).to_vec())

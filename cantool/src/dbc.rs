@@ -6,6 +6,13 @@
 //! every layout of PDUs up to 64 bytes; factor, offset, value tables, IEEE floats and
 //! multiplexing (simple, and the extended `SG_MUL_VAL_` form) are applied here, with the
 //! semantics cantools gives them.
+//!
+//! A DBC loads strict ([`Strictness::Strict`], the default: what cantools' `strict=True`
+//! refuses is refused) or lenient ([`Strictness::Lenient`], cantools' `strict=False`, the
+//! `--no-strict` of `cw-can`): two signals that share bits, or a signal beyond its
+//! message, are then kept as a [`LayoutFault`] of the message, reported by
+//! [`Database::warnings`], and a frame whose decoding meets one is refused as cantools
+//! refuses it (see [`MessageDef::fault_in`]).
 
 use std::collections::HashMap;
 use std::fmt;
@@ -41,6 +48,30 @@ pub enum Muxing {
         /// Inclusive ranges of the multiplexer's raw value.
         values: Vec<(u64, u64)>,
     },
+}
+
+/// How a DBC's layout faults are taken (cantools' `strict` argument).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Strictness {
+    /// Two signals that can be in one frame sharing bits, or a signal beyond its message,
+    /// refuse the DBC.
+    #[default]
+    Strict,
+    /// Such a message is kept with its [`LayoutFault`]s: each is a warning, and only the
+    /// frames whose decoding meets one are refused.
+    Lenient,
+}
+
+/// A layout that strict loading refuses and lenient loading keeps (signals by index).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum LayoutFault {
+    /// Two signals that can be in one frame share bits.
+    Overlap(usize, usize),
+    /// A signal's bits fall outside the message's bytes.
+    Outside(usize),
+    /// A signal hangs from a multiplexer that is not an integer multiplexer signal (`M`):
+    /// no frame selects it (cantools' lenient load keeps it and never decodes it).
+    Unselectable(usize),
 }
 
 /// One signal, checked.
@@ -102,6 +133,8 @@ pub struct MessageDef {
     pub fd: bool,
     /// Signals in DBC order.
     pub signals: Vec<SignalDef>,
+    /// What a lenient load kept that a strict one refuses (always empty when strict).
+    pub faults: Vec<LayoutFault>,
 }
 
 impl MessageDef {
@@ -157,6 +190,80 @@ impl MessageDef {
         self.signals
             .iter()
             .any(|s| matches!(&s.muxing, Muxing::When { multiplexer, .. } if *multiplexer == m))
+    }
+
+    /// Whether the multiplexer signal `m` may hold `value` in a frame, as cantools decides:
+    /// its known values are those that select a signal and those its value table names
+    /// (a named value may select nothing: the frame then carries the multiplexer alone);
+    /// a multiplexer with neither may hold any value.
+    pub fn mux_value_known(&self, m: usize, value: i128) -> bool {
+        let named = self
+            .signals
+            .get(m)
+            .map_or(&[][..], |s| s.choices.as_slice());
+        (!self.has_children(m) && named.is_empty())
+            || self.selects(m, value)
+            || named.iter().any(|(v, _)| i128::from(*v) == value)
+    }
+
+    /// The first of the message's [`LayoutFault`]s that a frame carrying the signals
+    /// `present` says are there meets, as cantools' decoding meets it: it reads each
+    /// multiplexing level (the signals always there, or those one multiplexer value
+    /// selects) in one pass per byte order, which cannot place a signal beyond the message
+    /// nor two that share bits ("unpacking failed"). Two signals of different byte
+    /// orders, or of different levels, that share bits are each read from their own bits.
+    pub fn fault_in(&self, present: &impl Fn(usize) -> bool) -> Option<&LayoutFault> {
+        let parent = |i: usize| match self.signals.get(i).map(|s| &s.muxing) {
+            Some(Muxing::When { multiplexer, .. }) => Some(*multiplexer),
+            _ => None,
+        };
+        let order = |i: usize| self.signals.get(i).map(|s| s.layout.byte_order());
+        self.faults.iter().find(|f| match **f {
+            LayoutFault::Outside(i) => present(i),
+            LayoutFault::Unselectable(_) => false,
+            LayoutFault::Overlap(a, b) => {
+                present(a) && present(b) && parent(a) == parent(b) && order(a) == order(b)
+            }
+        })
+    }
+
+    /// A fault in words, with the signals' names.
+    pub fn describe(&self, fault: &LayoutFault) -> String {
+        let name = |i: usize| self.signals.get(i).map_or("?", |s| s.name.as_str());
+        match *fault {
+            LayoutFault::Overlap(a, b) => {
+                format!(
+                    "message {}: signals {} and {} share bits",
+                    self.name,
+                    name(a),
+                    name(b)
+                )
+            }
+            LayoutFault::Outside(i) => {
+                let (start, len, order) = self.signals.get(i).map_or((0, 0, 1), |s| {
+                    let l = &s.layout;
+                    let order = u8::from(l.byte_order() == ByteOrder::Intel);
+                    (l.start_bit(), l.length_bits(), order)
+                });
+                format!(
+                    "message {}: signal {}: bits {start}|{len}@{order} fall outside the message's {} bytes",
+                    self.name,
+                    name(i),
+                    self.size
+                )
+            }
+            LayoutFault::Unselectable(i) => {
+                let by = match self.signals.get(i).map(|s| &s.muxing) {
+                    Some(Muxing::When { multiplexer, .. }) => name(*multiplexer),
+                    _ => "?",
+                };
+                format!(
+                    "message {}: signal {}: its multiplexer {by} is not an integer multiplexer signal (M): no frame carries it",
+                    self.name,
+                    name(i)
+                )
+            }
+        }
     }
 
     /// Whether signals `a` and `b` can be in one frame: not when both hang, through
@@ -269,9 +376,18 @@ impl Database {
     /// The file cannot be read, or [`Self::from_bytes`] refuses it; the sentence names the
     /// file.
     pub fn load(path: &std::path::Path) -> Result<Self, String> {
+        Self::load_with(path, Strictness::Strict)
+    }
+
+    /// Reads and loads a DBC file, strict or lenient.
+    ///
+    /// # Errors
+    /// As [`Self::load`].
+    pub fn load_with(path: &std::path::Path, strictness: Strictness) -> Result<Self, String> {
         let bytes =
             std::fs::read(path).map_err(|e| format!("cannot read {}: {e}", path.display()))?;
-        Self::from_bytes(&bytes).map_err(|e| format!("{}: {e}", path.display()))
+        Self::from_text_with(&text_of(&bytes), strictness)
+            .map_err(|e| format!("{}: {e}", path.display()))
     }
 
     /// Loads a DBC file's bytes (see [`text_of`] for the encodings).
@@ -289,6 +405,15 @@ impl Database {
     /// # Errors
     /// As [`Self::from_bytes`].
     pub fn from_text(text: &str) -> Result<Self, DbcError> {
+        Self::from_text_with(text, Strictness::Strict)
+    }
+
+    /// Loads a DBC's text, strict or lenient.
+    ///
+    /// # Errors
+    /// As [`Self::from_bytes`]; lenient, a signal beyond its message or two signals that
+    /// share bits are kept as [`LayoutFault`]s instead.
+    pub fn from_text_with(text: &str, strictness: Strictness) -> Result<Self, DbcError> {
         let dbc = Dbc::try_from(text).map_err(|e| DbcError(format!("does not parse: {e}")))?;
         let written = written_ids(text);
         let mut messages = Vec::new();
@@ -307,7 +432,7 @@ impl Database {
                     )));
                 }
             }
-            messages.push(load_message(&dbc, message)?);
+            messages.push(load_message(&dbc, message, strictness)?);
         }
         if messages.is_empty() {
             return Err(DbcError("holds no message (BO_)".into()));
@@ -323,6 +448,15 @@ impl Database {
             }
         }
         Ok(Self { messages, by_id })
+    }
+
+    /// What a lenient load kept that a strict one refuses, one sentence per fault naming
+    /// message and signals (empty when strict).
+    pub fn warnings(&self) -> Vec<String> {
+        self.messages
+            .iter()
+            .flat_map(|m| m.faults.iter().map(|f| m.describe(f)))
+            .collect()
     }
 
     /// Every message, in DBC order.
@@ -378,7 +512,11 @@ fn fd_by_attribute(dbc: &Dbc, id: MessageId) -> bool {
         })
 }
 
-fn load_message(dbc: &Dbc, message: &can_dbc::Message) -> Result<MessageDef, DbcError> {
+fn load_message(
+    dbc: &Dbc,
+    message: &can_dbc::Message,
+    strictness: Strictness,
+) -> Result<MessageDef, DbcError> {
     let name = &message.name;
     let err = |what: String| DbcError(format!("message {name}: {what}"));
     let (id, extended) = match message.id {
@@ -405,6 +543,7 @@ fn load_message(dbc: &Dbc, message: &can_dbc::Message) -> Result<MessageDef, Dbc
         .filter(|x| x.message_id == message.id)
         .collect();
     let mut signals = Vec::new();
+    let mut faults = Vec::new();
     for s in &message.signals {
         let serr = |what: String| err(format!("signal {}: {what}", s.name));
         let order = match s.byte_order {
@@ -420,11 +559,19 @@ fn load_message(dbc: &Dbc, message: &can_dbc::Message) -> Result<MessageDef, Dbc
             .ok()
             .filter(|l| (1..=64).contains(l))
             .ok_or_else(|| serr(format!("{} bits; a signal has 1 to 64", s.size)))?;
-        if !layout_fits(size.max(1), start, len, order) || size == 0 {
-            return Err(serr(format!(
+        let outside = || {
+            serr(format!(
                 "bits {start}|{len}@{} fall outside the message's {size} bytes",
-                if order == ByteOrder::Intel { 1 } else { 0 }
-            )));
+                u8::from(order == ByteOrder::Intel)
+            ))
+        };
+        if !layout_fits(size.max(1), start, len, order) || size == 0 {
+            // Lenient, a signal beyond its message is kept where a frame of 64 bytes
+            // would hold it; beyond that, no frame does.
+            if strictness == Strictness::Strict || !layout_fits(64, start, len, order) {
+                return Err(outside());
+            }
+            faults.push(LayoutFault::Outside(signals.len()));
         }
         let layout =
             SignalLayout::<64>::new(start, len, order, sign).map_err(|e| serr(format!("{e:?}")))?;
@@ -513,11 +660,17 @@ fn load_message(dbc: &Dbc, message: &can_dbc::Message) -> Result<MessageDef, Dbc
             muxing,
         });
     }
-    // Every multiplexer must be an integer multiplexer signal, and the chains must end.
+    // Every multiplexer must be an integer multiplexer signal (lenient: a signal that
+    // hangs from another kind is never selected), and the chains must end.
+    let mut unselectable = Vec::new();
     for (i, s) in signals.iter().enumerate() {
         if let Muxing::When { multiplexer, .. } = s.muxing {
             let m = signals.get(multiplexer);
             if !m.is_some_and(|m| m.is_multiplexer && matches!(m.encoding, Encoding::Integer(_))) {
+                if strictness == Strictness::Lenient && m.is_some() {
+                    unselectable.push(i);
+                    continue;
+                }
                 return Err(err(format!(
                     "signal {}: its multiplexer {} is not an integer multiplexer signal (M)",
                     s.name,
@@ -538,23 +691,35 @@ fn load_message(dbc: &Dbc, message: &can_dbc::Message) -> Result<MessageDef, Dbc
             }
         }
     }
-    let message = MessageDef {
+    for i in unselectable {
+        if let Some(Muxing::When { values, .. }) = signals.get_mut(i).map(|s| &mut s.muxing) {
+            values.clear();
+        }
+        faults.push(LayoutFault::Unselectable(i));
+    }
+    let mut message = MessageDef {
         name: name.clone(),
         id,
         extended,
         size,
         fd: size > 8 || fd_by_attribute(dbc, message.id),
         signals,
+        faults,
     };
     // Two signals that can be in one frame must not share a bit (cantools refuses them too).
     let bits: Vec<_> = message.signals.iter().map(|s| bits_of(&s.layout)).collect();
+    let mut overlaps = Vec::new();
     for (i, (a, bits_a)) in message.signals.iter().zip(&bits).enumerate() {
         for (j, (b, bits_b)) in message.signals.iter().zip(&bits).enumerate().skip(i + 1) {
             let shared = bits_a.iter().zip(bits_b).any(|(x, y)| x & y != 0);
             if shared && message.can_coexist(i, j) {
-                return Err(err(format!("signals {} and {} share bits", a.name, b.name)));
+                if strictness == Strictness::Strict {
+                    return Err(err(format!("signals {} and {} share bits", a.name, b.name)));
+                }
+                overlaps.push(LayoutFault::Overlap(i, j));
             }
         }
     }
+    message.faults.append(&mut overlaps);
     Ok(message)
 }

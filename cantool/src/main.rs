@@ -34,7 +34,7 @@ use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
 use cw_can::codec::{self, Input};
-use cw_can::dbc::Database;
+use cw_can::dbc::{Database, Strictness};
 use cw_can::log::{Entries, LogFormat};
 use cw_can::report::{self, Format};
 use cw_can::slcan::{Limits, SlcanSource};
@@ -56,9 +56,8 @@ struct Cli {
 enum Command {
     /// Decode CAN logs (candump, ASC, BLF): every frame, with its message and signals.
     Decode {
-        /// The DBC file (UTF-8 or Windows-1252).
-        #[arg(long)]
-        dbc: PathBuf,
+        #[command(flatten)]
+        dbc: DbcArgs,
         /// Stop at the first bad line instead of reporting it and going on.
         #[arg(long)]
         strict: bool,
@@ -85,9 +84,8 @@ enum Command {
     /// `DistanceFrame`s alone; and a panel that sends `ThresholdConfig` to a live bus.
     #[command(group(clap::ArgGroup::new("source").required(true).args(["replay", "simulate", "slcan"])))]
     View {
-        /// The DBC file (UTF-8 or Windows-1252).
-        #[arg(long)]
-        dbc: PathBuf,
+        #[command(flatten)]
+        dbc: DbcArgs,
         /// Replay a log (candump, ASC, BLF), with play, pause, speed and seek on the page.
         #[arg(long, value_name = "LOG")]
         replay: Option<PathBuf>,
@@ -115,14 +113,26 @@ enum Command {
     },
     /// Encode signal values into a frame of a message, printed as `ID#DATA`.
     Encode {
-        /// The DBC file (UTF-8 or Windows-1252).
-        #[arg(long)]
-        dbc: PathBuf,
+        #[command(flatten)]
+        dbc: DbcArgs,
         /// The message's name.
         message: String,
         /// `SIGNAL=VALUE`: a number or a name from the signal's value table.
         values: Vec<String>,
     },
+}
+
+/// The DBC and how strictly it is read.
+#[derive(clap::Args)]
+struct DbcArgs {
+    /// The DBC file (UTF-8 or Windows-1252).
+    #[arg(long)]
+    dbc: PathBuf,
+    /// Keep messages whose signals share bits or lie beyond the message, as cantools'
+    /// `--no-strict` does: each is a warning, and only a frame that carries such signals
+    /// together is refused.
+    #[arg(long)]
+    no_strict: bool,
 }
 
 /// A live bus through an SLCAN adapter (`decode` and `view`).
@@ -144,8 +154,18 @@ struct Adapter {
 /// Something that stops the run (exit status 2).
 struct Fatal(String);
 
-fn load(path: &Path) -> Result<Database, Fatal> {
-    Database::load(path).map_err(Fatal)
+/// Loads the DBC; lenient, each fault it keeps is a warning on standard error.
+fn load(args: &DbcArgs) -> Result<Database, Fatal> {
+    let strictness = if args.no_strict {
+        Strictness::Lenient
+    } else {
+        Strictness::Strict
+    };
+    let db = Database::load_with(&args.dbc, strictness).map_err(Fatal)?;
+    for warning in db.warnings() {
+        eprintln!("cw-can: warning: {}: {warning}", args.dbc.display());
+    }
+    Ok(db)
 }
 
 fn out_err(e: std::io::Error) -> Fatal {
@@ -164,7 +184,7 @@ enum Source<'a> {
 }
 
 /// Decodes every log; returns how many lines were bad.
-fn decode(dbc: &Path, strict: bool, format: Format, source: Source<'_>) -> Result<usize, Fatal> {
+fn decode(dbc: &DbcArgs, strict: bool, format: Format, source: Source<'_>) -> Result<usize, Fatal> {
     let db = load(dbc)?;
     let stdout = std::io::stdout();
     let mut out = std::io::BufWriter::new(stdout.lock());
@@ -222,11 +242,11 @@ fn decode(dbc: &Path, strict: bool, format: Format, source: Source<'_>) -> Resul
     Ok(bad)
 }
 
-fn encode(dbc: &Path, message: &str, values: &[String]) -> Result<(), Fatal> {
+fn encode(dbc: &DbcArgs, message: &str, values: &[String]) -> Result<(), Fatal> {
     let db = load(dbc)?;
     let m = db
         .by_name(message)
-        .ok_or_else(|| Fatal(format!("no message `{message}` in {}", dbc.display())))?;
+        .ok_or_else(|| Fatal(format!("no message `{message}` in {}", dbc.dbc.display())))?;
     let values = values
         .iter()
         .map(|p| {
@@ -262,7 +282,7 @@ enum ViewSource<'a> {
 }
 
 /// Serves the view until the process ends.
-fn view(dbc: &Path, source: ViewSource<'_>, listen: &str) -> Result<(), Fatal> {
+fn view(dbc: &DbcArgs, source: ViewSource<'_>, listen: &str) -> Result<(), Fatal> {
     let db = load(dbc)?;
     let (feed, what) = match source {
         ViewSource::Replay {

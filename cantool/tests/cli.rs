@@ -391,3 +391,33 @@ fn view_needs_one_source_and_refuses_what_it_cannot_open() {
     );
     assert_eq!(speed.status.code(), Some(2), "--speed is a replay's");
 }
+
+#[test]
+fn no_strict_keeps_what_strict_refuses_as_warnings_and_refuses_only_the_frames_it_cannot_read() {
+    let dbc = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/data/opendbc-faults.dbc");
+    let dbc = dbc.to_str().expect("path");
+    let log = "(0.0) can0 001#1234\n(0.1) can0 002#1234\n(0.2) can0 006#0205\n";
+    let strict = run(&["decode", "--dbc", dbc, "-"], log);
+    assert_eq!(strict.status.code(), Some(2));
+    assert_eq!(
+        text(&strict.stderr),
+        format!("cw-can: {dbc}: message Overlap: signals S and T share bits\n")
+    );
+    let lenient = run(&["decode", "--no-strict", "--dbc", dbc, "-"], log);
+    assert_eq!(lenient.status.code(), Some(1), "one frame was refused");
+    assert_eq!(
+        text(&lenient.stdout),
+        "\
+(0.100000) can0 002#1234 Orders(L: 18, B: 18)
+(0.200000) can0 006#0205 Named(Index: two)
+"
+    );
+    let stderr = text(&lenient.stderr);
+    assert!(stderr.starts_with(&format!(
+        "cw-can: warning: {dbc}: message Overlap: signals S and T share bits\n"
+    )));
+    assert_eq!(stderr.matches("cw-can: warning: ").count(), 5);
+    assert!(stderr.ends_with(
+        "cw-can: -:1: 001#1234: message Overlap: signals S and T share bits (kept by --no-strict): the frame carries them and cannot be decoded\ncw-can: 1 bad line(s)\n"
+    ));
+}

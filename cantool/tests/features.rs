@@ -3,7 +3,7 @@
 //! `encode_message`), written down here.
 
 use cw_can::codec::{decode, encode, DecodeError, Input, Physical, Raw};
-use cw_can::dbc::{Database, MessageDef};
+use cw_can::dbc::{Database, MessageDef, Strictness};
 
 fn db() -> Database {
     Database::from_bytes(include_bytes!("data/features.dbc")).expect("features.dbc loads")
@@ -307,5 +307,101 @@ fn a_windows_1252_dbc_reads_as_candb_wrote_it() {
         cw_can::dbc::text_of(&cp1252),
         utf8,
         "decoded as Windows-1252"
+    );
+}
+
+/// A DBC with the faults opendbc's production DBCs have (`vw_mqb`, `vw_pq`,
+/// `nissan_xterra_2011`, ...): signals that share bits, a signal beyond its message, a
+/// lone `m` with signals hung from it; and a multiplexer value that its value table names
+/// but that selects no signal (`tesla_model3_vehicle.dbc`'s `VCLEFT_switchStatusIndex`).
+/// The expected answers are cantools 45.1.0's with `strict=False`.
+const FAULTY: &str = include_str!("data/opendbc-faults.dbc");
+
+fn lenient() -> Database {
+    Database::from_text_with(FAULTY, Strictness::Lenient).expect("loads leniently")
+}
+
+#[test]
+fn strict_refuses_what_lenient_keeps_as_warnings_naming_message_and_signals() {
+    assert_eq!(
+        Database::from_text(FAULTY)
+            .map(|_| ())
+            .map_err(|e| e.to_string()),
+        Err("message Overlap: signals S and T share bits".into())
+    );
+    assert_eq!(
+        lenient().warnings(),
+        [
+            "message Overlap: signals S and T share bits",
+            "message Orders: signals L and B share bits",
+            "message Beyond: signal Out: bits 12|8@1 fall outside the message's 2 bytes",
+            "message Levels: signals Two and Two2 share bits",
+            "message LoneM: signal ByCode: its multiplexer Code is not an integer multiplexer signal (M): no frame carries it",
+        ]
+    );
+    // Beyond 64 bytes no frame holds a signal: refused even leniently.
+    let far = "VERSION \"\"\n\nNS_ :\n\nBS_:\n\nBU_: A\n\nBO_ 1 M: 8 A\n SG_ S : 600|8@1+ (1,0) [0|0] \"\" A\n";
+    assert!(Database::from_text_with(far, Strictness::Lenient)
+        .is_err_and(|e| e.to_string().contains("fall outside")));
+}
+
+#[test]
+fn lenient_frames_decode_as_cantools_no_strict_decodes_them() {
+    let db = lenient();
+    let unplaceable =
+        |name: &str, hex: &str| matches!(decoded(&db, name, hex), Err(DecodeError::Unplaceable(_)));
+    // Signals of one byte order and level that share bits: "unpacking failed".
+    assert!(unplaceable("Overlap", "1234"));
+    // Of different byte orders: each read from its own bits.
+    assert_eq!(
+        decoded(&db, "Orders", "1234"),
+        Ok(vec!["L=18".into(), "B=18".into()])
+    );
+    // A signal beyond the message: no frame of it decodes.
+    assert!(unplaceable("Beyond", "1234"));
+    // Sharing bits only under a value the frame does not select: decodes.
+    assert_eq!(
+        decoded(&db, "Levels", "01AB"),
+        Ok(vec!["Sel=1".into(), "One=171".into()])
+    );
+    assert!(unplaceable("Levels", "02AB"));
+    // A signal hung from a lone `m` is never carried.
+    assert_eq!(decoded(&db, "LoneM", "05"), Ok(vec!["Code=1".into()]));
+}
+
+#[test]
+fn a_named_multiplexer_value_that_selects_nothing_decodes_the_multiplexer_alone() {
+    let db = lenient();
+    assert_eq!(
+        decoded(&db, "Named", "0105"),
+        Ok(vec!["Index=one".into(), "X=5".into()])
+    );
+    assert_eq!(decoded(&db, "Named", "0205"), Ok(vec!["Index=two".into()]));
+    assert_eq!(
+        decoded(&db, "Named", "0305"),
+        Err(DecodeError::UnknownMux {
+            signal: "Index".into(),
+            value: 3
+        })
+    );
+    assert_eq!(
+        encoded(&db, "Named", &[("Index", "two")]),
+        Ok("0200".into())
+    );
+    assert!(
+        encoded(&db, "Named", &[("Index", "3")]).is_err_and(|e| e.contains("selects no signal"))
+    );
+}
+
+#[test]
+fn lenient_signals_that_share_bits_are_not_encoded() {
+    let db = lenient();
+    assert_eq!(
+        encoded(&db, "Overlap", &[("S", "1"), ("T", "2")]),
+        Err("message Overlap: signals S and T share bits (kept by --no-strict): a frame that carries them cannot be encoded".into())
+    );
+    assert_eq!(
+        encoded(&db, "Levels", &[("Sel", "1"), ("One", "7")]),
+        Ok("0107".into())
     );
 }

@@ -83,7 +83,7 @@ mod targets {
     use cw_can::asc::AscReader;
     use cw_can::blf::BlfReader;
     use cw_can::codec;
-    use cw_can::dbc::Database;
+    use cw_can::dbc::{Database, Strictness};
     use cw_can::log::{At, CandumpReader};
     use cw_can::report::{self, Format};
     use cw_can::view::feed::{Control, Feed, CHART_POINTS};
@@ -398,7 +398,7 @@ mod targets {
     /// Any DBC and any log, as `cw-can decode` reads them (the input's bytes up to the
     /// first 0 byte are the DBC, in UTF-8 or Windows-1252; the rest is read as a candump
     /// log and as an ASC log): the
-    /// DBC loads or is refused with a reason, every log line is an entry or an error that
+    /// DBC loads (strict, or else lenient) or is refused with a reason, every log line is an entry or an error that
     /// names its line, and every entry decodes or is refused, then renders in every output
     /// form, never a panic. Each decoded frame's signals encode back into the same bits.
     #[test]
@@ -408,8 +408,23 @@ mod targets {
                 Some(at) => (&bytes[..at], &bytes[at + 1..]),
                 None => (bytes, &[][..]),
             };
-            let Ok(db) = Database::from_bytes(dbc) else {
-                return;
+            // Strict, or else lenient (what strict refuses for a layout is a warning);
+            // where strict loads, lenient loads the same with no warning.
+            let text = cw_can::dbc::text_of(dbc);
+            let lenient = Database::from_text_with(&text, Strictness::Lenient);
+            let db = match Database::from_text(&text) {
+                Ok(strict) => {
+                    let Ok(lenient) = lenient else {
+                        panic!("a DBC strict loading takes, lenient loading refuses")
+                    };
+                    assert!(lenient.warnings().is_empty());
+                    assert_eq!(lenient.messages(), strict.messages());
+                    strict
+                }
+                Err(_) => match lenient {
+                    Ok(db) => db,
+                    Err(_) => return,
+                },
             };
             let lines = log.split(|b| *b == b'\n').count();
             let candump = CandumpReader::new(log);

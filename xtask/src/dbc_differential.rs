@@ -21,7 +21,7 @@ use crate::process::target_dir;
 use crate::rng::Rng;
 use crate::Result;
 use cw_can::codec::{self, Input, Physical};
-use cw_can::dbc::{Database, MessageDef};
+use cw_can::dbc::{Database, MessageDef, Strictness};
 use cw_can::report::hex;
 use cw_core::com::signal::spec::{bit_position, layout_fits};
 use cw_core::com::signal::ByteOrder;
@@ -62,6 +62,11 @@ pub struct Options {
     pub frames: u64,
     #[command(flatten)]
     pub seed: crate::rng::Seed,
+    /// Also compare on these DBC files (a public corpus such as opendbc's), both sides
+    /// loading them leniently (cantools' `strict=False`, `cw-can --no-strict`): whether
+    /// each loads, then random frames of every message decoded
+    #[arg(long = "dbc", value_name = "FILE")]
+    pub corpus: Vec<std::path::PathBuf>,
 }
 
 impl Default for Options {
@@ -69,9 +74,13 @@ impl Default for Options {
         Self {
             frames: FRAMES,
             seed: crate::rng::Seed::default(),
+            corpus: Vec::new(),
         }
     }
 }
+
+/// Every third generated DBC is loaded leniently, with faults in its messages.
+const LENIENT_EVERY: usize = 3;
 
 /// Where a generated signal hangs in the multiplexing.
 #[derive(Clone)]
@@ -87,6 +96,9 @@ enum Mux {
         ranges: Vec<(u64, u64)>,
         is_mux: bool,
     },
+    /// A lone lower-case `m` (as opendbc's `vw_pq.dbc` writes `MO2_Mp_Code`): not a
+    /// multiplexer, though `SG_MUL_VAL_` lines hang signals from it.
+    LoneM,
 }
 
 struct Sig {
@@ -282,6 +294,61 @@ fn multiplexer(name: &str, start: u16, len: u8, order: ByteOrder, mux: Mux) -> S
     }
 }
 
+/// Signals a lenient DBC adds to a message without looking where the others are: most
+/// share bits with some (of either byte order, at the message's level or a multiplexed
+/// one), some lie beyond the message (within 64 bytes).
+fn stray_signals(rng: &mut Rng, msg: &mut Msg) {
+    for k in 0..1 + rng.below(2) {
+        let len = int_len(rng, msg.size.min(8));
+        let order = if rng.one_in(2) {
+            ByteOrder::Intel
+        } else {
+            ByteOrder::Motorola
+        };
+        let span = ((msg.size + 2).min(64) * 8) as u64;
+        let Some(start) = (0..20)
+            .map(|_| rng.below(span) as u16)
+            .find(|start| layout_fits(64, *start, len, order))
+        else {
+            continue;
+        };
+        // At the message's level, or beside a multiplexed signal.
+        let mux = match msg.sigs.get(rng.below(msg.sigs.len() as u64 + 1) as usize) {
+            Some(Sig {
+                mux: Mux::Simple(v),
+                ..
+            }) => Mux::Simple(*v),
+            Some(Sig {
+                mux: Mux::Extended { by, ranges, .. },
+                ..
+            }) => Mux::Extended {
+                by: by.clone(),
+                ranges: ranges.clone(),
+                is_mux: false,
+            },
+            _ => Mux::Plain,
+        };
+        let mut sig = multiplexer(&format!("X{k}"), start, len, order, mux);
+        sig.signed = rng.one_in(2);
+        msg.sigs.push(sig);
+    }
+    // A lone `m` with signals hung from it, now and then, in a message without `M` (as
+    // in `vw_pq.dbc`; beside an `M`, cantools reads the lone `m` as `m<id>` and refuses
+    // the DBC).
+    let has_m = msg.sigs.iter().any(|s| matches!(s.mux, Mux::Root));
+    if !has_m && rng.one_in(6) {
+        let (start, order) = (0, ByteOrder::Intel);
+        msg.sigs
+            .push(multiplexer("Code", start, 2, order, Mux::LoneM));
+        let by = Mux::Extended {
+            by: "Code".into(),
+            ranges: vec![(1, 1)],
+            is_mux: false,
+        };
+        msg.sigs.push(multiplexer("ByCode", 2, 4, order, by));
+    }
+}
+
 fn gen_message(rng: &mut Rng, index: usize, used_ids: &mut Vec<u32>) -> Msg {
     let size = rng.pick(SIZES, 8);
     let extended = rng.one_in(3);
@@ -314,6 +381,18 @@ fn gen_message(rng: &mut Rng, index: usize, used_ids: &mut Vec<u32>) -> Msg {
     }
     if let Some(sel) = sel.and_then(|i| sigs.get(i)).map(|s| s.len) {
         let top = (1u64 << sel) - 1;
+        // Names for some of the selector's values, selecting signals or not (a named value
+        // that selects none decodes as the multiplexer alone).
+        if rng.one_in(3) {
+            if let Some(s) = sigs.iter_mut().find(|s| matches!(s.mux, Mux::Root)) {
+                for k in 0..1 + rng.below(3) {
+                    let v = rng.below(top + 1) as i64;
+                    if !s.choices.iter().any(|(c, _)| *c == v) {
+                        s.choices.push((v, format!("Kind{k}")));
+                    }
+                }
+            }
+        }
         if mode == 2 {
             // Simple: a few distinct selector values, each with its own signals.
             let mut values: Vec<u64> = Vec::new();
@@ -399,6 +478,7 @@ fn dbc_text(messages: &[Msg]) -> String {
             let ind = match &s.mux {
                 Mux::Plain => String::new(),
                 Mux::Root => " M".into(),
+                Mux::LoneM => " m".into(),
                 Mux::Simple(v) => format!(" m{v}"),
                 Mux::Extended { ranges, is_mux, .. } => format!(
                     " m{}{}",
@@ -466,6 +546,8 @@ fn dbc_text(messages: &[Msg]) -> String {
 enum Op {
     Decode(Vec<u8>),
     Encode(Vec<(String, String)>),
+    /// Whether the DBC loads at all (corpus files).
+    Load,
 }
 
 struct Case {
@@ -497,27 +579,42 @@ fn choose_mux(rng: &mut Rng, m: &MessageDef) -> Vec<(usize, u64)> {
                 }
             }
         }
+        // Now and then a value the multiplexer's value table names, which may select
+        // nothing.
+        let named: Vec<(u64, u64)> = s
+            .choices
+            .iter()
+            .filter_map(|(v, _)| u64::try_from(*v).ok().map(|v| (v, v)))
+            .collect();
+        if !named.is_empty() && (options.is_empty() || rng.one_in(3)) {
+            options = named;
+        }
         let (lo, hi) = rng.pick(&options, (0, 0));
-        let _ = s;
         out.push((i, lo + rng.below(hi - lo + 1)));
     }
     out
 }
 
+/// Frames of every message of `db`: decoded and encoded where the generator's messages
+/// `msgs` say what values to encode, else only decoded.
 fn gen_cases(
     rng: &mut Rng,
     dbc: usize,
     db: &Database,
-    msgs: &[Msg],
+    msgs: Option<&[Msg]>,
     next_id: &mut usize,
 ) -> Vec<Case> {
     let mut cases = Vec::new();
-    for (m, gen) in db.messages().iter().zip(msgs) {
+    for (n, m) in db.messages().iter().enumerate() {
+        let gen = msgs.and_then(|msgs| msgs.get(n));
         for k in 0..FRAMES_PER_MESSAGE {
             let id = *next_id;
             *next_id += 1;
             let mux = choose_mux(rng, m);
-            let op = if k % 2 == 0 {
+            // A message with faults a lenient load kept is only decoded: `cw-can` refuses
+            // to encode signals that share bits, where cantools packs them at shifted
+            // places.
+            let op = if k % 2 == 0 || !m.faults.is_empty() || gen.is_none() {
                 let mut pdu = [0u8; 64];
                 rng.fill(&mut pdu);
                 if !rng.one_in(5) {
@@ -544,7 +641,8 @@ fn gen_cases(
                     if !m.present(i, &mux_raw) {
                         continue;
                     }
-                    let Some(g) = gen.sigs.iter().find(|g| g.name == s.name) else {
+                    let Some(g) = gen.and_then(|gen| gen.sigs.iter().find(|g| g.name == s.name))
+                    else {
                         continue;
                     };
                     let text = if let Some((_, v)) = mux.iter().find(|(j, _)| *j == i) {
@@ -610,8 +708,12 @@ fn value_text(rng: &mut Rng, s: &Sig) -> String {
 
 /// Our verdict, in the same terms as the script's.
 fn ours(db: &Database, case: &Case) -> std::result::Result<String, ()> {
+    if let Op::Load = case.op {
+        return Ok("loaded".into());
+    }
     let m = db.by_name(&case.message).ok_or(())?;
     match &case.op {
+        Op::Load => Ok("loaded".into()),
         Op::Decode(data) => {
             let signals = codec::decode(m, data).map_err(|_| ())?;
             let mut parts: Vec<String> = signals
@@ -655,6 +757,9 @@ fn theirs(obj: &serde_json::Value) -> std::result::Result<String, ()> {
     if let Some(data) = obj.get("data").and_then(serde_json::Value::as_str) {
         return Ok(data.to_string());
     }
+    if obj.get("loaded").and_then(serde_json::Value::as_bool) == Some(true) {
+        return Ok("loaded".into());
+    }
     let signals = obj
         .get("signals")
         .and_then(serde_json::Value::as_object)
@@ -685,27 +790,69 @@ pub fn run(options: &Options) -> Result {
     let mut rng = Rng::new(seed);
     let dir = target_dir().join("xtask-dbc-differential");
     std::fs::create_dir_all(&dir).map_err(|e| format!("creating {}: {e}", dir.display()))?;
-    let mut dbs = Vec::new();
+    // Each DBC: its path, whether it is read strict, and what `cw-can` made of it.
+    let mut dbs: Vec<(
+        std::path::PathBuf,
+        Strictness,
+        std::result::Result<Database, String>,
+    )> = Vec::new();
     let mut cases = Vec::new();
     let mut next_id = 0;
     let mut total_signals = 0;
+    let mut faults = 0;
     while (cases.len() as u64) < options.frames {
+        let lenient = dbs.len() % LENIENT_EVERY == LENIENT_EVERY - 1;
         let mut used = Vec::new();
         let msgs: Vec<Msg> = (0..MESSAGES_PER_DBC)
-            .map(|i| gen_message(&mut rng, i, &mut used))
+            .map(|i| {
+                let mut m = gen_message(&mut rng, i, &mut used);
+                if lenient {
+                    stray_signals(&mut rng, &mut m);
+                }
+                m
+            })
             .collect();
         let text = dbc_text(&msgs);
-        let path = dir.join(format!("gen{}.dbc", dbs.len()));
+        let (strictness, kind) = if lenient {
+            (Strictness::Lenient, "lenient")
+        } else {
+            (Strictness::Strict, "gen")
+        };
+        let path = dir.join(format!("{kind}{}.dbc", dbs.len()));
         std::fs::write(&path, &text).map_err(|e| format!("writing {}: {e}", path.display()))?;
-        let db = Database::from_text(&text).map_err(|e| {
+        let db = Database::from_text_with(&text, strictness).map_err(|e| {
             format!(
                 "{}: cw-can refuses a generated DBC: {e} (seed {seed})",
                 path.display()
             )
         })?;
         total_signals += msgs.iter().map(|m| m.sigs.len()).sum::<usize>();
-        cases.extend(gen_cases(&mut rng, dbs.len(), &db, &msgs, &mut next_id));
-        dbs.push((path, db));
+        faults += db.warnings().len();
+        cases.extend(gen_cases(
+            &mut rng,
+            dbs.len(),
+            &db,
+            Some(&msgs),
+            &mut next_id,
+        ));
+        dbs.push((path, strictness, Ok(db)));
+    }
+    let generated = dbs.len();
+    for path in &options.corpus {
+        let db = Database::load_with(path, Strictness::Lenient);
+        cases.push(Case {
+            id: next_id,
+            dbc: dbs.len(),
+            message: String::new(),
+            op: Op::Load,
+        });
+        next_id += 1;
+        if let Ok(db) = &db {
+            total_signals += db.messages().iter().map(|m| m.signals.len()).sum::<usize>();
+            faults += db.warnings().len();
+            cases.extend(gen_cases(&mut rng, dbs.len(), db, None, &mut next_id));
+        }
+        dbs.push((path.clone(), Strictness::Lenient, db));
     }
     let cases_path = dir.join("cases.jsonl");
     let out_path = dir.join("cantools.jsonl");
@@ -713,7 +860,8 @@ pub fn run(options: &Options) -> Result {
     for c in &cases {
         let mut obj = serde_json::json!({
             "id": c.id,
-            "dbc": dbs.get(c.dbc).map(|(p, _)| p.display().to_string()),
+            "dbc": dbs.get(c.dbc).map(|(p, _, _)| p.display().to_string()),
+            "strict": dbs.get(c.dbc).is_some_and(|(_, s, _)| *s == Strictness::Strict),
             "message": c.message,
         });
         match &c.op {
@@ -721,6 +869,7 @@ pub fn run(options: &Options) -> Result {
                 obj["op"] = "decode".into();
                 obj["data"] = hex(data).into();
             }
+            Op::Load => obj["op"] = "load".into(),
             Op::Encode(values) => {
                 obj["op"] = "encode".into();
                 obj["values"] = values
@@ -749,19 +898,23 @@ pub fn run(options: &Options) -> Result {
             .unwrap_or(u64::MAX);
         results.insert(id as usize, obj);
     }
-    let (mut decodes, mut encodes, mut refused) = (0, 0, 0);
+    let (mut decodes, mut encodes, mut loads, mut refused) = (0, 0, 0, 0);
     let mut mismatches = Vec::new();
     for c in &cases {
-        let Some((path, db)) = dbs.get(c.dbc) else {
+        let Some((path, _, db)) = dbs.get(c.dbc) else {
             continue;
         };
         let Some(obj) = results.get(&c.id) else {
             return Err(format!("cantools wrote no result for case {}", c.id));
         };
-        let (a, b) = (ours(db, c), theirs(obj));
+        let (a, b) = match (db, &c.op) {
+            (Ok(db), _) => (ours(db, c), theirs(obj)),
+            (Err(_), _) => (Err(()), theirs(obj)),
+        };
         match &c.op {
             Op::Decode(_) => decodes += 1,
             Op::Encode(_) => encodes += 1,
+            Op::Load => loads += 1,
         }
         if a.is_err() && b.is_err() {
             refused += 1;
@@ -770,6 +923,10 @@ pub fn run(options: &Options) -> Result {
             let what = match &c.op {
                 Op::Decode(d) => format!("decode {}", hex(d)),
                 Op::Encode(v) => format!("encode {v:?}"),
+                Op::Load => match db {
+                    Ok(_) => "load".into(),
+                    Err(e) => format!("load ({e})"),
+                },
             };
             mismatches.push(format!(
                 "case {}: {} {} {what}\n  cw-can:   {a:?}\n  cantools: {:?} {}",
@@ -783,20 +940,32 @@ pub fn run(options: &Options) -> Result {
             ));
         }
     }
+    let messages: usize = dbs
+        .iter()
+        .filter_map(|(_, _, db)| db.as_ref().ok())
+        .map(|db| db.messages().len())
+        .sum();
+    let lenient = generated / LENIENT_EVERY;
+    let (given, loaded) = match dbs.len() - generated {
+        0 => (String::new(), String::new()),
+        n => (format!(", {n} given"), format!("{loads} loads, ")),
+    };
     println!(
-        "dbc-differential: {} DBCs, {} messages, {total_signals} signals; {} frames: {decodes} decoded, {encodes} encoded, {refused} refused by both; {} disagreements",
-        dbs.len(),
-        dbs.len() * MESSAGES_PER_DBC,
+        "dbc-differential: {generated} generated DBCs ({lenient} lenient){given}; {messages} messages, {total_signals} signals, {faults} faults kept leniently; {} cases: {loaded}{decodes} frames decoded, {encodes} encoded, {refused} refused by both; {} disagreements",
         cases.len(),
         mismatches.len()
     );
+    let all_path = dir.join("disagreements.txt");
+    std::fs::write(&all_path, mismatches.join("\n"))
+        .map_err(|e| format!("writing {}: {e}", all_path.display()))?;
     if mismatches.is_empty() {
         Ok(())
     } else {
         Err(format!(
-            "cw-can and cantools disagree on {} of {} frames (seed {seed}); the first {}:\n{}",
+            "cw-can and cantools disagree on {} of {} cases (seed {seed}; all in {}); the first {}:\n{}",
             mismatches.len(),
             cases.len(),
+            all_path.display(),
             SHOW.min(mismatches.len()),
             mismatches
                 .iter()
