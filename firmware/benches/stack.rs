@@ -41,7 +41,10 @@ fn stack(c: &mut Criterion) {
     let mut can = Mailbox;
     let _ = canif.set_controller_mode(&mut can, ControllerMode::Started);
     canif.set_pdu_mode(PduMode::Online);
-    let rx = CanFrame::from_parts(config::THRESHOLD_FRAME_ID, &[0xF4, 0x01, 0xE8, 0x03]);
+    let rx = CanFrame::from_parts(
+        config::canif::THRESHOLD_CONFIG_ID,
+        &[0xF4, 0x01, 0xE8, 0x03],
+    );
     let Some(rx) = rx else { return };
     let sdu = [0xDCu8, 0x05, 0, 0, 2, 0, 0, 0];
 
@@ -49,7 +52,7 @@ fn stack(c: &mut Criterion) {
     g.bench_function("TX Com_SendSignal -> PduR -> CanIf -> Can_Write", |b| {
         b.iter(|| {
             com.send_signal(
-                config::SIG_DISTANCE,
+                config::com::DISTANCE,
                 SignalValue::Unsigned(black_box(1500)),
                 |ipdu, sdu| {
                     config::PDUR
@@ -61,7 +64,12 @@ fn stack(c: &mut Criterion) {
     });
     g.bench_function("TX PduR -> CanIf -> Can_Write", |b| {
         b.iter(|| {
-            config::PDUR.com_transmit(&mut canif, &mut can, config::DISTANCE_IPDU, black_box(&sdu))
+            config::PDUR.com_transmit(
+                &mut canif,
+                &mut can,
+                config::com::DISTANCE_FRAME,
+                black_box(&sdu),
+            )
         })
     });
     g.bench_function("TX CanIf_Transmit -> Can_Write", |b| {
@@ -72,7 +80,7 @@ fn stack(c: &mut Criterion) {
             if let Ok(pdu) = canif.rx_indication(Hrh(0), black_box(&rx)) {
                 config::PDUR.canif_rx_indication(&mut com, pdu, rx.bytes());
             }
-            com.receive_signal(config::SIG_RED_BELOW)
+            com.receive_signal(config::com::RED_BELOW)
         })
     });
     g.bench_function("RX CanIf_RxIndication", |b| {
@@ -82,7 +90,7 @@ fn stack(c: &mut Criterion) {
         b.iter(|| config::PDUR.canif_rx_indication(&mut com, RxPduId(0), black_box(rx.bytes())))
     });
     g.bench_function("RX Com_ReceiveSignal", |b| {
-        b.iter(|| com.receive_signal(black_box(config::SIG_RED_BELOW)))
+        b.iter(|| com.receive_signal(black_box(config::com::RED_BELOW)))
     });
     g.finish();
 }

@@ -1,6 +1,13 @@
-//! The ECU configuration: every static table of the paper's collision-warning ECU in one
-//! place (paper §3.2, ARCHITECTURE §1). A rule broken here is a build error naming the
-//! table entry.
+//! The ECU configuration (paper §3.2, ARCHITECTURE §1). The basic software's tables (the
+//! OS's tasks, alarms, resources and ISRs; Com's I-PDUs and signals; PduR's routes;
+//! CanIf's PDUs; the CAN controller's bit rate) are generated from the ECU's description,
+//! `firmware/ecu.arxml`, into [`crate::generated`] (`cargo xtask generate`, the paper's
+//! step 3); this module builds the kernel's, Com's, CanIf's and PduR's checked tables
+//! from them and holds what the description does not carry yet (the FlexCAN message
+//! buffers, CanSM's timing, WdgM's supervision, the sensor's timing). A rule broken here or
+//! in the generated tables is a build error naming the table entry.
+//!
+//! The ECU's task set, as the description configures it:
 //!
 //! | task | priority | activation | runnables |
 //! |---|---|---|---|
@@ -51,56 +58,18 @@
 
 use cw_bsp::chip::flexcan::driver::INIT_POLLS;
 use cw_bsp::chip::flexcan::{ClockSource, FlexcanConfig, RxFilter};
-use cw_core::can::{CanId, Hrh, Hth};
-use cw_core::canif::{CanIfConfig, RxPduConfig, TxPduConfig, TxPduId};
+use cw_core::can::Hrh;
 use cw_core::cansm::{CanSmConfig, CanSmTimesMs};
-use cw_core::com::ipdu::{
-    ComConfig, RxIpduConfig, RxIpduId, SignalConfig, SignalDirection, SignalId, TransferProperty,
-    TxIpduConfig, TxIpduId, TxMode,
-};
-use cw_core::com::signal::{ByteOrder, Signedness};
 use cw_core::os::{
-    AlarmAction, AlarmConfig, ConformanceClass, CounterConfig, CounterId, Dialect, EventMask,
-    HookSet, IsrConfig, IsrId, OsConfig, OsDescription, ResourceId, Status, TaskConfig, TaskId,
+    AlarmAction, ConformanceClass, EventMask, OsConfig, OsDescription, Status, TaskId, TaskKind,
 };
-use cw_core::pdur::{PduRConfig, RxRoute};
 use cw_core::wdgm::AliveSupervision;
 
-/// `OsStartupTask`.
-pub const STARTUP_TASK: TaskId = TaskId(0);
-/// `OsLEDTask`.
-pub const LED_TASK: TaskId = TaskId(1);
-/// `OsBswServiceTask`.
-pub const BSW_TASK: TaskId = TaskId(2);
-/// `OsObstacleDetectionTask`.
-pub const OBSTACLE_TASK: TaskId = TaskId(3);
-/// `OsComTask`.
-pub const COM_TASK: TaskId = TaskId(4);
-/// `OsSonarTask`.
-pub const SONAR_TASK: TaskId = TaskId(5);
-/// `RES_COM`: the Com stack and the CAN controller.
-pub const RES_COM: ResourceId = ResourceId(0);
-/// `RES_RTE`: the RTE's buffers.
-pub const RES_RTE: ResourceId = ResourceId(1);
-/// `RES_LEDS`: the LED pins.
-pub const RES_LEDS: ResourceId = ResourceId(2);
-const USES_COM: u32 = 1 << RES_COM.0;
-const USES_RTE: u32 = 1 << RES_RTE.0;
-const USES_LEDS: u32 = 1 << RES_LEDS.0;
+pub use crate::generated::{can, canif, com, os, pdur};
 
-/// The 1 ms system counter.
-pub const SYSTEM_COUNTER: CounterId = CounterId(0);
-/// The system timer's interrupt (SysTick on a Cortex-M): drives [`SYSTEM_COUNTER`].
-pub const SYSTICK_ISR: IsrId = IsrId(0);
-/// The CAN controller's interrupt.
-pub const CAN_ISR: IsrId = IsrId(1);
-/// The UART ranging module's receive interrupt (category 1: above every category-2 ISR,
-/// so that `SuspendOSInterrupts` leaves it running and no byte at 9600 baud waits for an
-/// OS job).
-pub const SENSOR_RX_ISR: IsrId = IsrId(2);
-
-/// Task periods in ms (0: not periodic), indexed by task.
-pub const PERIOD_MS: [u32; 6] = [0, 10, 10, 20, 0, 40];
+/// Task periods in ms (0: not periodic), indexed by task: the cycles of the alarms on the
+/// system counter, which ticks every millisecond.
+pub const PERIOD_MS: [u32; os::TASKS] = os::PERIOD_TICKS;
 
 /// The longest time a UART ranging module takes between two frames, ms (A02YYUW in its
 /// "processed" output mode: 100 to 300 ms).
@@ -109,7 +78,7 @@ pub const SENSOR_FRAME_PERIOD_MAX_MS: u32 = 300;
 /// Samples of `OsSonarTask` without a good frame after which a UART ranging module is
 /// silent (its samples invalid): the first sample past the module's longest period.
 pub const SENSOR_SILENT_AFTER_SAMPLES: u8 = {
-    let samples = SENSOR_FRAME_PERIOD_MAX_MS / PERIOD_MS[SONAR_TASK.0 as usize] + 1;
+    let samples = SENSOR_FRAME_PERIOD_MAX_MS / PERIOD_MS[os::OS_SONAR_TASK.0 as usize] + 1;
     assert!(samples <= u8::MAX as u32);
     samples as u8
 };
@@ -123,24 +92,27 @@ pub const EXTENDED_TASKS: bool = cfg!(feature = "extended-tasks");
 /// ([`EXTENDED_TASKS`]).
 pub const EV_PERIOD: EventMask = 1;
 
-/// A periodic task: basic, or extended and started with the OS ([`EXTENDED_TASKS`]).
-const fn periodic(name: &'static str, priority: u8) -> TaskConfig {
-    if EXTENDED_TASKS {
-        TaskConfig::extended(name, priority).autostart()
-    } else {
-        TaskConfig::basic(name, priority)
+/// The OS as described, or with the paper's task structure where [`EXTENDED_TASKS`]:
+/// every task an autostarted cyclic alarm activates becomes an extended task started with
+/// the OS, and its alarm sets [`EV_PERIOD`] on it instead (conformance class ECC1).
+const fn structure(
+    d: OsDescription<{ os::TASKS }, { os::COUNTERS }, { os::ALARMS }, { os::ISRS }>,
+) -> OsDescription<{ os::TASKS }, { os::COUNTERS }, { os::ALARMS }, { os::ISRS }> {
+    if !EXTENDED_TASKS {
+        return d;
     }
-}
-
-/// A periodic task's alarm: it activates the task, or sets [`EV_PERIOD`] on it where the
-/// tasks are extended.
-const fn cyclic(name: &'static str, task: TaskId, period_ms: u32) -> AlarmConfig {
-    let action = if EXTENDED_TASKS {
-        AlarmAction::SetEvent(task, EV_PERIOD)
-    } else {
-        AlarmAction::ActivateTask(task)
-    };
-    AlarmConfig::new(name, SYSTEM_COUNTER, action).relative(period_ms, period_ms)
+    let mut d = d;
+    let mut a = 0;
+    while a < os::ALARMS {
+        if let AlarmAction::ActivateTask(task) = d.alarms[a].action {
+            d.alarms[a].action = AlarmAction::SetEvent(task, EV_PERIOD);
+            let t = task.0 as usize;
+            d.tasks[t].kind = TaskKind::Extended;
+            d.tasks[t] = d.tasks[t].autostart();
+        }
+        a += 1;
+    }
+    d.class(ConformanceClass::Ecc1)
 }
 
 /// The OS's status: extended (every check OSEK defines, errors to `ErrorHook`), or
@@ -153,62 +125,29 @@ pub const STATUS: Status = if cfg!(feature = "standard-status") {
     Status::Extended
 };
 
-/// The OS: six tasks, three resources, four cyclic alarms on a 1 ms counter, two
-/// category-2 ISRs and one of category 1.
-pub static OS: OsConfig<6, 3, 1, 4, 3> = match OsConfig::new(
-    OsDescription::new(
-        [
-            TaskConfig::basic("OsStartupTask", 7)
-                .non_preemptive()
-                .autostart()
-                .uses(USES_COM),
-            periodic("OsLEDTask", 6).uses(USES_RTE | USES_LEDS),
-            periodic("OsBswServiceTask", 5).uses(USES_COM | USES_RTE | USES_LEDS),
-            periodic("OsObstacleDetectionTask", 4).uses(USES_COM | USES_RTE),
-            TaskConfig::basic("OsComTask", 3).uses(USES_COM | USES_RTE),
-            periodic("OsSonarTask", 2).uses(USES_RTE),
-        ],
-        [CounterConfig {
-            max_allowed_value: 0xFFFF,
-            ticks_per_base: 1,
-            min_cycle: 1,
-        }],
-        [
-            cyclic("LedAlarm", LED_TASK, 10),
-            cyclic("BswAlarm", BSW_TASK, 10),
-            cyclic("ObstacleAlarm", OBSTACLE_TASK, 20),
-            cyclic("SonarAlarm", SONAR_TASK, 40),
-        ],
-        [
-            IsrConfig::cat2("SysTickIsr", 2),
-            IsrConfig::cat2("CanIsr", 1).uses(USES_COM),
-            IsrConfig::cat1("SensorRxIsr", 3),
-        ],
-    )
-    .class(if EXTENDED_TASKS {
-        ConformanceClass::Ecc1
-    } else {
-        ConformanceClass::Bcc1
-    })
-    .status(STATUS)
-    .dialect(Dialect::Autosar)
-    .hooks(HookSet {
-        error: true,
-        shutdown: true,
-        ..HookSet::NONE
-    }),
-) {
+/// The OS: the generated description ([`os::DESCRIPTION`]), in its structure
+/// (the paper's where [`EXTENDED_TASKS`]) and status ([`STATUS`]).
+pub static OS: os::Config = match OsConfig::new(structure(os::DESCRIPTION).status(STATUS)) {
     Ok(cfg) => cfg,
     Err(e) => panic!("{}", e.describe()),
 };
 
 cw_core::static_tables!(
     /// [`OS`] as a build-time constant: the kernel's table lookups fold away.
-    pub OsTables: OsConfig<6, 3, 1, 4, 3> = OS
+    pub OsTables: os::Config = OS
 );
 
 /// The OS kernel type for [`OS`], with the ECU's hooks.
-pub type Kernel = cw_core::os::Os<6, 3, 1, 4, 3, 6, OsTables, crate::ecu::EcuHooks>;
+pub type Kernel = cw_core::os::Os<
+    { os::TASKS },
+    { os::RESOURCES },
+    { os::COUNTERS },
+    { os::ALARMS },
+    { os::ISRS },
+    { os::QUEUE },
+    OsTables,
+    crate::ecu::EcuHooks,
+>;
 
 /// The kernel for [`OS`], before `StartOS`.
 ///
@@ -219,24 +158,12 @@ pub fn kernel() -> Result<Kernel, cw_core::os::ConfigError> {
     Kernel::new(OsTables)
 }
 
-const fn std_id(raw: u16) -> CanId {
-    match CanId::standard(raw) {
-        Some(id) => id,
-        None => panic!("CAN id above 0x7FF"),
-    }
-}
-
-/// CAN id of the distance frame (DBC `DistanceFrame`).
-pub const DISTANCE_FRAME_ID: CanId = std_id(0x100);
-/// CAN id of the threshold configuration frame (DBC `ThresholdConfig`).
-pub const THRESHOLD_FRAME_ID: CanId = std_id(0x200);
-
 /// The ECU's FlexCAN receive buffers (CanIf's hardware receive objects): the threshold
 /// frame into HRH 0 through its exact filter, and, like a controller with an open filter,
 /// every other frame too (standard and extended), so CanIf's own checks (unknown id, DLC)
 /// see every frame.
 pub const CAN_FILTERS: [RxFilter; 3] = [
-    RxFilter::exact(THRESHOLD_FRAME_ID, Hrh(0)),
+    RxFilter::exact(canif::THRESHOLD_CONFIG_ID, Hrh(0)),
     RxFilter::any(Hrh(0), false),
     RxFilter::any(Hrh(0), true),
 ];
@@ -258,130 +185,44 @@ pub const fn flexcan(clock_source: ClockSource, clock_hz: u32) -> FlexcanConfig<
     }
 }
 
-/// CanIf: one TX L-PDU (the distance frame), one RX L-PDU (thresholds from the PC).
-pub static CANIF: CanIfConfig<1, 1> = match CanIfConfig::new(
-    [TxPduConfig {
-        name: "DistanceFrame",
-        id: DISTANCE_FRAME_ID,
-        dlc: 8,
-        hth: Hth(0),
-    }],
-    [RxPduConfig {
-        name: "ThresholdConfig",
-        id: THRESHOLD_FRAME_ID,
-        dlc: 4,
-        hrh: Hrh(0),
-    }],
-) {
-    Ok(cfg) => cfg,
-    Err(e) => panic!("{}", e.describe()),
-};
+/// CanIf: the generated tables ([`canif::CONFIG`]).
+pub static CANIF: canif::Config = canif::CONFIG;
 
 cw_core::static_tables!(
     /// [`CANIF`] as a build-time constant: CanIf's lookups fold away.
-    pub CanIfTables: CanIfConfig<1, 1> = CANIF
+    pub CanIfTables: canif::Config = CANIF
 );
 
 /// The ECU's CanIf.
-pub type EcuCanIf = cw_core::canif::CanIf<1, 1, CanIfTables>;
-
-/// Com TX I-PDU of the distance frame.
-pub const DISTANCE_IPDU: TxIpduId = TxIpduId(0);
-/// Com RX I-PDU of the threshold frame.
-pub const THRESHOLD_IPDU: RxIpduId = RxIpduId(0);
-/// Com signal: the distance, mm (DBC `Distance`, 0|32@1+).
-pub const SIG_DISTANCE: SignalId = SignalId(0);
-/// Com signal: the warning level (DBC `WarningLevel`, 32|8@1+).
-pub const SIG_WARNING_LEVEL: SignalId = SignalId(1);
-/// Com signal: red threshold, mm (DBC `RedBelow`).
-pub const SIG_RED_BELOW: SignalId = SignalId(2);
-/// Com signal: yellow threshold, mm (DBC `YellowBelow`).
-pub const SIG_YELLOW_BELOW: SignalId = SignalId(3);
-/// The distance's invalidation value: all 32 bits set.
-pub const DISTANCE_INVALID: u64 = 0xFFFF_FFFF;
+pub type EcuCanIf = cw_core::canif::CanIf<{ canif::TX }, { canif::RX }, CanIfTables>;
 
 /// The Com main functions run in `OsBswServiceTask`, every 10 ms.
-pub const BSW_PERIOD_MS: u32 = 10;
+pub const BSW_PERIOD_MS: u32 = com::MAIN_PERIOD_MS;
+const _: () = assert!(
+    PERIOD_MS[os::OS_BSW_SERVICE_TASK.0 as usize] == BSW_PERIOD_MS,
+    "Com's main functions run once per OsBswServiceTask job"
+);
 
-/// The CAN controller (`CanControllerBaudrateConfig`): 500 kbit/s, the paper's bus, sampled
-/// at 87.5 % (CiA 301's recommendation).
-pub const CAN_CONTROLLER: cw_core::can::ControllerConfig = cw_core::can::ControllerConfig {
-    bitrate: 500_000,
-    sample_permille: 875,
-};
-
-/// Com: the distance frame is sent directly, once per sonar sample (the distance
-/// triggers, the level travels with it); the thresholds arrive from the PC.
-pub static COM: ComConfig<8, 1, 1, 4> = match ComConfig::new(
-    BSW_PERIOD_MS,
-    [TxIpduConfig {
-        name: "DistanceFrame",
-        len: 8,
-        mode: TxMode::Direct {
-            repetitions: 0,
-            repetition_period_ms: 0,
-        },
-        mdt_ms: 0,
-    }],
-    [RxIpduConfig {
-        name: "ThresholdConfig",
-        len: 4,
-        deadline_ms: 0,
-    }],
-    [
-        SignalConfig {
-            name: "Distance",
-            direction: SignalDirection::Tx(DISTANCE_IPDU, TransferProperty::Triggered),
-            layout: cw_core::signal_layout!(8; 0, 32, ByteOrder::Intel, Signedness::Unsigned),
-            init: DISTANCE_INVALID,
-            invalid: Some(DISTANCE_INVALID),
-            update_bit: None,
-        },
-        SignalConfig {
-            name: "WarningLevel",
-            direction: SignalDirection::Tx(DISTANCE_IPDU, TransferProperty::Pending),
-            layout: cw_core::signal_layout!(8; 32, 8, ByteOrder::Intel, Signedness::Unsigned),
-            init: 3,
-            invalid: None,
-            update_bit: None,
-        },
-        SignalConfig {
-            name: "RedBelow",
-            direction: SignalDirection::Rx(THRESHOLD_IPDU),
-            layout: cw_core::signal_layout!(8; 0, 16, ByteOrder::Intel, Signedness::Unsigned),
-            init: 1000,
-            invalid: None,
-            update_bit: None,
-        },
-        SignalConfig {
-            name: "YellowBelow",
-            direction: SignalDirection::Rx(THRESHOLD_IPDU),
-            layout: cw_core::signal_layout!(8; 16, 16, ByteOrder::Intel, Signedness::Unsigned),
-            init: 2000,
-            invalid: None,
-            update_bit: None,
-        },
-    ],
-) {
-    Ok(cfg) => cfg,
-    Err(e) => panic!("{}", e.describe()),
-};
+/// Com: the generated tables ([`com::CONFIG`]).
+pub static COM: com::Config = com::CONFIG;
 
 cw_core::static_tables!(
     /// [`COM`] as a build-time constant: signal layouts, transfer properties and timing
     /// fold into the code that uses them.
-    pub ComTables: ComConfig<8, 1, 1, 4> = COM
+    pub ComTables: com::Config = COM
 );
 
 /// The ECU's Com.
-pub type EcuCom = cw_core::com::ipdu::Com<8, 1, 1, 4, ComTables>;
+pub type EcuCom = cw_core::com::ipdu::Com<
+    { com::PDU_BYTES },
+    { com::TX },
+    { com::RX },
+    { com::SIGNALS },
+    ComTables,
+>;
 
-/// PduR: the distance I-PDU onto CanIf PDU 0; CanIf RX PDU 0 onto the threshold I-PDU.
-pub static PDUR: PduRConfig<1, 1, 1, 1> =
-    match PduRConfig::new([TxPduId(0)], [RxRoute::One(THRESHOLD_IPDU)]) {
-        Ok(cfg) => cfg,
-        Err(e) => panic!("{}", e.describe()),
-    };
+/// PduR: the generated routing paths ([`pdur::CONFIG`]).
+pub static PDUR: pdur::Config = pdur::CONFIG;
 
 /// CanSM: two fast recoveries after 10 ms, then 1 s; 100 ms on the bus ensures recovery.
 /// A controller mode change not indicated within 10 ms is asked for again, three times.
@@ -403,7 +244,11 @@ pub const CANSM: CanSmConfig = match CanSmConfig::from_ms(
 /// The tasks WdgM supervises, in the order of [`ALIVE`]: the periodic tasks but
 /// `OsBswServiceTask`, which runs WdgM's main function (if it stalls, the watchdog is no
 /// longer triggered at all).
-pub const SUPERVISED: [TaskId; 3] = [LED_TASK, OBSTACLE_TASK, SONAR_TASK];
+pub const SUPERVISED: [TaskId; 3] = [
+    os::OS_LED_TASK,
+    os::OS_OBSTACLE_DETECTION_TASK,
+    os::OS_SONAR_TASK,
+];
 
 /// Main functions of WdgM (one per `OsBswServiceTask` job) in one period of `task`.
 const fn reference_cycle(task: TaskId) -> u16 {
@@ -419,9 +264,13 @@ const fn reference_cycle(task: TaskId) -> u16 {
 /// and exactly one is expected per period (no margin, no failed cycle tolerated). A job
 /// that does not come, or comes twice, is a failure.
 pub static ALIVE: [AliveSupervision; 3] = [
-    AliveSupervision::new("OsLEDTask", reference_cycle(LED_TASK), 1),
-    AliveSupervision::new("OsObstacleDetectionTask", reference_cycle(OBSTACLE_TASK), 1),
-    AliveSupervision::new("OsSonarTask", reference_cycle(SONAR_TASK), 1),
+    AliveSupervision::new("OsLEDTask", reference_cycle(os::OS_LED_TASK), 1),
+    AliveSupervision::new(
+        "OsObstacleDetectionTask",
+        reference_cycle(os::OS_OBSTACLE_DETECTION_TASK),
+        1,
+    ),
+    AliveSupervision::new("OsSonarTask", reference_cycle(os::OS_SONAR_TASK), 1),
 ];
 
 /// Main functions an expired supervision still triggers the watchdog: none. The reset

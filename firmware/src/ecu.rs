@@ -241,19 +241,19 @@ impl<C: cw_core::can::CanDriver + CanEvents> ComStack<C> {
         let (canif, can, frames) = (&mut self.canif, &mut self.can, &mut self.frames);
         let mut transmit = |ipdu, sdu: &[u8]| frames.transmit(canif, can, ipdu, sdu);
         let _ = self.com.send_signal(
-            config::SIG_WARNING_LEVEL,
+            config::com::WARNING_LEVEL,
             SignalValue::Unsigned(level),
             &mut transmit,
         );
         let _ = match distance {
             Some(mm) => self.com.send_signal(
-                config::SIG_DISTANCE,
+                config::com::DISTANCE,
                 SignalValue::Unsigned(mm),
                 &mut transmit,
             ),
             None => self
                 .com
-                .invalidate_signal(config::SIG_DISTANCE, &mut transmit),
+                .invalidate_signal(config::com::DISTANCE, &mut transmit),
         };
     }
 
@@ -363,14 +363,14 @@ pub struct Ecu<P, B: Board> {
     port: P,
     com: Resource<
         ComStack<B::Can>,
-        { config::RES_COM.0 },
-        { config::OS.isr_shared(config::RES_COM) },
+        { config::os::RES_COM.0 },
+        { config::OS.isr_shared(config::os::RES_COM) },
     >,
-    rte: Resource<Rte, { config::RES_RTE.0 }, { config::OS.isr_shared(config::RES_RTE) }>,
+    rte: Resource<Rte, { config::os::RES_RTE.0 }, { config::OS.isr_shared(config::os::RES_RTE) }>,
     leds: Resource<
         LedOutputs<B>,
-        { config::RES_LEDS.0 },
-        { config::OS.isr_shared(config::RES_LEDS) },
+        { config::os::RES_LEDS.0 },
+        { config::OS.isr_shared(config::os::RES_LEDS) },
     >,
     sonar: TaskLocal<SonarPart<B>>,
     obstacle: TaskLocal<ObstaclePart>,
@@ -523,7 +523,7 @@ impl<P: Port<Kernel = Kernel>, B: Board> Ecu<P, B> {
         // Can_Init: the controller at the configured bitrate, stopped until CanSM starts it.
         let stack = self.com.get_mut();
         stack.can_init_refused =
-            cw_core::can::CanDriver::init(&mut stack.can, &config::CAN_CONTROLLER).is_err();
+            cw_core::can::CanDriver::init(&mut stack.can, &config::can::CONTROLLER).is_err();
         // Wdg_Init: the watchdog runs from here on; WdgM's first main function (the first
         // `OsBswServiceTask` job, 10 ms after StartOS) triggers it well within its timeout.
         self.wdg
@@ -606,7 +606,7 @@ impl<P: Port<Kernel = Kernel>, B: Board> Ecu<P, B> {
     /// One job's body between its marks, and its alive indication; `false` where the board
     /// made it hang (it never ends: no `TerminateTask` follows).
     fn job(&self, task: TaskId) -> bool {
-        if task == config::COM_TASK {
+        if task == config::os::OS_COM_TASK {
             self.port.span(span::ACTIVATE_TO_FIRST_LINE, false);
         }
         self.port.job_started(task);
@@ -617,12 +617,12 @@ impl<P: Port<Kernel = Kernel>, B: Board> Ecu<P, B> {
             return false;
         }
         match task {
-            config::STARTUP_TASK => self.startup_task(),
-            config::LED_TASK => self.led_task(),
-            config::BSW_TASK => self.bsw_task(),
-            config::OBSTACLE_TASK => self.obstacle_task(),
-            config::COM_TASK => self.com_task(),
-            config::SONAR_TASK => self.sonar_task(),
+            config::os::OS_STARTUP_TASK => self.startup_task(),
+            config::os::OS_LED_TASK => self.led_task(),
+            config::os::OS_BSW_SERVICE_TASK => self.bsw_task(),
+            config::os::OS_OBSTACLE_DETECTION_TASK => self.obstacle_task(),
+            config::os::OS_COM_TASK => self.com_task(),
+            config::os::OS_SONAR_TASK => self.sonar_task(),
             _ => {}
         }
         // WdgM's alive indication: the supervised task's job has run.
@@ -700,36 +700,36 @@ impl<P: Port<Kernel = Kernel>, B: Board> Ecu<P, B> {
         // One span from the ISR's first line, filed by the path the kernel took (so that
         // telling the two apart costs the tick nothing).
         self.port.span(span::TICK_NOTHING_DUE, true);
-        let whole = self
-            .port
-            .tick_isr(config::SYSTICK_ISR, config::SYSTEM_COUNTER, |os| {
-                // (The outer result: the entry; the inner one: the return.)
-                Self::isr_entry(os, config::SYSTICK_ISR)?;
-                let _ = os.increment_counter(config::SYSTEM_COUNTER);
-                Ok::<_, OsError>(Self::isr_return(os))
-            });
+        let whole =
+            self.port
+                .tick_isr(config::os::SYS_TICK_ISR, config::os::SYSTEM_COUNTER, |os| {
+                    // (The outer result: the entry; the inner one: the return.)
+                    Self::isr_entry(os, config::os::SYS_TICK_ISR)?;
+                    let _ = os.increment_counter(config::os::SYSTEM_COUNTER);
+                    Ok::<_, OsError>(Self::isr_return(os))
+                });
         // (The trace's mark of the ISR's entry comes after the span: it is the measuring's,
         // not the tick's.)
         match whole {
             TickPath::NothingDue => {
                 self.port.span(span::TICK_NOTHING_DUE, false);
-                self.port.isr_entered(config::SYSTICK_ISR);
+                self.port.isr_entered(config::os::SYS_TICK_ISR);
             }
             TickPath::Whole(Err(_)) => {
                 self.port
                     .span_end_as(span::TICK_NOTHING_DUE, span::TICK_ALARMS_DUE);
-                self.port.isr_refused(config::SYSTICK_ISR);
+                self.port.isr_refused(config::os::SYS_TICK_ISR);
             }
             TickPath::AlarmsDue => {
                 self.port
                     .span_end_as(span::TICK_NOTHING_DUE, span::TICK_ALARMS_DUE);
-                self.port.isr_entered(config::SYSTICK_ISR);
+                self.port.isr_entered(config::os::SYS_TICK_ISR);
                 self.dispatch();
             }
             TickPath::Whole(Ok(left)) => {
                 self.port
                     .span_end_as(span::TICK_NOTHING_DUE, span::TICK_ALARMS_DUE);
-                self.port.isr_entered(config::SYSTICK_ISR);
+                self.port.isr_entered(config::os::SYS_TICK_ISR);
                 if left.is_ok() {
                     self.dispatch();
                 }
@@ -742,7 +742,7 @@ impl<P: Port<Kernel = Kernel>, B: Board> Ecu<P, B> {
     /// the caller must run them one by one. For a simulation in virtual time.
     pub fn quiet_ticks(&self, ticks: u64) -> bool {
         self.port.kernel(|os| {
-            os.try_ticks(config::SYSTICK_ISR, config::SYSTEM_COUNTER, ticks)
+            os.try_ticks(config::os::SYS_TICK_ISR, config::os::SYSTEM_COUNTER, ticks)
                 .is_some()
         })
     }
@@ -751,14 +751,14 @@ impl<P: Port<Kernel = Kernel>, B: Board> Ecu<P, B> {
     /// armed).
     pub fn ticks_to_expiry(&self) -> u64 {
         self.port
-            .inspect(|os| os.ticks_to_expiry(config::SYSTEM_COUNTER).unwrap_or(0))
+            .inspect(|os| os.ticks_to_expiry(config::os::SYSTEM_COUNTER).unwrap_or(0))
     }
 
     /// `CanIsr`: the CAN controller's pending events, in order, into CanIf and upwards.
     /// Out of line, as an ISR's body is (`ISR(CanIsr)`).
     #[inline(never)]
     pub fn can_isr(&self) {
-        self.isr(config::CAN_ISR, span::CAN_ISR, |ecu| {
+        self.isr(config::os::CAN_ISR, span::CAN_ISR, |ecu| {
             let _ = ecu.com.lock(&ecu.port, |stack| {
                 while let Some(event) = stack.can.take_event() {
                     let rx = matches!(event, CanInterrupt::Received(..));
@@ -882,8 +882,8 @@ impl<P: Port<Kernel = Kernel>, B: Board> Ecu<P, B> {
     fn obstacle_task(&self) {
         let thresholds = self.com.lock(&self.port, |stack| {
             (
-                stack.com.receive_signal(config::SIG_RED_BELOW),
-                stack.com.receive_signal(config::SIG_YELLOW_BELOW),
+                stack.com.receive_signal(config::com::RED_BELOW),
+                stack.com.receive_signal(config::com::YELLOW_BELOW),
             )
         });
         let Ok(measurement) = self
@@ -925,7 +925,7 @@ impl<P: Port<Kernel = Kernel>, B: Board> Ecu<P, B> {
         if notify == Ok(true) {
             self.port.span(span::ACTIVATE_TO_FIRST_LINE, true);
             // An error here reaches ErrorHook, which counts it.
-            let _ = self.port.activate_task(config::COM_TASK);
+            let _ = self.port.activate_task(config::os::OS_COM_TASK);
             self.dispatch();
         }
     }

@@ -19,6 +19,7 @@ pub mod config;
 #[cfg(all(target_arch = "arm", target_os = "none"))]
 pub mod cortex_m;
 pub mod ecu;
+pub mod generated;
 #[cfg(feature = "host")]
 pub mod host;
 pub mod iohwab;

@@ -236,7 +236,7 @@ fn run_in_real_time(_: &mut Simulation, _: u64, _: bool) -> Result<String, Strin
 fn write_job_starts(sim: &mut Simulation, path: &str) -> Result<(), String> {
     let can_isr = cw_firmware::config::OS
         .isrs()
-        .get(usize::from(cw_firmware::config::CAN_ISR.0))
+        .get(usize::from(cw_firmware::config::os::CAN_ISR.0))
         .map_or("?", |i| i.name);
     let mut isr_entries = sim.can_isr_entries().to_vec().into_iter().peekable();
     let port = sim.ecu().port();

@@ -133,11 +133,11 @@ where
                 "checked at every task switch and OS tick (the core has no Arm MPU)"
             }
         );
-        evb::start_tick(isr_priority(config::SYSTICK_ISR));
-        evb::enable_can_interrupts(isr_priority(config::CAN_ISR));
+        evb::start_tick(isr_priority(config::os::SYS_TICK_ISR));
+        evb::enable_can_interrupts(isr_priority(config::os::CAN_ISR));
         #[cfg(feature = "s32k144evb-uart")]
         if self.uart_sensor {
-            SensorUart::enable_interrupt(isr_priority(config::SENSOR_RX_ISR));
+            SensorUart::enable_interrupt(isr_priority(config::os::SENSOR_RX_ISR));
         }
         self.ecu.start_os();
     }

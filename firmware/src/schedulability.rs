@@ -36,7 +36,8 @@ use crate::config;
 
 /// Tasks activated by another task's job, not by an alarm: (task, the task whose job
 /// activates it).
-pub const RELEASED_BY: [(TaskId, TaskId); 1] = [(config::COM_TASK, config::SONAR_TASK)];
+pub const RELEASED_BY: [(TaskId, TaskId); 1] =
+    [(config::os::OS_COM_TASK, config::os::OS_SONAR_TASK)];
 
 /// The tasks and ISRs analysed, in this order: the five tasks after start-up, then
 /// `SysTickIsr` and `CanIsr`.
@@ -44,11 +45,11 @@ pub const ITEMS: usize = 7;
 
 /// The tasks analysed, by slot.
 const TASKS: [TaskId; 5] = [
-    config::LED_TASK,
-    config::BSW_TASK,
-    config::OBSTACLE_TASK,
-    config::COM_TASK,
-    config::SONAR_TASK,
+    config::os::OS_LED_TASK,
+    config::os::OS_BSW_SERVICE_TASK,
+    config::os::OS_OBSTACLE_DETECTION_TASK,
+    config::os::OS_COM_TASK,
+    config::os::OS_SONAR_TASK,
 ];
 
 /// What the analysis takes from a measurement, in one unit of time: the measuring
@@ -79,8 +80,8 @@ pub fn item(i: usize) -> Option<(&'static str, Option<TaskId>)> {
         }
         None => {
             let isr = match i.checked_sub(TASKS.len())? {
-                0 => config::SYSTICK_ISR,
-                1 => config::CAN_ISR,
+                0 => config::os::SYS_TICK_ISR,
+                1 => config::os::CAN_ISR,
                 _ => return None,
             };
             let name = config::OS
@@ -149,10 +150,14 @@ pub fn loads(measured: &Measured) -> [Load; ITEMS] {
         task(TASKS[2]),
         task(TASKS[3]),
         task(TASKS[4]),
-        isr(usize::from(config::SYSTICK_ISR.0), ms, measured.tick_wcet),
         isr(
-            usize::from(config::CAN_ISR.0),
-            period_of(config::SONAR_TASK),
+            usize::from(config::os::SYS_TICK_ISR.0),
+            ms,
+            measured.tick_wcet,
+        ),
+        isr(
+            usize::from(config::os::CAN_ISR.0),
+            period_of(config::os::OS_SONAR_TASK),
             measured.can_isr_wcet,
         ),
     ]
@@ -201,7 +206,7 @@ mod tests {
             .map(Some)
         );
         assert_eq!(item(ITEMS), None);
-        assert_eq!(item(3).and_then(|(_, t)| t), Some(config::COM_TASK));
+        assert_eq!(item(3).and_then(|(_, t)| t), Some(config::os::OS_COM_TASK));
         // CanIsr: one transmit confirmation per sonar job.
         assert_eq!(set[6].period, 40 * 31_250);
         // OsComTask is released as late as the sonar job's end.
@@ -222,7 +227,7 @@ mod tests {
     #[test]
     fn a_job_longer_than_the_sonars_period_is_found_and_named() {
         let mut m = measured();
-        m.task_wcet[usize::from(config::SONAR_TASK.0)] = 40 * 31_250;
+        m.task_wcet[usize::from(config::os::OS_SONAR_TASK.0)] = 40 * 31_250;
         let mut set = loads(&m);
         let _ = rta::settle_jitter(&mut set, &released_by());
         let missed: Vec<_> = (0..ITEMS)

@@ -138,7 +138,7 @@ pub struct Stack {
 fn send_distance_down(s: &mut Stack, distance_mm: u32) {
     let (canif, can) = (&mut s.canif, &mut s.can);
     let _ = s.com.send_signal(
-        config::SIG_DISTANCE,
+        config::com::DISTANCE,
         SignalValue::Unsigned(u64::from(distance_mm)),
         |ipdu, sdu| config::PDUR.com_transmit(canif, can, ipdu, sdu).is_ok(),
     );
@@ -161,7 +161,7 @@ fn probe_tx_com_down(s: &mut Stack, distance_mm: u32) {
 #[inline(never)]
 fn probe_tx_com_only(s: &mut Stack, distance_mm: u32) {
     let _ = s.com.send_signal(
-        config::SIG_DISTANCE,
+        config::com::DISTANCE,
         SignalValue::Unsigned(u64::from(distance_mm)),
         |_, sdu| {
             core::hint::black_box(sdu);
@@ -172,7 +172,7 @@ fn probe_tx_com_only(s: &mut Stack, distance_mm: u32) {
 
 #[inline(never)]
 fn probe_tx_pdur_down(s: &mut Stack, sdu: &[u8; 8]) {
-    let _ = config::PDUR.com_transmit(&mut s.canif, &mut s.can, config::DISTANCE_IPDU, sdu);
+    let _ = config::PDUR.com_transmit(&mut s.canif, &mut s.can, config::com::DISTANCE_FRAME, sdu);
 }
 
 #[inline(never)]
@@ -185,7 +185,7 @@ fn probe_rx_path(s: &mut Stack, frame: &CanFrame) -> u64 {
     if let Ok(pdu) = s.canif.rx_indication(Hrh(0), frame) {
         config::PDUR.canif_rx_indication(&mut s.com, pdu, frame.bytes());
     }
-    match s.com.receive_signal(config::SIG_RED_BELOW) {
+    match s.com.receive_signal(config::com::RED_BELOW) {
         Ok(SignalValue::Unsigned(v)) => v,
         _ => 0,
     }
@@ -203,7 +203,7 @@ fn probe_rx_pdur_com(s: &mut Stack, bytes: &[u8]) {
 
 #[inline(never)]
 fn probe_rx_com_read(s: &mut Stack) -> u64 {
-    match s.com.receive_signal(config::SIG_RED_BELOW) {
+    match s.com.receive_signal(config::com::RED_BELOW) {
         Ok(SignalValue::Unsigned(v)) => v,
         _ => 0,
     }
@@ -239,8 +239,8 @@ impl Stack {
         self.can.frame = None;
         let distance = black_box(1000 + i % 500);
         let (Some(rx), Some(tx)) = (
-            CanFrame::from_parts(config::THRESHOLD_FRAME_ID, &RX),
-            CanFrame::from_parts(config::DISTANCE_FRAME_ID, &SDU),
+            CanFrame::from_parts(config::canif::THRESHOLD_CONFIG_ID, &RX),
+            CanFrame::from_parts(config::canif::DISTANCE_FRAME_ID, &SDU),
         ) else {
             return 0;
         };

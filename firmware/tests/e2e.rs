@@ -99,10 +99,10 @@ fn periodic_tasks_run_exactly_on_their_periods_and_every_sample_leaves_as_a_fram
     let sim = run("ramp 300 3000 5000");
     let starts = sim.task_starts();
     for (task, period_ms) in [
-        (config::LED_TASK, 10),
-        (config::BSW_TASK, 10),
-        (config::OBSTACLE_TASK, 20),
-        (config::SONAR_TASK, 40),
+        (config::os::OS_LED_TASK, 10),
+        (config::os::OS_BSW_SERVICE_TASK, 10),
+        (config::os::OS_OBSTACLE_DETECTION_TASK, 20),
+        (config::os::OS_SONAR_TASK, 40),
     ] {
         let times: Vec<u64> = starts
             .iter()
@@ -120,12 +120,12 @@ fn periodic_tasks_run_exactly_on_their_periods_and_every_sample_leaves_as_a_fram
     // OsComTask, which preempted it at once.
     let sonar: Vec<u64> = starts
         .iter()
-        .filter(|(t, _)| *t == config::SONAR_TASK)
+        .filter(|(t, _)| *t == config::os::OS_SONAR_TASK)
         .map(|(_, us)| *us)
         .collect();
     let com: Vec<u64> = starts
         .iter()
-        .filter(|(t, _)| *t == config::COM_TASK)
+        .filter(|(t, _)| *t == config::os::OS_COM_TASK)
         .map(|(_, us)| *us)
         .collect();
     let sample_done: Vec<u64> = sonar
@@ -137,7 +137,7 @@ fn periodic_tasks_run_exactly_on_their_periods_and_every_sample_leaves_as_a_fram
     let frames: Vec<u64> = sim
         .frames()
         .iter()
-        .filter(|f| f.frame.can_id() == config::DISTANCE_FRAME_ID)
+        .filter(|f| f.frame.can_id() == config::canif::DISTANCE_FRAME_ID)
         .map(|f| f.time_us)
         .collect();
     let sent_by_end: Vec<u64> = sonar
@@ -236,7 +236,7 @@ fn io_stack_inits_ports_once_and_triggers_the_sensor_before_every_echo() {
     let sonar_runs = sim
         .task_starts()
         .iter()
-        .filter(|(t, _)| *t == config::SONAR_TASK)
+        .filter(|(t, _)| *t == config::os::OS_SONAR_TASK)
         .count();
     let edges = sim.sonar_trigger().history();
     assert_eq!(edges.len(), 2 * sonar_runs);
@@ -275,7 +275,7 @@ fn no_communication_silences_the_bus_but_not_the_leds_then_frames_resume() {
     let distance_frames = |from_us: u64, to_us: u64| {
         sim.frames()
             .iter()
-            .filter(|f| f.frame.can_id() == config::DISTANCE_FRAME_ID)
+            .filter(|f| f.frame.can_id() == config::canif::DISTANCE_FRAME_ID)
             .filter(|f| f.time_us >= from_us && f.time_us < to_us)
             .count()
     };
@@ -313,7 +313,7 @@ fn a_stop_during_a_frame_on_the_wire_completes_at_its_end_and_is_indicated() {
     let silent = |sim: &Simulation| {
         sim.frames()
             .iter()
-            .filter(|f| f.frame.can_id() == config::DISTANCE_FRAME_ID)
+            .filter(|f| f.frame.can_id() == config::canif::DISTANCE_FRAME_ID)
             .all(|f| f.time_us < 1_011_000 || f.time_us >= 2_000_000)
     };
     assert!(silent(&sim));
@@ -357,7 +357,7 @@ fn an_isr_the_kernel_refuses_has_its_line_quieted_not_left_pending() {
     // entry, so its body (which would clear the source) does not run; the port quiets the
     // line instead of returning to take it again.
     sim.ecu().can_isr();
-    assert_eq!(*sim.ecu().port().refused_isrs(), [config::CAN_ISR]);
+    assert_eq!(*sim.ecu().port().refused_isrs(), [config::os::CAN_ISR]);
 }
 
 #[test]

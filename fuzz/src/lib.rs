@@ -295,6 +295,21 @@ mod targets {
             });
     }
 
+    /// The ECU's ARXML description with any of its values replaced by any text: it
+    /// generates, or is refused with every error naming the file or an ARXML path, never a
+    /// panic (`cw_gen::spec::a_changed_value_generates_or_names_paths`).
+    #[test]
+    fn arxml_description() {
+        bolero::check!()
+            .with_type::<(u8, String)>()
+            .for_each(|(which, value)| {
+                assert!(cw_gen::spec::a_changed_value_generates_or_names_paths(
+                    usize::from(*which),
+                    value
+                ));
+            });
+    }
+
     /// Any frame, standard or extended, of any length and payload: its stuff bits counted
     /// eight bits at a time through the tables are those its bits one by one get
     /// (`cw_core::can::timing::spec::stuffing_agrees`, the CRC-15 included).

@@ -17,6 +17,8 @@
 //! - `cargo xtask mutants`: kernel mutants the OSEK conformance suite must catch;
 //! - `cargo xtask mutation [--shard K/N | --ci] [--file PATH]..`: cargo-mutants over the
 //!   verified kernels, every survivor killed or listed as equivalent in `docs/src/mutants.md`;
+//! - `cargo xtask generate [--check]`: the firmware's configuration tables generated from
+//!   the ECU's ARXML description (the paper's step 3), or checked against it;
 //! - `cargo xtask qemu [--scenario FILE].. [--compare] [--live] [--events] [--profile]
 //!   [--flash] [--serial tcp:PORT]`:
 //!   the ECU's Cortex-M4 image on QEMU's mps2-an386, the emulator-in-the-loop tests against
@@ -54,6 +56,7 @@ mod decode_speed;
 mod differential;
 mod docs;
 mod eval;
+mod generate;
 mod image;
 mod log_formats;
 mod mpc5748g;
@@ -116,6 +119,9 @@ enum Command {
     Mutation(mutation::Options),
     /// Build the ECU's Cortex-M4 image and run it on QEMU's mps2-an386
     Qemu(qemu::Options),
+    /// Generate the firmware's configuration tables (firmware/src/generated.rs) from the
+    /// ECU's description (firmware/ecu.arxml); --check fails where they disagree
+    Generate(generate::Options),
     /// The paper's evaluation on this ECU: the periodicity of its tasks (the paper's
     /// Table 1) on the Cortex-M4 image, written as a report with its samples and plots
     Eval(eval::Options),
@@ -163,6 +169,7 @@ fn main() -> ExitCode {
 fn run(command: Command) -> Result {
     match command {
         Command::Ci(options) => ci::run(&options),
+        Command::Generate(options) => generate::run(&options),
         Command::Setup => ci::run(&ci::Options::only(&["setup"])),
         Command::Differential(options) => differential::run(&options),
         Command::DbcDifferential(options) => dbc_differential::run(&options),

@@ -82,10 +82,10 @@ fn main() -> ! {
     let app: &'static Mps2App = app;
     #[cfg(feature = "extended-tasks")]
     for (task, stack) in [
-        config::LED_TASK,
-        config::BSW_TASK,
-        config::OBSTACLE_TASK,
-        config::SONAR_TASK,
+        config::os::OS_LED_TASK,
+        config::os::OS_BSW_SERVICE_TASK,
+        config::os::OS_OBSTACLE_DETECTION_TASK,
+        config::os::OS_SONAR_TASK,
     ]
     .into_iter()
     .zip(&EXTENDED_STACKS)

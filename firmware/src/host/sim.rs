@@ -537,7 +537,7 @@ impl Simulation {
             sonar.true_distance_mm = self.scenario.distance_at(t);
             sonar.sensor.set_forced_dropout(self.scenario.in_dropout(t));
         }
-        self.ecu.port().raise(config::SYSTICK_ISR);
+        self.ecu.port().raise(config::os::SYS_TICK_ISR);
         self.take_interrupts();
         self.bus.drain_trace_into(&mut self.frames);
         if t % 10 == 0 {
@@ -559,7 +559,7 @@ impl Simulation {
         let ecu_frames: Vec<u64> = self
             .frames
             .iter()
-            .filter(|r| r.frame.can_id() == config::DISTANCE_FRAME_ID)
+            .filter(|r| r.frame.can_id() == config::canif::DISTANCE_FRAME_ID)
             .map(|r| r.time_us)
             .collect();
         let echoes = self.board.sonar.borrow().echoes_us.clone();
@@ -660,7 +660,7 @@ impl Simulation {
     /// The CAN controller's new events raise its interrupt.
     fn deliver_can_events(&mut self) {
         if self.ecu.com_stack().can.has_events() {
-            self.ecu.port().raise(config::CAN_ISR);
+            self.ecu.port().raise(config::os::CAN_ISR);
             self.take_interrupts();
         }
         self.bus.drain_trace_into(&mut self.frames);
@@ -672,8 +672,8 @@ impl Simulation {
         loop {
             let next = self.ecu.port().take_interrupt(config::OS.isrs());
             match next {
-                Some(config::SYSTICK_ISR) => self.ecu.tick(),
-                Some(config::CAN_ISR) => {
+                Some(config::os::SYS_TICK_ISR) => self.ecu.tick(),
+                Some(config::os::CAN_ISR) => {
                     self.can_isr_entries.push(self.clock.now_us());
                     self.ecu.can_isr();
                 }

@@ -383,7 +383,7 @@ impl App for Mps2App {
                 measure_stack(self.ecu.port(), stack);
             }
         });
-        mps2::start_tick(isr_priority(config::SYSTICK_ISR));
+        mps2::start_tick(isr_priority(config::os::SYS_TICK_ISR));
         cw_bsp::cortex_m::trace::set_isr_spans(span::ISR_SPANS);
         start_os_with_devices(&self.ecu, self.uart_sensor);
     }
@@ -671,7 +671,7 @@ fn calibrate(port: &CortexMPort<Kernel>) {
     port.job_started(slot);
     let isr_entered = around(&|| {
         port.span(outer, true);
-        port.isr_entered(config::CAN_ISR);
+        port.isr_entered(config::os::CAN_ISR);
         port.span(outer, false);
     });
     port.job_finished(slot);
@@ -715,8 +715,10 @@ fn measure_flexcan(port: &CortexMPort<Kernel>) {
     // All-zero registers read as a module on the bus: the start is reached at once.
     let _ = can.set_controller_mode(ControllerMode::Started);
     let tx_mb = 1 + config::CAN_FILTERS.len();
-    let Some(frame) = CanFrame::from_parts(config::THRESHOLD_FRAME_ID, &[1, 2, 3, 4, 5, 6, 7, 8])
-    else {
+    let Some(frame) = CanFrame::from_parts(
+        config::canif::THRESHOLD_CONFIG_ID,
+        &[1, 2, 3, 4, 5, 6, 7, 8],
+    ) else {
         return;
     };
     for pdu in 0..REPEATS {

@@ -59,9 +59,9 @@ pub(crate) fn start_os_with_devices<B: Board>(
     ecu: &Ecu<CortexMPort<Kernel>, B>,
     uart_sensor: bool,
 ) {
-    mps2::enable_can_interrupts(isr_priority(config::CAN_ISR));
+    mps2::enable_can_interrupts(isr_priority(config::os::CAN_ISR));
     if uart_sensor {
-        SensorUart::enable_interrupt(isr_priority(config::SENSOR_RX_ISR));
+        SensorUart::enable_interrupt(isr_priority(config::os::SENSOR_RX_ISR));
     }
     ecu.start_os();
 }

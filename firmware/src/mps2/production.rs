@@ -42,7 +42,7 @@ pub struct Mps2FlashApp {
 impl App for Mps2FlashApp {
     fn start_os(&self) {
         cortex_m::interrupt::disable();
-        mps2::start_tick(isr_priority(config::SYSTICK_ISR));
+        mps2::start_tick(isr_priority(config::os::SYS_TICK_ISR));
         start_os_with_devices(&self.ecu, true);
     }
 

@@ -1,0 +1,85 @@
+//! `cw-gen`: the paper's procedure (§3.1) made real and open. The ECU is described in ARXML
+//! (AUTOSAR 4); this crate reads that description, checks it, and writes the Rust
+//! configuration the firmware compiles, each generated item naming the ARXML path it came
+//! from.
+//!
+//! - [`model`]: the description as plain values, with their ARXML paths;
+//! - [`arxml`]: reading and writing it with `autosar-data`;
+//! - [`validate`]: the checks before generation, each error naming every path involved;
+//! - [`rust`]: the generated Rust.
+//!
+//! `cargo xtask generate` runs the four steps on `firmware/ecu.arxml` and writes
+//! `firmware/src/generated.rs`; `cargo xtask generate --check` (in the check command)
+//! fails when the committed file is not what the description generates.
+
+#![forbid(unsafe_code)]
+// Input from outside (an ARXML file) is an error value naming its path, never a panic.
+#![cfg_attr(
+    not(test),
+    warn(
+        clippy::unwrap_used,
+        clippy::expect_used,
+        clippy::panic,
+        clippy::indexing_slicing
+    )
+)]
+
+pub mod arxml;
+mod digest;
+pub mod model;
+pub mod rust;
+pub mod spec;
+pub mod validate;
+
+pub use digest::digest;
+
+/// The description's file, from the workspace's root.
+pub const DESCRIPTION: &str = "firmware/ecu.arxml";
+/// The generated file, from the workspace's root.
+pub const GENERATED: &str = "firmware/src/generated.rs";
+
+/// Everything that stops generation: each error with every path involved.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Refused(pub Vec<validate::Error>);
+
+impl std::fmt::Display for Refused {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        for (i, e) in self.0.iter().enumerate() {
+            if i > 0 {
+                f.write_str("\n")?;
+            }
+            write!(f, "error: {e}")?;
+        }
+        Ok(())
+    }
+}
+
+impl std::error::Error for Refused {}
+
+/// What generation gives: the Rust (before `rustfmt`), and notes on what the description
+/// holds that this ECU does not use.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Generated {
+    /// The module's text.
+    pub rust: String,
+    /// One sentence per item read but not used, with its path.
+    pub notes: Vec<String>,
+}
+
+/// Reads, checks and generates: the paper's step 3 for the ECUC values in `bytes` (the
+/// file `source`, named in the generated header).
+///
+/// # Errors
+/// Everything that cannot be read, mapped or generated, at once.
+pub fn generate(bytes: &[u8], source: &str) -> Result<Generated, Refused> {
+    let read = arxml::read(bytes, source).map_err(Refused)?;
+    let errors = validate::check(&read.ecu);
+    if !errors.is_empty() {
+        return Err(Refused(errors));
+    }
+    let rust = rust::emit(&read.ecu, source, &digest(bytes)).map_err(|e| Refused(vec![e]))?;
+    Ok(Generated {
+        rust,
+        notes: read.notes,
+    })
+}
