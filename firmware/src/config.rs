@@ -61,7 +61,8 @@ use cw_bsp::chip::flexcan::{ClockSource, FlexcanConfig, RxFilter};
 use cw_core::can::Hrh;
 use cw_core::cansm::{CanSmConfig, CanSmTimesMs};
 use cw_core::os::{
-    AlarmAction, ConformanceClass, EventMask, OsConfig, OsDescription, Status, TaskId, TaskKind,
+    AlarmAction, AlarmAutostart, ConformanceClass, EventMask, OsConfig, OsDescription, Status,
+    TaskId, TaskKind,
 };
 use cw_core::wdgm::AliveSupervision;
 
@@ -104,7 +105,9 @@ const fn structure(
     let mut d = d;
     let mut a = 0;
     while a < os::ALARMS {
-        if let AlarmAction::ActivateTask(task) = d.alarms[a].action {
+        let cyclic =
+            matches!(d.alarms[a].autostart, AlarmAutostart::Relative { cycle, .. } if cycle > 0);
+        if let (AlarmAction::ActivateTask(task), true) = (d.alarms[a].action, cyclic) {
             d.alarms[a].action = AlarmAction::SetEvent(task, EV_PERIOD);
             let t = task.0 as usize;
             d.tasks[t].kind = TaskKind::Extended;
@@ -115,14 +118,14 @@ const fn structure(
     d.class(ConformanceClass::Ecc1)
 }
 
-/// The OS's status: extended (every check OSEK defines, errors to `ErrorHook`), or
-/// standard with the `standard-status` feature. Extended status costs the ECU's paths
+/// The OS's status: as the description sets it (`OsStatus`: extended, every check OSEK
+/// defines, errors to `ErrorHook`), or standard with the `standard-status` feature. Extended status costs the ECU's paths
 /// about 5 instructions per `GetResource` (the caller's priority against the ceiling) and
 /// 88 bytes of the production image (docs/src/os.md, "Standard and extended status").
 pub const STATUS: Status = if cfg!(feature = "standard-status") {
     Status::Standard
 } else {
-    Status::Extended
+    os::DESCRIPTION.status
 };
 
 /// The OS: the generated description ([`os::DESCRIPTION`]), in its structure
@@ -170,6 +173,28 @@ pub const CAN_FILTERS: [RxFilter; 3] = [
 
 /// The ECU's FlexCAN transmit buffers: one for its one HTH.
 pub const CAN_TX_BUFFERS: [u8; 1] = [1];
+
+// The message buffers above are the board's, not the description's: they serve one HTH
+// and one HRH, which every L-PDU of the description must use.
+const _: () = {
+    let mut k = 0;
+    while k < canif::TX {
+        assert!(
+            CANIF_ON_BUFFERS.tx()[k].hth.0 == 0,
+            "a CanIf TX PDU on an HTH the FlexCAN buffers do not serve"
+        );
+        k += 1;
+    }
+    let mut k = 0;
+    while k < canif::RX {
+        assert!(
+            CANIF_ON_BUFFERS.rx()[k].hrh.0 == 0,
+            "a CanIf RX PDU on an HRH the FlexCAN filters do not serve"
+        );
+        k += 1;
+    }
+};
+const CANIF_ON_BUFFERS: canif::Config = canif::CONFIG;
 
 /// The ECU's FlexCAN controller on the protocol clock `clock_hz` from `clock_source`: 32
 /// message buffers, the receive filters [`CAN_FILTERS`] and transmit buffers

@@ -39,11 +39,11 @@ pub mod os {
     pub const CAN_ISR: IsrId = IsrId(1);
     /// `SensorRxIsr` (/CollisionWarning/EcucValues/Os/SensorRxIsr).
     pub const SENSOR_RX_ISR: IsrId = IsrId(2);
-    /// Each task's period, in its alarm's counter ticks: the cycle of the alarm that activates it or sets its event (0: no such alarm).
+    /// Each task's period, in its alarm's counter ticks: the cycle of the autostarted cyclic alarm that activates it or sets its event (0: none does).
     pub const PERIOD_TICKS: [u32; 6] = [0, 10, 10, 20, 0, 40];
     /// Resources (`OsResource`): the `R` of the kernel's `OsConfig`.
     pub const RESOURCES: usize = 3;
-    /// The OS's tables (/CollisionWarning/EcucValues/Os): tasks, counters, alarms and ISRs, in conformance class BCC1 (derived: basic tasks, single activations), AUTOSAR's behaviour.
+    /// The OS's tables as described (/CollisionWarning/EcucValues/Os): tasks, counters, alarms and ISRs, in conformance class BCC1 (derived: basic tasks, single activations), AUTOSAR's behaviour, the described status and hooks (the firmware's configuration may build another structure or status from them).
     pub const DESCRIPTION: OsDescription<6, 1, 4, 3> = OsDescription::new(
         [
             // /CollisionWarning/EcucValues/Os/OsStartupTask
@@ -238,7 +238,7 @@ pub mod com {
 /// `CanIf` (/CollisionWarning/EcucValues/CanIf/CanIfInitCfg).
 pub mod canif {
     use cw_core::can::{CanId, Hrh, Hth};
-    use cw_core::canif::{CanIfConfig, RxPduConfig, TxPduConfig, TxPduId};
+    use cw_core::canif::{CanIfConfig, RxPduConfig, RxPduId, TxPduConfig, TxPduId};
 
     /// `DistanceFrame` (/CollisionWarning/EcucValues/CanIf/CanIfInitCfg/DistanceFrame).
     pub const DISTANCE_FRAME: TxPduId = TxPduId(0);
@@ -247,7 +247,9 @@ pub mod canif {
         Some(id) => id,
         None => panic!("11-bit CAN id out of range"),
     };
-    /// `ThresholdConfig`'s CAN id (/CollisionWarning/EcucValues/CanIf/CanIfInitCfg/ThresholdConfig).
+    /// `ThresholdConfig` (/CollisionWarning/EcucValues/CanIf/CanIfInitCfg/ThresholdConfig).
+    pub const THRESHOLD_CONFIG: RxPduId = RxPduId(0);
+    /// `ThresholdConfig`'s CAN id.
     pub const THRESHOLD_CONFIG_ID: CanId = match CanId::standard(0x200) {
         Some(id) => id,
         None => panic!("11-bit CAN id out of range"),
@@ -284,33 +286,35 @@ pub mod canif {
     };
 }
 
-/// `PduR`: Com's sent I-PDUs onto CanIf's TX PDUs, CanIf's RX PDUs onto Com's received
-/// I-PDUs.
+/// `PduR` (its routing paths): Com's sent I-PDUs onto CanIf's TX PDUs, CanIf's RX PDUs onto
+/// Com's received I-PDUs.
 pub mod pdur {
     use cw_core::canif::TxPduId;
+    use cw_core::com::ipdu::RxIpduId;
     use cw_core::pdur::{PduRConfig, RxRoute};
 
+    /// Each sent Com I-PDU's CanIf TX PDU.
+    pub const TX: [TxPduId; 1] = [
+        // /CollisionWarning/EcucValues/PduR/PduRRoutingPaths/DistanceFrame_Tx
+        TxPduId(0),
+    ];
+    /// Where each CanIf RX PDU goes.
+    pub const RX: [RxRoute; 1] = [
+        // /CollisionWarning/EcucValues/PduR/PduRRoutingPaths/ThresholdConfig_Rx
+        RxRoute::One(RxIpduId(0)),
+    ];
     /// PduR's checked tables: Com's sent I-PDUs, CanIf's TX and RX PDUs, Com's received I-PDUs.
     pub type Config = PduRConfig<1, 1, 1, 1>;
-    /// PduR's routing paths.
-    pub const CONFIG: Config = match PduRConfig::new(
-        [
-            // /CollisionWarning/EcucValues/PduR/PduRRoutingPaths/DistanceFrame_Tx
-            TxPduId(0),
-        ],
-        [
-            // /CollisionWarning/EcucValues/PduR/PduRRoutingPaths/ThresholdConfig_Rx
-            RxRoute::One(cw_core::com::ipdu::RxIpduId(0)),
-        ],
-    ) {
+    /// PduR's tables.
+    pub const CONFIG: Config = match PduRConfig::new(TX, RX) {
         Ok(cfg) => cfg,
         Err(e) => panic!("{}", e.describe()),
     };
 }
 
-/// `Can`.
+/// `Can` (/CollisionWarning/EcucValues/Can/CanConfigSet/CanController).
 pub mod can {
-    /// `CanController` (/CollisionWarning/EcucValues/Can/CanConfigSet/CanController): 500 kbit/s, sampled at 875 per mille (propagation 7 tq, phase 1 6 tq, phase 2 2 tq).
+    /// `CanController` (/CollisionWarning/EcucValues/Can/CanConfigSet/CanController): 500 kbit/s, sampled at 875 per mille of the bit (from its segments: the driver chooses the time quanta for its clock).
     pub const CONTROLLER: cw_core::can::ControllerConfig = cw_core::can::ControllerConfig {
         bitrate: 500000,
         sample_permille: 875,

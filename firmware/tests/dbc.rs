@@ -4,6 +4,7 @@
 use can_dbc::{ByteOrder as DbcOrder, Dbc, MessageId, ValueType};
 use cw_core::com::ipdu::SignalDirection;
 use cw_core::com::signal::{ByteOrder, Signedness};
+use cw_core::pdur::RxRoute;
 use cw_firmware::config;
 
 fn dbc() -> Dbc {
@@ -17,13 +18,23 @@ fn every_com_signal_matches_the_dbc() {
     let dbc = dbc();
     let mut checked = 0;
     for sig in config::COM.signals() {
+        // The frame of the signal's I-PDU, through PduR's routes.
         let (frame_id, ipdu_len) = match sig.direction {
             SignalDirection::Tx(id, _) => {
-                let canif = config::CANIF.tx()[usize::from(id.0)];
+                let lpdu = config::pdur::TX[usize::from(id.0)];
+                let canif = config::CANIF.tx()[usize::from(lpdu.0)];
                 (canif.id, config::COM.tx()[usize::from(id.0)].len)
             }
             SignalDirection::Rx(id) => {
-                let canif = config::CANIF.rx()[usize::from(id.0)];
+                let k = config::pdur::RX
+                    .iter()
+                    .position(|route| match route {
+                        RxRoute::One(to) => *to == id,
+                        RxRoute::FanOut(to) => to.contains(&id),
+                        RxRoute::Drop => false,
+                    })
+                    .expect("every received I-PDU is routed from a CanIf RX PDU");
+                let canif = config::CANIF.rx()[k];
                 (canif.id, config::COM.rx()[usize::from(id.0)].len)
             }
         };

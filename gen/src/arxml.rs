@@ -9,8 +9,8 @@
 //! last segments of its path, below its module's. Then each known container is mapped onto
 //! [`crate::model`]. What cannot be mapped is refused with its path: an unknown module,
 //! container, parameter or reference, a value of the wrong form, a reference to nothing.
-//! Standard parameters that this ECU has no use for are listed in [`UNUSED`]: they are read
-//! and reported as notes, never silently dropped.
+//! Standard parameters, references and containers that this ECU has no use for are read
+//! and reported as notes with their paths, never silently dropped.
 
 use autosar_data::{AttributeName, AutosarModel, AutosarVersion, Element, ElementName, EnumItem};
 
@@ -26,41 +26,14 @@ pub const VERSION: AutosarVersion = AutosarVersion::Autosar_00050;
 /// Where the standard module definitions live.
 pub const STANDARD_DEFS: &str = "/AUTOSAR/EcucDefs";
 
-/// Parameters, references and containers of the standard definitions that this ECU does
-/// not use (by the last segments of their definition): reading one gives a note, not an
-/// error.
+/// Top-level containers of the standard definitions that this ECU does not use: reading one
+/// gives a note, not an error (the parameters and references it does not use are noted
+/// where their container is read).
 pub const UNUSED: &[&str] = &[
-    "OsTask/OsTaskAccessingApplication",
-    "OsTask/OsTaskAutostart/OsTaskAppModeRef",
-    "OsTask/OsTaskTimingProtection",
-    "OsTask/ArcCoreOsTaskStackSize",
-    "OsTask/OsTaskStackSize",
-    "OsCounter/OsCounterAccessingApplication",
-    "OsAlarm/OsAlarmAccessingApplication",
-    "OsAlarm/OsAlarmAutostart/OsAlarmAutostartType",
-    "OsAlarm/OsAlarmAutostart/OsAlarmAppModeRef",
-    "OsResource/OsResourceAccessingApplication",
-    "OsIsr/OsIsrTimingProtection",
-    "OsOS/OsScalabilityClass",
-    "OsOS/OsStackMonitoring",
-    "OsOS/OsUseGetServiceId",
-    "OsOS/OsUseParameterAccess",
-    "OsOS/OsUseResScheduler",
-    "OsOS/OsHooks/OsProtectionHook",
-    "ComConfig/ComIPdu/ComIPduCallout",
-    "ComConfig/ComIPdu/ComIPduHandleId",
-    "ComConfig/ComIPdu/ComIPduSignalProcessing",
-    "ComConfig/ComIPdu/ComIPduType",
-    "ComConfig/ComSignal/ComHandleId",
-    "ComConfig/ComSignal/ComSignalLength",
-    "ComConfig/ComSignal/ComSystemTemplateSystemSignalRef",
-    "ComConfig/ComSignal/ComNotification",
     "ComGeneral",
     "CanIfPublicCfg",
     "CanIfPrivateCfg",
-    "CanIfInitCfg/CanIfTxPduCfg/CanIfTxPduType",
-    "CanIfInitCfg/CanIfTxPduCfg/CanIfTxPduUserTxConfirmationUL",
-    "CanIfInitCfg/CanIfRxPduCfg/CanIfRxPduUserRxIndicationUL",
+    "CanIfCtrlDrvCfg",
     "PduRGeneral",
     "PduRBswModules",
     "CanGeneral",
@@ -75,13 +48,16 @@ pub struct Param {
     pub value: String,
 }
 
-/// A reference: its definition's last segment and the path it points to.
+/// A reference: its definition's last segment, the path it points to and what is there.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Ref {
     /// The definition's last segment (`OsTaskResourceRef`).
     pub def: String,
     /// The target's ARXML path.
     pub target: String,
+    /// The target's definition's last segment (`OsResource`), or its element's name where
+    /// it is not an ECUC container.
+    pub target_def: String,
 }
 
 /// An ECUC container value, read generically.
@@ -195,9 +171,15 @@ fn read_container(e: &Element, module_def: &str, out: &mut Vec<Error>) -> Option
             ));
             continue;
         };
-        let target = match r.get_sub_element(ElementName::ValueRef) {
+        let (target, target_def) = match r.get_sub_element(ElementName::ValueRef) {
             Some(v) => match v.get_reference_target() {
-                Ok(t) => path_of(&t),
+                Ok(t) => {
+                    let def = text(&t, ElementName::DefinitionRef).map_or_else(
+                        || t.element_name().to_string(),
+                        |d| d.rsplit('/').next().unwrap_or(&d).to_string(),
+                    );
+                    (path_of(&t), def)
+                }
                 Err(_) => {
                     out.push(Error::new(
                         format!(
@@ -221,6 +203,7 @@ fn read_container(e: &Element, module_def: &str, out: &mut Vec<Error>) -> Option
         refs.push(Ref {
             def: last(&d),
             target,
+            target_def,
         });
     }
     let subs = e
@@ -284,6 +267,8 @@ pub fn modules(bytes: &[u8], file_name: &str) -> Result<Vec<Module>, Vec<Error>>
 /// refused (or noted, for [`UNUSED`]).
 struct Take<'a> {
     c: &'a Container,
+    /// A mapping function took this (top-level) container.
+    touched: bool,
     params: Vec<bool>,
     refs: Vec<bool>,
     subs: Vec<bool>,
@@ -314,6 +299,7 @@ impl<'a> Take<'a> {
     fn new(c: &'a Container) -> Self {
         Self {
             c,
+            touched: false,
             params: vec![false; c.params.len()],
             refs: vec![false; c.refs.len()],
             subs: vec![false; c.subs.len()],
@@ -354,6 +340,25 @@ impl<'a> Take<'a> {
             return 0;
         }
         self.int(def, out).unwrap_or(0)
+    }
+
+    /// A signal value as ECUC writes it (a string: decimal or `0x` hex, negative for
+    /// signed signals), as the raw bits of a 64-bit two's complement.
+    fn value(&mut self, def: &str, out: &mut Vec<Error>) -> Option<u64> {
+        let v = self.param(def)?;
+        let parsed = match v.strip_prefix('-') {
+            Some(magnitude) => parse_int(magnitude)
+                .and_then(|m| i64::try_from(m).ok())
+                .map(|m| m.wrapping_neg() as u64),
+            None => parse_int(v),
+        };
+        if parsed.is_none() {
+            out.push(Error::new(
+                format!("{def} = `{v}` is not an integer"),
+                &[&self.c.path],
+            ));
+        }
+        parsed
     }
 
     fn ms(&mut self, def: &str, out: &mut Vec<Error>) -> Option<u64> {
@@ -402,13 +407,24 @@ impl<'a> Take<'a> {
         found
     }
 
-    /// The targets' short names of every reference `def`, taken.
-    fn refs(&mut self, def: &str) -> Vec<String> {
+    /// The targets' short names of every reference `def`, taken; each must point to a
+    /// container of definition `kind` (its last segment).
+    fn refs(&mut self, def: &str, kind: &str, out: &mut Vec<Error>) -> Vec<String> {
         let mut names = Vec::new();
         for (i, r) in self.c.refs.iter().enumerate() {
             if r.def == def {
                 if let Some(t) = self.refs.get_mut(i) {
                     *t = true;
+                }
+                if r.target_def != kind {
+                    out.push(Error::new(
+                        format!(
+                            "{def} points to {}, whose definition is {}: it must be {kind}",
+                            r.target, r.target_def
+                        ),
+                        &[&self.c.path],
+                    ));
+                    continue;
                 }
                 names.push(r.target.rsplit('/').next().unwrap_or(&r.target).to_string());
             }
@@ -416,21 +432,60 @@ impl<'a> Take<'a> {
         names
     }
 
-    /// The one target of reference `def`.
-    fn one_ref(&mut self, def: &str, out: &mut Vec<Error>) -> String {
-        let mut names = self.refs(def);
-        if names.len() != 1 {
+    /// The one target of reference `def` (see [`Self::refs`]).
+    fn one_ref(&mut self, def: &str, kind: &str, out: &mut Vec<Error>) -> String {
+        let count = self.c.refs.iter().filter(|r| r.def == def).count();
+        let mut names = self.refs(def, kind, out);
+        if count != 1 {
             out.push(Error::new(
                 format!(
-                    "{} {} has {} {def}: exactly one is needed",
+                    "{} {} has {count} {def}: exactly one is needed",
                     self.last(),
-                    self.name(),
-                    names.len()
+                    self.name()
                 ),
                 &[&self.c.path],
             ));
         }
         names.pop().unwrap_or_default()
+    }
+
+    /// Takes parameter and references `def` that the ECU has no use for, each a note.
+    fn unused(&mut self, def: &str, notes: &mut Vec<String>) {
+        for (i, p) in self.c.params.iter().enumerate() {
+            if p.def == def {
+                if let Some(t) = self.params.get_mut(i) {
+                    *t = true;
+                }
+                notes.push(format!(
+                    "{}: parameter {def} = {} is not used by this ECU",
+                    self.c.path, p.value
+                ));
+            }
+        }
+        for (i, r) in self.c.refs.iter().enumerate() {
+            if r.def == def {
+                if let Some(t) = self.refs.get_mut(i) {
+                    *t = true;
+                }
+                notes.push(format!(
+                    "{}: reference {def} to {} is not used by this ECU",
+                    self.c.path, r.target
+                ));
+            }
+        }
+    }
+
+    /// The sub-container of definition `def` where there may be one at most: a second is
+    /// refused.
+    fn single(&mut self, def: &str, out: &mut Vec<Error>) -> Option<&'a Container> {
+        let found = self.subs(def);
+        if let [first, second, ..] = found.as_slice() {
+            out.push(Error::new(
+                format!("two {def} where there may be one"),
+                &[&second.path, &first.path],
+            ));
+        }
+        found.first().copied()
     }
 
     /// The sub-containers of definition `def` (its last segment), taken.
@@ -536,7 +591,19 @@ pub fn map(modules: &[Module]) -> Result<Read, Vec<Error>> {
             }
         }
         for t in top {
-            t.finish(&mut out, &mut notes);
+            if t.touched {
+                t.finish(&mut out, &mut notes);
+            } else if UNUSED.contains(&t.c.def.as_str()) {
+                notes.push(format!(
+                    "{}: container {} is not used by this ECU",
+                    t.c.path, t.c.def
+                ));
+            } else {
+                out.push(Error::new(
+                    format!("container {} cannot be mapped onto the ECU", t.c.def),
+                    &[&t.c.path],
+                ));
+            }
         }
     }
     for needed in ["Os", "EcuC", "Com", "PduR", "CanIf", "Can"] {
@@ -563,7 +630,12 @@ pub fn read(bytes: &[u8], file_name: &str) -> Result<Read, Vec<Error>> {
 }
 
 fn top_level<'t, 'a>(top: &'t mut [Take<'a>], def: &str) -> Vec<&'t mut Take<'a>> {
-    top.iter_mut().filter(|t| t.c.def == def).collect()
+    let mut found = Vec::new();
+    for t in top.iter_mut().filter(|t| t.c.def == def) {
+        t.touched = true;
+        found.push(t);
+    }
+    found
 }
 
 fn name_of(c: &Container) -> String {
@@ -578,7 +650,14 @@ fn map_os(
     notes: &mut Vec<String>,
 ) {
     os.path = m.path.clone();
-    for t in top_level(top, "OsOS") {
+    let osos = top_level(top, "OsOS");
+    if let [first, second, ..] = osos.as_slice() {
+        out.push(Error::new(
+            "two OsOS where there may be one",
+            &[&second.c.path, &first.c.path],
+        ));
+    }
+    for t in osos {
         os.status = t
             .literal(
                 "OsStatus",
@@ -589,7 +668,16 @@ fn map_os(
                 out,
             )
             .unwrap_or_default();
-        for h in t.subs("OsHooks") {
+        for u in [
+            "OsScalabilityClass",
+            "OsStackMonitoring",
+            "OsUseGetServiceId",
+            "OsUseParameterAccess",
+            "OsUseResScheduler",
+        ] {
+            t.unused(u, notes);
+        }
+        if let Some(h) = t.single("OsHooks", out) {
             let mut h = Take::new(h);
             os.hooks = Hooks {
                 error: h.boolean("OsErrorHook", out).unwrap_or(false),
@@ -598,9 +686,11 @@ fn map_os(
                 pre_task: h.boolean("OsPreTaskHook", out).unwrap_or(false),
                 post_task: h.boolean("OsPostTaskHook", out).unwrap_or(false),
             };
+            h.unused("OsProtectionHook", notes);
             h.finish(out, notes);
         }
     }
+    // One application mode: the kernel's OSDEFAULTAPPMODE.
     let modes = top_level(top, "OsAppMode");
     if modes.len() > 1 {
         let paths: Vec<&str> = modes.iter().map(|t| t.c.path.as_str()).collect();
@@ -610,11 +700,18 @@ fn map_os(
         ));
     }
     for t in top_level(top, "OsTask") {
-        let autostart = t.subs("OsTaskAutostart");
-        for a in &autostart {
+        let autostart = t.single("OsTaskAutostart", out);
+        if let Some(a) = autostart {
             let mut a = Take::new(a);
-            a.refs("OsTaskAppModeRef");
+            a.refs("OsTaskAppModeRef", "OsAppMode", out);
             a.finish(out, notes);
+        }
+        for u in [
+            "OsTaskAccessingApplication",
+            "OsTaskStackSize",
+            "ArcCoreOsTaskStackSize",
+        ] {
+            t.unused(u, notes);
         }
         os.tasks.push(Task {
             path: t.c.path.clone(),
@@ -624,9 +721,9 @@ fn map_os(
                 .literal("OsTaskSchedule", &[("FULL", true), ("NON", false)], out)
                 .unwrap_or(true),
             activations: t.int("OsTaskActivation", out).unwrap_or(1),
-            autostart: !autostart.is_empty(),
-            resources: t.refs("OsTaskResourceRef"),
-            events: t.refs("OsTaskEventRef"),
+            autostart: autostart.is_some(),
+            resources: t.refs("OsTaskResourceRef", "OsResource", out),
+            events: t.refs("OsTaskEventRef", "OsEvent", out),
         });
     }
     for t in top_level(top, "OsEvent") {
@@ -639,7 +736,7 @@ fn map_os(
     for t in top_level(top, "OsResource") {
         // Linked and internal resources are not in the kernel.
         t.literal("OsResourceProperty", &[("STANDARD", ())], out);
-        t.refs("OsResourceAccessingApplication");
+        t.unused("OsResourceAccessingApplication", notes);
         os.resources.push(Named {
             path: t.c.path.clone(),
             name: name_of(t.c),
@@ -648,6 +745,7 @@ fn map_os(
     for t in top_level(top, "OsCounter") {
         // The kernel drives its counters from the system timer.
         t.literal("OsCounterType", &[("HARDWARE", ())], out);
+        t.unused("OsCounterAccessingApplication", notes);
         os.counters.push(Counter {
             path: t.c.path.clone(),
             name: name_of(t.c),
@@ -657,24 +755,41 @@ fn map_os(
         });
     }
     for t in top_level(top, "OsAlarm") {
-        let counter = t.one_ref("OsAlarmCounterRef", out);
+        let counter = t.one_ref("OsAlarmCounterRef", "OsCounter", out);
+        t.unused("OsAlarmAccessingApplication", notes);
         let mut action = None;
-        for a in t.subs("OsAlarmAction") {
+        if let Some(a) = t.single("OsAlarmAction", out) {
             let mut a = Take::new(a);
             for x in a.subs("OsAlarmActivateTask") {
                 let mut x = Take::new(x);
-                action = Some(AlarmAction::ActivateTask(
-                    x.one_ref("OsAlarmActivateTaskRef", out),
-                ));
+                let task = x.one_ref("OsAlarmActivateTaskRef", "OsTask", out);
+                action = Some(AlarmAction::ActivateTask(task));
                 x.finish(out, notes);
             }
             for x in a.subs("OsAlarmSetEvent") {
                 let mut x = Take::new(x);
-                let task = x.one_ref("OsAlarmSetEventTaskRef", out);
-                let event = x.one_ref("OsAlarmSetEventRef", out);
+                let task = x.one_ref("OsAlarmSetEventTaskRef", "OsTask", out);
+                let event = x.one_ref("OsAlarmSetEventRef", "OsEvent", out);
+                if action.is_some() {
+                    out.push(Error::new(
+                        "an alarm does one thing: two actions",
+                        &[&a.c.path],
+                    ));
+                }
                 action = Some(AlarmAction::SetEvent(task, event));
                 x.finish(out, notes);
             }
+            a.finish(out, notes);
+        }
+        let mut autostart = None;
+        if let Some(a) = t.single("OsAlarmAutostart", out) {
+            let mut a = Take::new(a);
+            a.literal("OsAlarmAutostartType", &[("RELATIVE", ())], out);
+            autostart = Some((
+                a.required_int("OsAlarmAlarmTime", out),
+                a.int("OsAlarmCycleTime", out).unwrap_or(0),
+            ));
+            a.refs("OsAlarmAppModeRef", "OsAppMode", out);
             a.finish(out, notes);
         }
         let Some(action) = action else {
@@ -687,22 +802,6 @@ fn map_os(
             ));
             continue;
         };
-        let mut autostart = None;
-        for a in t.subs("OsAlarmAutostart") {
-            let mut a = Take::new(a);
-            if a.param("OsAlarmAutostartType") == Some("ABSOLUTE") {
-                out.push(Error::new(
-                    "OsAlarmAutostartType ABSOLUTE: the ECU starts its alarms relative to StartOS",
-                    &[&a.c.path],
-                ));
-            }
-            autostart = Some((
-                a.required_int("OsAlarmAlarmTime", out),
-                a.int("OsAlarmCycleTime", out).unwrap_or(0),
-            ));
-            a.refs("OsAlarmAppModeRef");
-            a.finish(out, notes);
-        }
         os.alarms.push(Alarm {
             path: t.c.path.clone(),
             name: name_of(t.c),
@@ -719,11 +818,17 @@ fn map_os(
                 out,
             )
             .unwrap_or(2);
-        // The interrupt priority is the port's: as MICROSAR names it, or Arctic Core.
-        let priority = t
-            .int("OsIsrInterruptPriority", out)
-            .or_else(|| t.int("ArcOsIsrPriority", out));
-        let Some(priority) = priority else {
+        let resources = t.refs("OsIsrResourceRef", "OsResource", out);
+        t.unused("OsIsrTimingProtection", notes);
+        // The interrupt priority is the port's, in OSEK's order (a higher number is more
+        // urgent), as MICROSAR and TOPPERS name it, or as Arctic Core does.
+        let has = |t: &Take<'_>, def: &str| t.c.params.iter().any(|p| p.def == def);
+        let def = if has(t, "OsIsrInterruptPriority") || !has(t, "ArcOsIsrPriority") {
+            "OsIsrInterruptPriority"
+        } else {
+            "ArcOsIsrPriority"
+        };
+        if !has(t, def) {
             out.push(Error::new(
                 format!(
                     "ISR {} has no priority (OsIsrInterruptPriority or ArcOsIsrPriority)",
@@ -732,13 +837,16 @@ fn map_os(
                 &[&t.c.path],
             ));
             continue;
+        }
+        let Some(priority) = t.int(def, out) else {
+            continue;
         };
         os.isrs.push(Isr {
             path: t.c.path.clone(),
             name: name_of(t.c),
             category,
             priority,
-            resources: t.refs("OsIsrResourceRef"),
+            resources,
         });
     }
 }
@@ -764,8 +872,8 @@ fn map_ecuc(
             });
             p.finish(out, notes);
         }
-        t.param("PduIdTypeEnum");
-        t.param("PduLengthTypeEnum");
+        t.unused("PduIdTypeEnum", notes);
+        t.unused("PduLengthTypeEnum", notes);
     }
     // R4.2.1 and later: `EcucConfigSet/EcucPduCollection`; before: `EcucPduCollection`.
     for t in top_level(top, "EcucConfigSet") {
@@ -790,13 +898,25 @@ fn map_com(
     com.path = m.path.clone();
     for t in top_level(top, "ComConfig") {
         com.path = t.c.path.clone();
-        for f in t.subs("ComTimeBase") {
+        if let Some(f) = t.single("ComTimeBase", out) {
             let mut f = Take::new(f);
             com.main_period_ms = f.ms("ComTxTimeBase", out).unwrap_or(0);
-            f.ms("ComRxTimeBase", out);
+            // Both main functions run in one task, at one period.
+            if let Some(rx) = f.ms("ComRxTimeBase", out) {
+                if rx != com.main_period_ms {
+                    out.push(Error::new(
+                        format!(
+                            "ComRxTimeBase {rx} ms differs from ComTxTimeBase {} ms: the ECU runs both main functions in one task",
+                            com.main_period_ms
+                        ),
+                        &[&f.c.path],
+                    ));
+                }
+            }
+            f.unused("ComGwTimeBase", notes);
             f.finish(out, notes);
         }
-        let mut timeouts: Vec<(String, u64)> = Vec::new();
+        let mut timeouts: Vec<(String, u64, String)> = Vec::new();
         for s in t.subs("ComSignal") {
             let mut s = Take::new(s);
             let signal = Signal {
@@ -831,8 +951,8 @@ fn map_com(
                         out,
                     )
                     .unwrap_or(false),
-                init: s.int("ComSignalInitValue", out).unwrap_or(0),
-                invalid: s.int("ComSignalDataInvalidValue", out),
+                init: s.value("ComSignalInitValue", out).unwrap_or(0),
+                invalid: s.value("ComSignalDataInvalidValue", out),
                 transfer: s
                     .literal(
                         "ComTransferProperty",
@@ -855,8 +975,12 @@ fn map_com(
                 update_bit: s.int("ComUpdateBitPosition", out),
             };
             if let Some(t) = s.ms("ComTimeout", out) {
-                timeouts.push((signal.name.clone(), t));
+                timeouts.push((signal.name.clone(), t, signal.path.clone()));
             }
+            for u in ["ComHandleId", "ComSignalLength", "ComNotification"] {
+                s.unused(u, notes);
+            }
+            s.unused("ComSystemTemplateSystemSignalRef", notes);
             com.signals.push(signal);
             s.finish(out, notes);
         }
@@ -867,16 +991,24 @@ fn map_com(
                 &[("SEND", true), ("RECEIVE", false)],
                 out,
             );
-            let pdu = i.one_ref("ComPduIdRef", out);
-            let signals = i.refs("ComIPduSignalRef");
-            // The ECU monitors deadlines per I-PDU: its signals' `ComTimeout`, which must
-            // agree.
-            let timeouts: Vec<u64> = signals
+            let pdu = i.one_ref("ComPduIdRef", "Pdu", out);
+            let signals = i.refs("ComIPduSignalRef", "ComSignal", out);
+            for u in [
+                "ComIPduCallout",
+                "ComIPduHandleId",
+                "ComIPduSignalProcessing",
+                "ComIPduType",
+            ] {
+                i.unused(u, notes);
+            }
+            // The ECU monitors deadlines per received I-PDU: its signals' `ComTimeout`,
+            // which must agree; a sent I-PDU's are not monitored.
+            let own: Vec<&(String, u64, String)> = timeouts
                 .iter()
-                .filter_map(|n| timeouts.iter().find(|(s, _)| s == n).map(|(_, t)| *t))
+                .filter(|(n, _, _)| signals.contains(n))
                 .collect();
-            let deadline = timeouts.first().copied().unwrap_or(0);
-            if timeouts.iter().any(|t| *t != deadline) {
+            let deadline = own.first().map_or(0, |(_, t, _)| *t);
+            if own.iter().any(|(_, t, _)| *t != deadline) {
                 out.push(Error::new(
                     format!(
                         "the signals of I-PDU {} have different ComTimeout: the ECU monitors one deadline per I-PDU",
@@ -886,12 +1018,12 @@ fn map_com(
                 ));
             }
             let mut tx = None;
-            for x in i.subs("ComTxIPdu") {
+            if let Some(x) = i.single("ComTxIPdu", out) {
                 let mut x = Take::new(x);
                 let mdt_ms = x.ms("ComMinimumDelayTime", out).unwrap_or(0);
-                for m in x.subs("ComTxModeTrue") {
+                if let Some(m) = x.single("ComTxModeTrue", out) {
                     let mut m = Take::new(m);
-                    for mode in m.subs("ComTxMode") {
+                    if let Some(mode) = m.single("ComTxMode", out) {
                         let mut mode = Take::new(mode);
                         tx = Some(TxIPdu {
                             mode: mode
@@ -921,7 +1053,18 @@ fn map_com(
                 x.finish(out, notes);
             }
             let direction = match (send, tx) {
-                (Some(true), Some(tx)) => Direction::Send(tx),
+                (Some(true), Some(tx)) => {
+                    if let Some((n, _, p)) = own.first() {
+                        out.push(Error::new(
+                            format!(
+                                "signal {n} of sent I-PDU {} has a ComTimeout: the ECU monitors the deadlines of received I-PDUs only",
+                                name_of(i.c)
+                            ),
+                            &[p, &i.c.path],
+                        ));
+                    }
+                    Direction::Send(tx)
+                }
                 (Some(true), None) => {
                     out.push(Error::new(
                         format!(
@@ -930,16 +1073,28 @@ fn map_com(
                         ),
                         &[&i.c.path],
                     ));
+                    i.finish(out, notes);
                     continue;
                 }
-                (Some(false), _) => Direction::Receive {
-                    deadline_ms: deadline,
-                },
+                (Some(false), tx) => {
+                    if tx.is_some() {
+                        out.push(Error::new(
+                            format!("received I-PDU {} has a ComTxIPdu", name_of(i.c)),
+                            &[&i.c.path],
+                        ));
+                    }
+                    Direction::Receive {
+                        deadline_ms: deadline,
+                    }
+                }
                 (None, _) => {
-                    out.push(Error::new(
-                        format!("I-PDU {} has no ComIPduDirection", name_of(i.c)),
-                        &[&i.c.path],
-                    ));
+                    if i.c.params.iter().all(|p| p.def != "ComIPduDirection") {
+                        out.push(Error::new(
+                            format!("I-PDU {} has no ComIPduDirection", name_of(i.c)),
+                            &[&i.c.path],
+                        ));
+                    }
+                    i.finish(out, notes);
                     continue;
                 }
             };
@@ -964,25 +1119,32 @@ fn map_pdur(
     fn path(r: &Container, routes: &mut Vec<Route>, out: &mut Vec<Error>, notes: &mut Vec<String>) {
         let mut r = Take::new(r);
         let mut src = String::new();
-        let mut dest = String::new();
-        for s in r.subs("PduRSrcPdu") {
+        if let Some(s) = r.single("PduRSrcPdu", out) {
             let mut s = Take::new(s);
-            src = s.one_ref("PduRSrcPduRef", out);
-            s.param("PduRSourcePduHandleId");
+            src = s.one_ref("PduRSrcPduRef", "Pdu", out);
+            s.unused("PduRSourcePduHandleId", notes);
             s.finish(out, notes);
         }
+        let mut dests = Vec::new();
         for d in r.subs("PduRDestPdu") {
             let mut d = Take::new(d);
-            dest = d.one_ref("PduRDestPduRef", out);
-            d.param("PduRDestPduHandleId");
-            d.param("PduRDestPduDataProvision");
+            dests.push(d.one_ref("PduRDestPduRef", "Pdu", out));
+            d.unused("PduRDestPduHandleId", notes);
+            // Direct data provision is the only one the ECU's PduR has.
+            d.literal("PduRDestPduDataProvision", &[("PDUR_DIRECT", ())], out);
             d.finish(out, notes);
+        }
+        if dests.is_empty() {
+            out.push(Error::new(
+                format!("routing path {} has no PduRDestPdu", name_of(r.c)),
+                &[&r.c.path],
+            ));
         }
         routes.push(Route {
             path: r.c.path.clone(),
             name: name_of(r.c),
             src,
-            dest,
+            dests,
         });
         r.finish(out, notes);
     }
@@ -1014,38 +1176,39 @@ fn map_canif(
     canif.path = m.path.clone();
     for t in top_level(top, "CanIfInitCfg") {
         canif.path = t.c.path.clone();
-        // Hardware objects by name, in order, per kind.
+        // Hardware objects by name, in order, per kind; the Can driver's objects and
+        // controller they stand for are the board's (config::CAN_FILTERS).
         let mut hths = Vec::new();
         let mut hrhs = Vec::new();
         for h in t.subs("CanIfInitHohCfg") {
             let mut h = Take::new(h);
-            for x in h.subs("CanIfHthCfg") {
-                let mut x = Take::new(x);
-                x.refs("CanIfHthCanCtrlIdRef");
-                x.param("CanIfHthIdSymRef");
-                x.refs("CanIfHthIdSymRef");
-                hths.push(name_of(x.c));
-                x.finish(out, notes);
-            }
-            for x in h.subs("CanIfHrhCfg") {
-                let mut x = Take::new(x);
-                x.refs("CanIfHrhCanCtrlIdRef");
-                x.refs("CanIfHrhIdSymRef");
-                hrhs.push(name_of(x.c));
-                x.finish(out, notes);
+            for (kind, list) in [("Hth", &mut hths), ("Hrh", &mut hrhs)] {
+                for x in h.subs(&format!("CanIf{kind}Cfg")) {
+                    let mut x = Take::new(x);
+                    x.unused(&format!("CanIf{kind}CanCtrlIdRef"), notes);
+                    x.unused(&format!("CanIf{kind}IdSymRef"), notes);
+                    list.push(name_of(x.c));
+                    x.finish(out, notes);
+                }
             }
             h.finish(out, notes);
         }
         // Transmit buffers, each on one HTH.
-        let mut buffers: Vec<(String, String)> = Vec::new();
+        let mut buffers: Vec<(String, usize)> = Vec::new();
         for b in t.subs("CanIfBufferCfg") {
             let mut b = Take::new(b);
-            let hth = b.one_ref("CanIfBufferHthRef", out);
-            b.param("CanIfBufferSize");
-            buffers.push((name_of(b.c), hth));
+            let hth = b.one_ref("CanIfBufferHthRef", "CanIfHthCfg", out);
+            if b.int("CanIfBufferSize", out) == Some(0) {
+                out.push(Error::new(
+                    "CanIfBufferSize 0: the ECU's CanIf buffers one PDU per transmit PDU",
+                    &[&b.c.path],
+                ));
+            }
+            if let Some(k) = hths.iter().position(|h| *h == hth) {
+                buffers.push((name_of(b.c), k));
+            }
             b.finish(out, notes);
         }
-        let buffer_hths: Vec<String> = buffers.iter().map(|(b, _)| b.clone()).collect();
         let id_type = |x: &mut Take<'_>, def: &str, out: &mut Vec<Error>| {
             x.literal(
                 def,
@@ -1059,20 +1222,7 @@ fn map_canif(
             )
             .unwrap_or(false)
         };
-        let hoh = |x: &mut Take<'_>, def: &str, list: &[String], out: &mut Vec<Error>| {
-            let name = x.one_ref(def, out);
-            match list.iter().position(|n| *n == name) {
-                Some(i) => i as u64,
-                None => {
-                    out.push(Error::new(
-                        format!("{def} points to {name}, which is not one of CanIf's hardware objects or buffers"),
-                        &[&x.c.path],
-                    ));
-                    0
-                }
-            }
-        };
-        // The DLC, as R4.2 names it or as earlier releases did.
+        // The DLC, as R4.3 names it or as earlier releases did.
         let dlc = |x: &mut Take<'_>, kind: &str, out: &mut Vec<Error>| {
             let long = format!("CanIf{kind}PduDataLength");
             let short = format!("CanIf{kind}PduDlc");
@@ -1080,19 +1230,35 @@ fn map_canif(
         };
         for x in t.subs("CanIfTxPduCfg") {
             let mut x = Take::new(x);
-            let buffer = hoh(&mut x, "CanIfTxPduBufferRef", &buffer_hths, out);
-            let hth = usize::try_from(buffer)
-                .ok()
-                .and_then(|b| buffers.get(b))
-                .and_then(|(_, hth)| hths.iter().position(|h| h == hth))
-                .unwrap_or(0) as u64;
+            let buffer = x.one_ref("CanIfTxPduBufferRef", "CanIfBufferCfg", out);
+            let hth = match buffers.iter().find(|(b, _)| *b == buffer) {
+                Some((_, k)) => *k as u64,
+                None => {
+                    out.push(Error::new(
+                        format!(
+                            "CanIfTxPduBufferRef points to {buffer}, which is on no HTH of CanIf"
+                        ),
+                        &[&x.c.path],
+                    ));
+                    0
+                }
+            };
+            for u in [
+                "CanIfTxPduType",
+                "CanIfTxPduUserTxConfirmationUL",
+                "CanIfTxPduId",
+                "CanIfTxPduUserTxConfirmationName",
+                "CanIfTxPduReadNotifyStatus",
+            ] {
+                x.unused(u, notes);
+            }
             let lpdu = LPdu {
                 path: x.c.path.clone(),
                 name: name_of(x.c),
                 can_id: x.required_int("CanIfTxPduCanId", out),
                 extended: id_type(&mut x, "CanIfTxPduCanIdType", out),
                 dlc: dlc(&mut x, "Tx", out),
-                pdu: x.one_ref("CanIfTxPduRef", out),
+                pdu: x.one_ref("CanIfTxPduRef", "Pdu", out),
                 hoh: hth,
             };
             canif.tx.push(lpdu);
@@ -1111,14 +1277,35 @@ fn map_canif(
                     &[&x.c.path],
                 ));
             }
+            let hrh_name = x.one_ref("CanIfRxPduHrhIdRef", "CanIfHrhCfg", out);
+            let hrh = match hrhs.iter().position(|h| *h == hrh_name) {
+                Some(k) => k as u64,
+                None => {
+                    out.push(Error::new(
+                        format!("CanIfRxPduHrhIdRef points to {hrh_name}, which is not in CanIfInitHohCfg"),
+                        &[&x.c.path],
+                    ));
+                    0
+                }
+            };
+            for u in [
+                "CanIfRxPduUserRxIndicationUL",
+                "CanIfRxPduId",
+                "CanIfRxPduUserRxIndicationName",
+                "CanIfRxPduReadNotifyStatus",
+                "CanIfRxPduReadData",
+                "CanIfRxPduDlcCheck",
+            ] {
+                x.unused(u, notes);
+            }
             let lpdu = LPdu {
                 path: x.c.path.clone(),
                 name: name_of(x.c),
                 can_id: x.required_int("CanIfRxPduCanId", out),
                 extended: id_type(&mut x, "CanIfRxPduCanIdType", out),
                 dlc: dlc(&mut x, "Rx", out),
-                pdu: x.one_ref("CanIfRxPduRef", out),
-                hoh: hoh(&mut x, "CanIfRxPduHrhIdRef", &hrhs, out),
+                pdu: x.one_ref("CanIfRxPduRef", "Pdu", out),
+                hoh: hrh,
             };
             canif.rx.push(lpdu);
             x.finish(out, notes);
@@ -1144,27 +1331,39 @@ fn map_can(
             let mut c = Take::new(c);
             can.path = c.c.path.clone();
             can.name = name_of(c.c);
-            c.param("CanControllerId");
-            c.refs("CanCpuClockRef");
-            c.refs("CanControllerDefaultBaudrate");
-            for b in c.subs("CanControllerBaudrateConfig") {
+            for u in [
+                "CanControllerId",
+                "CanCpuClockRef",
+                "CanControllerDefaultBaudrate",
+            ] {
+                c.unused(u, notes);
+            }
+            // The driver derives its time quanta from the bit rate and the sample point.
+            if let Some(b) = c.single("CanControllerBaudrateConfig", out) {
                 let mut b = Take::new(b);
                 can.baud_kbps = b.required_int("CanControllerBaudRate", out);
                 can.prop_seg = b.required_int("CanControllerPropSeg", out);
                 can.seg1 = b.required_int("CanControllerSeg1", out);
                 can.seg2 = b.required_int("CanControllerSeg2", out);
-                b.param("CanControllerSyncJumpWidth");
-                b.param("CanControllerBaudRateConfigID");
+                b.unused("CanControllerSyncJumpWidth", notes);
+                b.unused("CanControllerBaudRateConfigID", notes);
                 b.finish(out, notes);
             }
             c.finish(out, notes);
         }
+        // The board's message buffers are its own (config::CAN_FILTERS).
         for h in t.subs("CanHardwareObject") {
             let mut h = Take::new(h);
-            for p in ["CanObjectType", "CanIdType", "CanHandleType", "CanObjectId"] {
-                h.param(p);
+            for p in [
+                "CanObjectType",
+                "CanIdType",
+                "CanHandleType",
+                "CanObjectId",
+                "CanIdValue",
+                "CanControllerRef",
+            ] {
+                h.unused(p, notes);
             }
-            h.refs("CanControllerRef");
             h.finish(out, notes);
         }
     }
@@ -1746,14 +1945,16 @@ impl Writer<'_> {
             )?;
             let target = find(&pdus, &r.src).ok_or_else(|| missing("PDU", &r.src, &r.path))?;
             Self::reference(&src, &format!("{d}/PduRSrcPdu/PduRSrcPduRef"), &target)?;
-            let dest = Self::container(
-                &c,
-                &format!("{}_Dest", r.name),
-                &format!("{d}/PduRDestPdu"),
-                true,
-            )?;
-            let target = find(&pdus, &r.dest).ok_or_else(|| missing("PDU", &r.dest, &r.path))?;
-            Self::reference(&dest, &format!("{d}/PduRDestPdu/PduRDestPduRef"), &target)?;
+            for (k, dest_pdu) in r.dests.iter().enumerate() {
+                let name = match k {
+                    0 => format!("{}_Dest", r.name),
+                    k => format!("{}_Dest{k}", r.name),
+                };
+                let dest = Self::container(&c, &name, &format!("{d}/PduRDestPdu"), true)?;
+                let target =
+                    find(&pdus, dest_pdu).ok_or_else(|| missing("PDU", dest_pdu, &r.path))?;
+                Self::reference(&dest, &format!("{d}/PduRDestPdu/PduRDestPduRef"), &target)?;
+            }
         }
 
         // Can: the controller, then CanIf, whose hardware objects refer to it.

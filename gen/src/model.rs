@@ -185,8 +185,8 @@ pub struct Pdu {
 pub struct Com {
     /// The module's path.
     pub path: Path,
-    /// The period of Com's main functions, ms (`ComMainFunctionTx/ComMainFunctionPeriod`,
-    /// also Rx's).
+    /// The period of Com's main functions, ms (`ComTimeBase/ComTxTimeBase`, which
+    /// `ComRxTimeBase` must equal: both run in one task).
     pub main_period_ms: u64,
     /// `ComIPdu`.
     pub ipdus: Vec<IPdu>,
@@ -301,7 +301,7 @@ pub struct Signal {
     pub update_bit: Option<u64>,
 }
 
-/// `PduRRoutingPath`: one source PDU to one destination.
+/// `PduRRoutingPath`: one source PDU to one destination or more.
 #[derive(Debug, Clone, PartialEq, Eq, Default)]
 pub struct Route {
     /// ARXML path.
@@ -310,8 +310,8 @@ pub struct Route {
     pub name: String,
     /// `PduRSrcPdu/PduRSrcPduRef`, by name.
     pub src: String,
-    /// `PduRDestPdu/PduRDestPduRef`, by name.
-    pub dest: String,
+    /// Every `PduRDestPdu/PduRDestPduRef`, by name.
+    pub dests: Vec<String>,
 }
 
 /// `CanIf`.
@@ -365,9 +365,12 @@ pub struct CanController {
 
 impl CanController {
     /// The sample point in per mille of the bit: the synchronisation quantum, the
-    /// propagation and phase 1 segments over the whole bit, rounded down.
-    pub fn sample_permille(&self) -> u64 {
-        let before = 1 + self.prop_seg + self.seg1;
-        (before * 1000).checked_div(before + self.seg2).unwrap_or(0)
+    /// propagation and phase 1 segments over the whole bit, rounded down (`None` where the
+    /// segments overflow).
+    pub fn sample_permille(&self) -> Option<u64> {
+        let before = self.prop_seg.checked_add(self.seg1)?.checked_add(1)?;
+        before
+            .checked_mul(1000)?
+            .checked_div(before.checked_add(self.seg2)?)
     }
 }

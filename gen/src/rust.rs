@@ -95,7 +95,7 @@ pub fn emit(ecu: &Ecu, source: &str, digest: &str) -> Result<String, Error> {
     emit_com(ecu, &mut s)?;
     emit_canif(ecu, &mut s)?;
     emit_pdur(ecu, &mut s)?;
-    emit_can(ecu, &mut s);
+    emit_can(ecu, &mut s)?;
     Ok(s)
 }
 
@@ -161,7 +161,10 @@ fn emit_os(ecu: &Ecu, s: &mut String) -> Result<(), Error> {
                     let task = match &a.action {
                         AlarmAction::ActivateTask(task) | AlarmAction::SetEvent(task, _) => task,
                     };
-                    (task == &t.name).then_some(a.autostart.map_or(0, |(_, cycle)| cycle))
+                    match a.autostart {
+                        Some((_, cycle)) if cycle > 0 && task == &t.name => Some(cycle),
+                        _ => None,
+                    }
                 })
                 .unwrap_or(0)
                 .to_string()
@@ -175,8 +178,8 @@ fn emit_os(ecu: &Ecu, s: &mut String) -> Result<(), Error> {
     );
     let _ = writeln!(
         s,
-        "/// Each task's period, in its alarm's counter ticks: the cycle of the alarm that \
-         activates it or sets its event (0: no such alarm).\npub const PERIOD_TICKS: [u32; {nt}] = [{}];",
+        "/// Each task's period, in its alarm's counter ticks: the cycle of the autostarted \
+         cyclic alarm that activates it or sets its event (0: none does).\npub const PERIOD_TICKS: [u32; {nt}] = [{}];",
         periods.join(", ")
     );
     let _ = writeln!(
@@ -198,8 +201,10 @@ fn emit_os(ecu: &Ecu, s: &mut String) -> Result<(), Error> {
     };
     let _ = writeln!(
         s,
-        "/// The OS's tables ({}): tasks, counters, alarms and ISRs, in conformance class \
-         {} (derived: {} tasks, {} activations), AUTOSAR's behaviour.\npub const DESCRIPTION: OsDescription<{nt}, {nc}, {na}, {ni}> = OsDescription::new(\n[",
+        "/// The OS's tables as described ({}): tasks, counters, alarms and ISRs, in \
+         conformance class {} (derived: {} tasks, {} activations), AUTOSAR's behaviour, the \
+         described status and hooks (the firmware's configuration may build another structure \
+         or status from them).\npub const DESCRIPTION: OsDescription<{nt}, {nc}, {na}, {ni}> = OsDescription::new(\n[",
         os.path,
         class.to_uppercase(),
         if extended { "extended" } else { "basic" },
@@ -526,12 +531,14 @@ fn emit_canif(ecu: &Ecu, s: &mut String) -> Result<(), Error> {
             id(l)
         );
     }
-    for l in &canif.rx {
+    for (k, l) in canif.rx.iter().enumerate() {
         let _ = writeln!(
             s,
-            "/// `{}`'s CAN id ({}).\npub const {}_ID: CanId = {};",
+            "/// `{}` ({}).\npub const {}: RxPduId = RxPduId({k});\n/// `{}`'s CAN id.\npub const {}_ID: CanId = {};",
             l.name,
             l.path,
+            constant(&l.name),
+            l.name,
             constant(&l.name),
             id(l)
         );
@@ -577,7 +584,13 @@ fn emit_canif(ecu: &Ecu, s: &mut String) -> Result<(), Error> {
     let imports = uses_of("cw_core::can", &["CanId", "Hrh", "Hth"], s)
         + &uses_of(
             "cw_core::canif",
-            &["CanIfConfig", "RxPduConfig", "TxPduConfig", "TxPduId"],
+            &[
+                "CanIfConfig",
+                "RxPduConfig",
+                "RxPduId",
+                "TxPduConfig",
+                "TxPduId",
+            ],
             s,
         );
     let _ = writeln!(
@@ -590,82 +603,85 @@ fn emit_canif(ecu: &Ecu, s: &mut String) -> Result<(), Error> {
 
 fn emit_pdur(ecu: &Ecu, s: &mut String) -> Result<(), Error> {
     let com = &ecu.com;
-    let _ = writeln!(
-        s,
-        "/// `PduR`: Com's sent I-PDUs onto CanIf's TX PDUs, CanIf's RX PDUs onto Com's received\n/// I-PDUs.\npub mod pdur {{\n    use cw_core::canif::TxPduId;\n    use cw_core::pdur::{{PduRConfig, RxRoute}};\n"
-    );
+    let received: Vec<_> = com
+        .ipdus
+        .iter()
+        .filter(|i| matches!(i.direction, Direction::Receive { .. }))
+        .collect();
     let mut tx = Vec::new();
     let mut ntx_com = 0;
-    let mut nrx_com = 0;
     for i in &com.ipdus {
-        match i.direction {
-            Direction::Send(_) => {
-                ntx_com += 1;
-                let r = ecu.routes.iter().find(|r| r.src == i.pdu).ok_or_else(|| {
+        if let Direction::Send(_) = i.direction {
+            ntx_com += 1;
+            let r =
+                ecu.routes.iter().find(|r| r.src == i.pdu).ok_or_else(|| {
                     Error::new(format!("I-PDU {} is not routed", i.name), &[&i.path])
                 })?;
-                let k = index_of(
-                    &ecu.canif.tx,
-                    &r.dest,
-                    |l| &l.pdu,
-                    "CanIf TX PDU of",
-                    &r.path,
-                )?;
-                tx.push(format!("// {}\nTxPduId({k})", r.path));
-            }
-            Direction::Receive { .. } => nrx_com += 1,
+            let dest = r.dests.first().map_or("", String::as_str);
+            let k = index_of(&ecu.canif.tx, dest, |l| &l.pdu, "CanIf TX PDU of", &r.path)?;
+            tx.push(format!("// {}\nTxPduId({k})", r.path));
         }
     }
     let mut rx = Vec::new();
     for l in &ecu.canif.rx {
-        let route = ecu.routes.iter().find(|r| r.src == l.pdu);
-        match route {
-            None => rx.push(format!("// {}: not routed\nRxRoute::Drop", l.path)),
-            Some(r) => {
-                let received: Vec<_> = com
-                    .ipdus
-                    .iter()
-                    .filter(|i| matches!(i.direction, Direction::Receive { .. }))
-                    .collect();
-                let k = received
-                    .iter()
-                    .position(|i| i.pdu == r.dest)
-                    .ok_or_else(|| {
-                        Error::new(
-                            format!("no received Com I-PDU has PDU {}", r.dest),
-                            &[&r.path],
-                        )
-                    })?;
-                rx.push(format!(
-                    "// {}\nRxRoute::One(cw_core::com::ipdu::RxIpduId({k}))",
-                    r.path
-                ));
-            }
+        // Every received I-PDU any route from this PDU reaches, in Com's order.
+        let routes: Vec<_> = ecu.routes.iter().filter(|r| r.src == l.pdu).collect();
+        let targets: Vec<usize> = received
+            .iter()
+            .enumerate()
+            .filter(|(_, i)| routes.iter().any(|r| r.dests.contains(&i.pdu)))
+            .map(|(k, _)| k)
+            .collect();
+        let paths: Vec<&str> = routes.iter().map(|r| r.path.as_str()).collect();
+        match targets.as_slice() {
+            [] => rx.push(format!("// {}: not routed\nRxRoute::Drop", l.path)),
+            [k] => rx.push(format!(
+                "// {}\nRxRoute::One(RxIpduId({k}))",
+                paths.join(", ")
+            )),
+            many => rx.push(format!(
+                "// {}\nRxRoute::FanOut(&[{}])",
+                paths.join(", "),
+                many.iter()
+                    .map(|k| format!("RxIpduId({k})"))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            )),
         }
     }
-    let (ntx, nrx) = (ecu.canif.tx.len(), ecu.canif.rx.len());
-    let _ = writeln!(
-        s,
-        "/// PduR's checked tables: Com's sent I-PDUs, CanIf's TX and RX PDUs, Com's received I-PDUs.\npub type Config = PduRConfig<{ntx_com}, {ntx}, {nrx}, {nrx_com}>;\n/// PduR's routing paths.\npub const CONFIG: Config = match PduRConfig::new(\n[{}],\n[{}],\n) {{\nOk(cfg) => cfg,\nErr(e) => panic!(\"{{}}\", e.describe()),\n}};\n}}\n",
+    let (ntx, nrx, nrx_com) = (ecu.canif.tx.len(), ecu.canif.rx.len(), received.len());
+    let body = format!(
+        "/// Each sent Com I-PDU's CanIf TX PDU.\npub const TX: [TxPduId; {ntx_com}] = [{}];\n\
+         /// Where each CanIf RX PDU goes.\npub const RX: [RxRoute; {nrx}] = [{}];\n\
+         /// PduR's checked tables: Com's sent I-PDUs, CanIf's TX and RX PDUs, Com's received I-PDUs.\npub type Config = PduRConfig<{ntx_com}, {ntx}, {nrx}, {nrx_com}>;\n\
+         /// PduR's tables.\npub const CONFIG: Config = match PduRConfig::new(TX, RX) {{\nOk(cfg) => cfg,\nErr(e) => panic!(\"{{}}\", e.describe()),\n}};\n",
         tx.join(",\n"),
         rx.join(",\n")
+    );
+    let imports = uses_of("cw_core::canif", &["TxPduId"], &body)
+        + &uses_of("cw_core::com::ipdu", &["RxIpduId"], &body)
+        + &uses_of("cw_core::pdur", &["PduRConfig", "RxRoute"], &body);
+    let _ = writeln!(
+        s,
+        "/// `PduR` (its routing paths): Com's sent I-PDUs onto CanIf's TX PDUs, CanIf's RX PDUs onto\n/// Com's received I-PDUs.\npub mod pdur {{\n{imports}\n{body}}}\n"
     );
     Ok(())
 }
 
-fn emit_can(ecu: &Ecu, s: &mut String) {
+fn emit_can(ecu: &Ecu, s: &mut String) -> Result<(), Error> {
     let c = &ecu.can;
+    let invalid = || Error::new("the controller's segments overflow", &[&c.path]);
+    let sample = c.sample_permille().ok_or_else(invalid)?;
+    let bitrate = c.baud_kbps.checked_mul(1000).ok_or_else(invalid)?;
     let _ = writeln!(
         s,
-        "/// `Can`.\npub mod can {{\n    /// `{}` ({}): {} kbit/s, sampled at {} per mille (propagation {} tq, phase 1 {} tq, phase 2 {} tq).\n    pub const CONTROLLER: cw_core::can::ControllerConfig = cw_core::can::ControllerConfig {{\n        bitrate: {},\n        sample_permille: {},\n    }};\n}}",
+        "/// `Can` ({}).\npub mod can {{\n    /// `{}` ({}): {} kbit/s, sampled at {} per mille of the bit (from its segments: the \
+         driver chooses the time quanta for its clock).\n    pub const CONTROLLER: cw_core::can::ControllerConfig = cw_core::can::ControllerConfig {{\n        bitrate: {bitrate},\n        sample_permille: {sample},\n    }};\n}}",
+        c.path,
         c.name,
         c.path,
         c.baud_kbps,
-        c.sample_permille(),
-        c.prop_seg,
-        c.seg1,
-        c.seg2,
-        c.baud_kbps * 1000,
-        c.sample_permille()
+        sample,
     );
+    Ok(())
 }

@@ -5,7 +5,7 @@
 use std::collections::HashMap;
 use std::fmt;
 
-use crate::model::{AlarmAction, Direction, Ecu, Endianness, Signal};
+use crate::model::{AlarmAction, Direction, Ecu, Endianness, Signal, TxModeMode};
 
 /// One thing wrong with the description.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -39,10 +39,16 @@ impl fmt::Display for Error {
 
 impl std::error::Error for Error {}
 
-/// The largest priority a task may have (the kernel keeps priorities in a byte).
-pub const MAX_TASK_PRIORITY: u64 = 255;
-/// The interrupt priorities the ports take (`IsrConfig::priority`: 1 is the lowest).
-pub const ISR_PRIORITIES: std::ops::RangeInclusive<u64> = 1..=15;
+/// The largest priority a task may have (the kernel's `MAX_PRIORITY`).
+pub const MAX_TASK_PRIORITY: u64 = cw_core::os::MAX_PRIORITY as u64;
+/// The interrupt priorities the Cortex-M port expresses, in OSEK's order (a higher number
+/// is more urgent): `cw_bsp::cortex_m::ISR_PRIORITIES`, three NVIC priority bits less the
+/// faults' level and PendSV's.
+pub const ISR_PRIORITIES: std::ops::RangeInclusive<u64> = 1..=6;
+/// The CAN bit rates the controller takes, kbit/s.
+pub const BAUD_KBPS: std::ops::RangeInclusive<u64> = 1..=1000;
+/// Time quanta in one CAN bit (ISO 11898-1: 8 to 25).
+pub const BIT_QUANTA: std::ops::RangeInclusive<u64> = 8..=25;
 /// The largest Com I-PDU or CAN frame the ECU handles (classic CAN).
 pub const MAX_PDU_LENGTH: u64 = 8;
 
@@ -111,7 +117,126 @@ pub fn check(ecu: &Ecu) -> Vec<Error> {
     check_os(ecu, &mut out);
     check_com(ecu, &mut out);
     check_routes_and_canif(ecu, &mut out);
+    check_can(ecu, &mut out);
+    check_constants(ecu, &mut out);
     out
+}
+
+/// The CAN controller's bit rate and segments.
+fn check_can(ecu: &Ecu, out: &mut Vec<Error>) {
+    let c = &ecu.can;
+    if !BAUD_KBPS.contains(&c.baud_kbps) {
+        out.push(Error::new(
+            format!(
+                "CAN controller {} at {} kbit/s: {}..={} can be configured",
+                c.name,
+                c.baud_kbps,
+                BAUD_KBPS.start(),
+                BAUD_KBPS.end()
+            ),
+            &[&c.path],
+        ));
+    }
+    let quanta = c
+        .prop_seg
+        .checked_add(c.seg1)
+        .and_then(|q| q.checked_add(c.seg2))
+        .and_then(|q| q.checked_add(1));
+    if c.prop_seg == 0
+        || c.seg1 == 0
+        || c.seg2 == 0
+        || !quanta.is_some_and(|q| BIT_QUANTA.contains(&q))
+    {
+        out.push(Error::new(
+            format!(
+                "CAN controller {}: segments {}+{}+{} tq and the synchronisation quantum: each segment at least 1, the bit {}..={} tq",
+                c.name,
+                c.prop_seg,
+                c.seg1,
+                c.seg2,
+                BIT_QUANTA.start(),
+                BIT_QUANTA.end()
+            ),
+            &[&c.path],
+        ));
+    }
+}
+
+/// Two items that the generated code would name with one constant.
+fn check_constants(ecu: &Ecu, out: &mut Vec<Error>) {
+    let constant = crate::rust::constant;
+    let reserved = |names: &[&str]| -> Vec<(String, String)> {
+        names
+            .iter()
+            .map(|n| ((*n).to_string(), "(generated)".to_string()))
+            .collect()
+    };
+    let os = &ecu.os;
+    let mut names = reserved(&[
+        "TASKS",
+        "COUNTERS",
+        "ALARMS",
+        "ISRS",
+        "QUEUE",
+        "RESOURCES",
+        "PERIOD_TICKS",
+        "DESCRIPTION",
+    ]);
+    names.extend(os.tasks.iter().map(|t| (constant(&t.name), t.path.clone())));
+    names.extend(
+        os.resources
+            .iter()
+            .map(|t| (constant(&t.name), t.path.clone())),
+    );
+    names.extend(
+        os.events
+            .iter()
+            .map(|t| (constant(&t.name), t.path.clone())),
+    );
+    names.extend(
+        os.counters
+            .iter()
+            .map(|t| (constant(&t.name), t.path.clone())),
+    );
+    names.extend(os.isrs.iter().map(|t| (constant(&t.name), t.path.clone())));
+    let mut com = reserved(&[
+        "MAIN_PERIOD_MS",
+        "PDU_BYTES",
+        "TX",
+        "RX",
+        "SIGNALS",
+        "CONFIG",
+    ]);
+    com.extend(
+        ecu.com
+            .ipdus
+            .iter()
+            .map(|t| (constant(&t.name), t.path.clone())),
+    );
+    for sig in &ecu.com.signals {
+        com.push((constant(&sig.name), sig.path.clone()));
+        if sig.invalid.is_some() {
+            com.push((format!("{}_INVALID", constant(&sig.name)), sig.path.clone()));
+        }
+    }
+    let mut canif = reserved(&["TX", "RX", "CONFIG"]);
+    for l in ecu.canif.tx.iter().chain(&ecu.canif.rx) {
+        canif.push((constant(&l.name), l.path.clone()));
+        canif.push((format!("{}_ID", constant(&l.name)), l.path.clone()));
+    }
+    for (module, list) in [("os", names), ("com", com), ("canif", canif)] {
+        let mut seen: HashMap<&str, &str> = HashMap::new();
+        for (name, path) in &list {
+            if let Some(first) = seen.insert(name, path) {
+                out.push(Error::new(
+                    format!(
+                        "two items of {module} would both be generated as the constant {name}: rename one"
+                    ),
+                    &[path, first],
+                ));
+            }
+        }
+    }
 }
 
 fn check_os(ecu: &Ecu, out: &mut Vec<Error>) {
@@ -181,10 +306,77 @@ fn check_os(ecu: &Ecu, out: &mut Vec<Error>) {
         if let Some(other) = by_priority.insert(task.priority, &task.path) {
             out.push(Error::new(
                 format!(
-                    "two tasks have priority {}: the ECU's OS runs one task per priority (BCC1, ECC1)",
+                    "two tasks have priority {}: the generator gives each task a priority of its own",
                     task.priority
                 ),
                 &[&task.path, other],
+            ));
+        }
+        if !task.events.is_empty() && task.activations != 1 {
+            out.push(Error::new(
+                format!(
+                    "extended task {} allows {} activations: an extended task has one",
+                    task.name, task.activations
+                ),
+                &[&task.path],
+            ));
+        }
+        let mut masks: HashMap<u64, &str> = HashMap::new();
+        for e in &task.events {
+            if let Some((_, ev)) = find(&os.events, e, |x| &x.name) {
+                if let Some(other) = masks.insert(ev.mask, &ev.path) {
+                    out.push(Error::new(
+                        format!(
+                            "task {} waits for two events of mask {:#x}",
+                            task.name, ev.mask
+                        ),
+                        &[&task.path, &ev.path, other],
+                    ));
+                }
+            }
+        }
+        // One cyclic alarm gives a task its period.
+        let cyclic: Vec<&str> = os
+            .alarms
+            .iter()
+            .filter(|a| {
+                let target = match &a.action {
+                    AlarmAction::ActivateTask(t) | AlarmAction::SetEvent(t, _) => t,
+                };
+                *target == task.name && a.autostart.is_some_and(|(_, cycle)| cycle > 0)
+            })
+            .map(|a| a.path.as_str())
+            .collect();
+        if cyclic.len() > 1 {
+            let mut paths = vec![task.path.as_str()];
+            paths.extend(cyclic);
+            out.push(Error::new(
+                format!(
+                    "task {} is driven by two cyclic alarms: one gives it its period",
+                    task.name
+                ),
+                &paths,
+            ));
+        }
+    }
+    // Category-1 ISRs run above every category-2 ISR (the OS never masks them).
+    let lowest_cat1 = os
+        .isrs
+        .iter()
+        .filter(|i| i.category == 1)
+        .min_by_key(|i| i.priority);
+    if let Some(c1) = lowest_cat1 {
+        for i in os
+            .isrs
+            .iter()
+            .filter(|i| i.category == 2 && i.priority >= c1.priority)
+        {
+            out.push(Error::new(
+                format!(
+                    "category-1 ISR {} (priority {}) is not above category-2 ISR {} (priority {})",
+                    c1.name, c1.priority, i.name, i.priority
+                ),
+                &[&c1.path, &i.path],
             ));
         }
     }
@@ -200,13 +392,30 @@ fn check_os(ecu: &Ecu, out: &mut Vec<Error>) {
         }
     }
     for counter in &os.counters {
-        if counter.max_allowed_value == 0 || counter.max_allowed_value > u64::from(u32::MAX) {
+        let max = u64::from(u32::MAX) - 1;
+        if counter.max_allowed_value == 0 || counter.max_allowed_value > max {
             out.push(Error::new(
                 format!(
-                    "counter {} counts to {}: 1 to {} is possible",
-                    counter.name,
-                    counter.max_allowed_value,
-                    u32::MAX
+                    "counter {} counts to {}: 1 to {max} is possible",
+                    counter.name, counter.max_allowed_value
+                ),
+                &[&counter.path],
+            ));
+        }
+        if counter.ticks_per_base == 0 || counter.ticks_per_base > u64::from(u32::MAX) {
+            out.push(Error::new(
+                format!(
+                    "counter {} has {} ticks per base: 1 or more, within 32 bits",
+                    counter.name, counter.ticks_per_base
+                ),
+                &[&counter.path],
+            ));
+        }
+        if counter.min_cycle == 0 || counter.min_cycle > counter.max_allowed_value {
+            out.push(Error::new(
+                format!(
+                    "counter {}'s minimum cycle {} is outside 1..={}",
+                    counter.name, counter.min_cycle, counter.max_allowed_value
                 ),
                 &[&counter.path],
             ));
@@ -250,13 +459,14 @@ fn check_os(ecu: &Ecu, out: &mut Vec<Error>) {
             }
         }
         if let (Some((start, cycle)), Some((_, c))) = (alarm.autostart, counter) {
-            if start > c.max_allowed_value
+            if start == 0
+                || start > c.max_allowed_value
                 || (cycle != 0 && (cycle < c.min_cycle || cycle > c.max_allowed_value))
             {
                 out.push(Error::new(
                     format!(
-                        "alarm {} starts after {start} and cycles every {cycle} ticks, outside counter {}'s {}..={}",
-                        alarm.name, c.name, c.min_cycle, c.max_allowed_value
+                        "alarm {} starts after {start} and cycles every {cycle} ticks: counter {} takes 1..={} for the start and {}..={} for a cycle",
+                        alarm.name, c.name, c.max_allowed_value, c.min_cycle, c.max_allowed_value
                     ),
                     &[&alarm.path, &c.path],
                 ));
@@ -394,6 +604,38 @@ fn check_com(ecu: &Ecu, out: &mut Vec<Error>) {
             }
             placed.push((signal, bits));
         }
+        let base = com.main_period_ms.max(1);
+        let whole = |ms: u64| ms % base == 0;
+        let timing_error = |what: &str| {
+            Error::new(
+                format!(
+                    "I-PDU {}'s {what} is not a whole number of Com's {} ms main periods",
+                    ipdu.name, com.main_period_ms
+                ),
+                &[&ipdu.path],
+            )
+        };
+        match &ipdu.direction {
+            Direction::Send(tx) => {
+                let periodic = matches!(tx.mode, TxModeMode::Periodic | TxModeMode::Mixed);
+                if !whole(tx.mdt_ms) {
+                    out.push(timing_error("minimum delay time"));
+                }
+                if periodic && (tx.period_ms == 0 || !whole(tx.period_ms) || !whole(tx.offset_ms)) {
+                    out.push(timing_error("period (not 0) or offset"));
+                }
+                if tx.repetitions > 0
+                    && (tx.repetition_period_ms == 0 || !whole(tx.repetition_period_ms))
+                {
+                    out.push(timing_error("repetition period (not 0)"));
+                }
+            }
+            Direction::Receive { deadline_ms } => {
+                if !whole(*deadline_ms) {
+                    out.push(timing_error("deadline (ComTimeout)"));
+                }
+            }
+        }
         if let Direction::Send(tx) = &ipdu.direction {
             if tx.repetitions > 255 {
                 out.push(Error::new(
@@ -407,6 +649,38 @@ fn check_com(ecu: &Ecu, out: &mut Vec<Error>) {
         }
     }
     for signal in &com.signals {
+        // Init and invalid values within the signal's bits (signed ones as the two's
+        // complement of 64 bits).
+        for (what, v) in [
+            ("ComSignalInitValue", Some(signal.init)),
+            ("ComSignalDataInvalidValue", signal.invalid),
+        ] {
+            let Some(v) = v else { continue };
+            let fits = match (signal.bit_size, signal.signed) {
+                (64.., _) => true,
+                (n, false) => v < 1 << n,
+                (n, true) => {
+                    let x = v as i64;
+                    let half = 1i64 << n.saturating_sub(1);
+                    -half <= x && x < half
+                }
+            };
+            if !fits {
+                out.push(Error::new(
+                    format!(
+                        "signal {}'s {what} {} does not fit its {} bits",
+                        signal.name,
+                        if signal.signed {
+                            (v as i64).to_string()
+                        } else {
+                            v.to_string()
+                        },
+                        signal.bit_size
+                    ),
+                    &[&signal.path],
+                ));
+            }
+        }
         if !owner.contains_key(signal.name.as_str()) {
             out.push(Error::new(
                 format!("signal {} is in no I-PDU", signal.name),
@@ -421,16 +695,40 @@ fn check_routes_and_canif(ecu: &Ecu, out: &mut Vec<Error>) {
     duplicates(out, "CanIf TX PDU", &ecu.canif.tx, |t| (&t.name, &t.path));
     duplicates(out, "CanIf RX PDU", &ecu.canif.rx, |t| (&t.name, &t.path));
     for route in &ecu.routes {
-        for end in [&route.src, &route.dest] {
-            if find(&ecu.pdus, end, |p| &p.name).is_none() {
-                out.push(Error::new(
+        let src = find(&ecu.pdus, &route.src, |p| &p.name);
+        for end in std::iter::once(&route.src).chain(&route.dests) {
+            match find(&ecu.pdus, end, |p| &p.name) {
+                None => out.push(Error::new(
                     format!(
                         "routing path {} refers to PDU {end}, which EcuC does not have",
                         route.name
                     ),
                     &[&route.path],
-                ));
+                )),
+                Some((_, p)) => {
+                    if let Some((_, s)) = src {
+                        if p.length != s.length {
+                            out.push(Error::new(
+                                format!(
+                                    "routing path {} joins PDU {} of {} bytes to PDU {} of {}: both ends have one length",
+                                    route.name, s.name, s.length, p.name, p.length
+                                ),
+                                &[&route.path, &s.path, &p.path],
+                            ));
+                        }
+                    }
+                }
             }
+        }
+    }
+    // One Com I-PDU per global PDU.
+    let mut pdu_owner: HashMap<&str, &str> = HashMap::new();
+    for ipdu in &ecu.com.ipdus {
+        if let Some(other) = pdu_owner.insert(&ipdu.pdu, &ipdu.path) {
+            out.push(Error::new(
+                format!("two Com I-PDUs refer to PDU {}", ipdu.pdu),
+                &[&ipdu.path, other],
+            ));
         }
     }
     for (kind, lpdus) in [("TX", &ecu.canif.tx), ("RX", &ecu.canif.rx)] {
@@ -485,13 +783,26 @@ fn check_routes_and_canif(ecu: &Ecu, out: &mut Vec<Error>) {
                 if sending {
                     r.src == ipdu.pdu
                 } else {
-                    r.dest == ipdu.pdu
+                    r.dests.contains(&ipdu.pdu)
                 }
             })
             .collect();
+        if let (true, [r]) = (sending, routes.as_slice()) {
+            if r.dests.len() != 1 {
+                out.push(Error::new(
+                    format!(
+                        "routing path {} sends I-PDU {} to {} PDUs: the ECU's PduR sends each to one",
+                        r.name,
+                        ipdu.name,
+                        r.dests.len()
+                    ),
+                    &[&r.path, &ipdu.path],
+                ));
+            }
+        }
         let lower = |r: &&crate::model::Route| {
             if sending {
-                r.dest.clone()
+                r.dests.first().cloned().unwrap_or_default()
             } else {
                 r.src.clone()
             }

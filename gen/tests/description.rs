@@ -132,16 +132,19 @@ fn a_description_the_ecu_cannot_run_is_refused_naming_every_item_involved() {
     // Two tasks on one priority.
     assert_eq!(
         refused(&with_value("OsTaskPriority", 2, "6")),
-        ["two tasks have priority 6: the ECU's OS runs one task per priority (BCC1, ECC1)\n  at /CollisionWarning/EcucValues/Os/OsBswServiceTask\n  and /CollisionWarning/EcucValues/Os/OsLEDTask"]
+        ["two tasks have priority 6: the generator gives each task a priority of its own\n  at /CollisionWarning/EcucValues/Os/OsBswServiceTask\n  and /CollisionWarning/EcucValues/Os/OsLEDTask"]
     );
     // A priority outside the kernel's, an ISR priority outside the port's.
     assert_eq!(
-        refused(&with_value("OsTaskPriority", 0, "300")),
-        ["task OsStartupTask has priority 300, above the kernel's 255\n  at /CollisionWarning/EcucValues/Os/OsStartupTask"]
+        refused(&with_value("OsTaskPriority", 0, "64")),
+        ["task OsStartupTask has priority 64, above the kernel's 63\n  at /CollisionWarning/EcucValues/Os/OsStartupTask"]
     );
     assert_eq!(
-        refused(&with_value("OsIsrInterruptPriority", 0, "16")),
-        ["ISR SysTickIsr has priority 16, outside the port's 1..=15\n  at /CollisionWarning/EcucValues/Os/SysTickIsr"]
+        refused(&with_value("OsIsrInterruptPriority", 0, "7")),
+        [
+            "category-1 ISR SensorRxIsr (priority 3) is not above category-2 ISR SysTickIsr (priority 7)\n  at /CollisionWarning/EcucValues/Os/SensorRxIsr\n  and /CollisionWarning/EcucValues/Os/SysTickIsr",
+            "ISR SysTickIsr has priority 7, outside the port's 1..=6\n  at /CollisionWarning/EcucValues/Os/SysTickIsr",
+        ]
     );
     // Duplicate CAN ids among the received PDUs cannot arise with one; a sent id beyond 11 bits.
     assert_eq!(
@@ -151,7 +154,7 @@ fn a_description_the_ecu_cannot_run_is_refused_naming_every_item_involved() {
     // An alarm whose cycle its counter cannot count.
     assert_eq!(
         refused(&with_value("OsAlarmCycleTime", 3, "70000")),
-        ["alarm SonarAlarm starts after 40 and cycles every 70000 ticks, outside counter SystemCounter's 1..=65535\n  at /CollisionWarning/EcucValues/Os/SonarAlarm\n  and /CollisionWarning/EcucValues/Os/SystemCounter"]
+        ["alarm SonarAlarm starts after 40 and cycles every 70000 ticks: counter SystemCounter takes 1..=65535 for the start and 1..=65535 for a cycle\n  at /CollisionWarning/EcucValues/Os/SonarAlarm\n  and /CollisionWarning/EcucValues/Os/SystemCounter"]
     );
 }
 
@@ -172,4 +175,117 @@ fn any_value_of_the_description_changed_generates_or_is_refused_with_a_path() {
                 value
             ))
         });
+}
+
+#[test]
+fn references_to_the_wrong_kind_of_container_are_refused() {
+    let wrong = ECU.replacen(
+        "/CollisionWarning/EcucValues/Os/RES_RTE</VALUE-REF>",
+        "/CollisionWarning/EcucValues/Os/OsComTask</VALUE-REF>",
+        1,
+    );
+    assert_eq!(
+        refused(&wrong),
+        ["OsTaskResourceRef points to /CollisionWarning/EcucValues/Os/OsComTask, whose definition is OsTask: it must be OsResource\n  at /CollisionWarning/EcucValues/Os/OsLEDTask"]
+    );
+}
+
+#[test]
+fn what_the_bus_and_the_main_functions_cannot_carry_is_refused() {
+    // The two ends of a route of different lengths.
+    assert_eq!(
+        refused(&with_value("PduLength", 3, "8")),
+        ["routing path ThresholdConfig_Rx joins PDU ThresholdConfig_CanIf of 4 bytes to PDU ThresholdConfig_Com of 8: both ends have one length\n  at /CollisionWarning/EcucValues/PduR/PduRRoutingPaths/ThresholdConfig_Rx\n  and /CollisionWarning/EcucValues/EcuC/EcucConfigSet/EcucPduCollection/ThresholdConfig_CanIf\n  and /CollisionWarning/EcucValues/EcuC/EcucConfigSet/EcucPduCollection/ThresholdConfig_Com"]
+    );
+    // Com's two main functions at two periods.
+    assert_eq!(
+        refused(&with_value("ComRxTimeBase", 0, "0.02")),
+        ["ComRxTimeBase 20 ms differs from ComTxTimeBase 10 ms: the ECU runs both main functions in one task\n  at /CollisionWarning/EcucValues/Com/ComConfig/ComTimeBase"]
+    );
+    // A time between main functions.
+    assert_eq!(
+        refused(&with_value("ComMinimumDelayTime", 0, "0.005")),
+        ["I-PDU DistanceFrame's minimum delay time is not a whole number of Com's 10 ms main periods\n  at /CollisionWarning/EcucValues/Com/ComConfig/DistanceFrame"]
+    );
+    // An init value wider than its signal.
+    assert_eq!(
+        refused(&with_value("ComSignalInitValue", 1, "300")),
+        ["signal WarningLevel's ComSignalInitValue 300 does not fit its 8 bits\n  at /CollisionWarning/EcucValues/Com/ComConfig/WarningLevel"]
+    );
+    // A bit rate and segments the controller cannot have.
+    assert_eq!(
+        refused(&with_value("CanControllerBaudRate", 0, "2000")),
+        ["CAN controller CanController at 2000 kbit/s: 1..=1000 can be configured\n  at /CollisionWarning/EcucValues/Can/CanConfigSet/CanController"]
+    );
+    assert_eq!(
+        refused(&with_value("CanControllerSeg2", 0, "0")),
+        ["CAN controller CanController: segments 7+6+0 tq and the synchronisation quantum: each segment at least 1, the bit 8..=25 tq\n  at /CollisionWarning/EcucValues/Can/CanConfigSet/CanController"]
+    );
+}
+
+#[test]
+fn two_items_generated_as_one_constant_are_refused() {
+    // A resource whose constant is a task's.
+    let renamed = ECU.replace("RES_LEDS", "OsLedTask");
+    assert_eq!(
+        refused(&renamed),
+        ["two items of os would both be generated as the constant OS_LED_TASK: rename one\n  at /CollisionWarning/EcucValues/Os/OsLedTask\n  and /CollisionWarning/EcucValues/Os/OsLEDTask"]
+    );
+}
+
+#[test]
+fn a_big_endian_signal_is_placed_by_its_most_significant_bit() {
+    // RedBelow as a Motorola signal: ComBitPosition names its most significant bit, as
+    // the DBC's start bit and the System Template's startPosition do.
+    let moto = with_value("ComSignalEndianness", 2, "BIG_ENDIAN");
+    let at = moto
+        .match_indices("/ComBitPosition</DEFINITION-REF>")
+        .nth(2)
+        .map(|(i, _)| i)
+        .expect("RedBelow's position");
+    let open = at + moto[at..].find("<VALUE>").expect("value") + "<VALUE>".len();
+    let close = open + moto[open..].find("</VALUE>").expect("end");
+    let moto = format!("{}7{}", &moto[..open], &moto[close..]);
+    let out = cw_gen::generate(moto.as_bytes(), "ecu.arxml").expect("it generates");
+    assert!(out
+        .rust
+        .contains("cw_core::signal_layout!(8; 7, 16, ByteOrder::Motorola, Signedness::Unsigned)"));
+    assert_eq!(
+        validate::signal_bits(7, 16, cw_gen::model::Endianness::Big, 4),
+        Some(vec![7, 6, 5, 4, 3, 2, 1, 0, 15, 14, 13, 12, 11, 10, 9, 8])
+    );
+    // At bit 0 it runs into the next bytes' high bits, here past the PDU's end.
+    assert_eq!(
+        validate::signal_bits(24, 16, cw_gen::model::Endianness::Big, 4),
+        None
+    );
+}
+
+#[test]
+fn one_received_pdu_routed_to_two_i_pdus_fans_out() {
+    let mut ecu = arxml::read(ECU.as_bytes(), "ecu.arxml").expect("reads").ecu;
+    let mut second = ecu.com.ipdus[1].clone();
+    second.name = "ThresholdCopy".into();
+    second.pdu = "ThresholdConfig_Copy".into();
+    second.signals.clear();
+    ecu.com.ipdus.push(second);
+    let mut pdu = ecu.pdus[3].clone();
+    pdu.name = "ThresholdConfig_Copy".into();
+    ecu.pdus.push(pdu);
+    ecu.routes[1].dests.push("ThresholdConfig_Copy".into());
+    assert_eq!(validate::check(&ecu), Vec::new());
+    let rust = cw_gen::rust::emit(&ecu, "ecu.arxml", "-").expect("emits");
+    assert!(
+        rust.contains("RxRoute::FanOut(&[RxIpduId(0), RxIpduId(1)])"),
+        "{rust}"
+    );
+    // And it writes and reads back as it was.
+    let text = arxml::write(&ecu, "CollisionWarning").expect("writes");
+    assert_eq!(
+        arxml::read(text.as_bytes(), "x.arxml")
+            .expect("reads")
+            .ecu
+            .routes,
+        ecu.routes
+    );
 }
