@@ -286,8 +286,8 @@ pub mod canif {
     };
 }
 
-/// `PduR` (its routing paths): Com's sent I-PDUs onto CanIf's TX PDUs, CanIf's RX PDUs onto
-/// Com's received I-PDUs.
+/// `PduR` (its routing paths): Com's sent I-PDUs onto CanIf's TX PDUs, CanIf's RX PDUs
+/// onto Com's received I-PDUs.
 pub mod pdur {
     use cw_core::canif::TxPduId;
     use cw_core::com::ipdu::RxIpduId;

@@ -51,6 +51,22 @@ fn uses_of(path: &str, names: &[&str], body: &str) -> String {
     }
 }
 
+/// A generated module: its doc line, its name, its `use` lines and its items.
+fn module(out: &mut String, doc: &str, name: &str, imports: &str, body: &str) {
+    let _ = writeln!(out, "/// {doc}.\npub mod {name} {{\n{imports}\n{body}}}\n");
+}
+
+/// Each item's id, `pub const NAME: Kind = Kind(index);`, documented with its path.
+fn ids(s: &mut String, kind: &str, items: Vec<(&str, &str)>) {
+    for (i, (name, path)) in items.into_iter().enumerate() {
+        let _ = writeln!(
+            s,
+            "/// `{name}` ({path}).\npub const {}: {kind} = {kind}({i});",
+            constant(name)
+        );
+    }
+}
+
 /// The index of `name` among `items`, or an error naming `from`.
 fn index_of<T>(
     items: &[T],
@@ -103,24 +119,22 @@ fn emit_os(ecu: &Ecu, s: &mut String) -> Result<(), Error> {
     let os = &ecu.os;
     let out = s;
     let s = &mut String::new();
-    for (i, t) in os.tasks.iter().enumerate() {
-        let _ = writeln!(
-            s,
-            "/// `{}` ({}).\npub const {}: TaskId = TaskId({i});",
-            t.name,
-            t.path,
-            constant(&t.name)
-        );
-    }
-    for (i, r) in os.resources.iter().enumerate() {
-        let _ = writeln!(
-            s,
-            "/// `{}` ({}).\npub const {}: ResourceId = ResourceId({i});",
-            r.name,
-            r.path,
-            constant(&r.name)
-        );
-    }
+    ids(
+        s,
+        "TaskId",
+        os.tasks
+            .iter()
+            .map(|t| (t.name.as_str(), t.path.as_str()))
+            .collect(),
+    );
+    ids(
+        s,
+        "ResourceId",
+        os.resources
+            .iter()
+            .map(|t| (t.name.as_str(), t.path.as_str()))
+            .collect(),
+    );
     for e in &os.events {
         let _ = writeln!(
             s,
@@ -131,24 +145,22 @@ fn emit_os(ecu: &Ecu, s: &mut String) -> Result<(), Error> {
             e.mask
         );
     }
-    for (i, c) in os.counters.iter().enumerate() {
-        let _ = writeln!(
-            s,
-            "/// `{}` ({}).\npub const {}: CounterId = CounterId({i});",
-            c.name,
-            c.path,
-            constant(&c.name)
-        );
-    }
-    for (i, isr) in os.isrs.iter().enumerate() {
-        let _ = writeln!(
-            s,
-            "/// `{}` ({}).\npub const {}: IsrId = IsrId({i});",
-            isr.name,
-            isr.path,
-            constant(&isr.name)
-        );
-    }
+    ids(
+        s,
+        "CounterId",
+        os.counters
+            .iter()
+            .map(|t| (t.name.as_str(), t.path.as_str()))
+            .collect(),
+    );
+    ids(
+        s,
+        "IsrId",
+        os.isrs
+            .iter()
+            .map(|t| (t.name.as_str(), t.path.as_str()))
+            .collect(),
+    );
     // A task's period: the cycle of the autostarted alarm that activates it or sets its
     // event, in its counter's ticks.
     let periods: Vec<String> = os
@@ -315,11 +327,7 @@ fn emit_os(ecu: &Ecu, s: &mut String) -> Result<(), Error> {
         ],
         s,
     );
-    let _ = writeln!(
-        out,
-        "/// `Os` ({}).\npub mod os {{\n{imports}\n{s}}}\n",
-        os.path
-    );
+    module(out, &format!("`Os` ({})", os.path), "os", &imports, s);
     Ok(())
 }
 
@@ -500,11 +508,7 @@ fn emit_com(ecu: &Ecu, s: &mut String) -> Result<(), Error> {
         ],
         s,
     ) + &uses_of("cw_core::com::signal", &["ByteOrder", "Signedness"], s);
-    let _ = writeln!(
-        out,
-        "/// `Com` ({}).\npub mod com {{\n{imports}\n{s}}}\n",
-        com.path
-    );
+    module(out, &format!("`Com` ({})", com.path), "com", &imports, s);
     Ok(())
 }
 
@@ -519,29 +523,19 @@ fn emit_canif(ecu: &Ecu, s: &mut String) -> Result<(), Error> {
             format!("match CanId::standard({:#x}) {{ Some(id) => id, None => panic!(\"11-bit CAN id out of range\") }}", l.can_id)
         }
     };
-    for (k, l) in canif.tx.iter().enumerate() {
-        let _ = writeln!(
-            s,
-            "/// `{}` ({}).\npub const {}: TxPduId = TxPduId({k});\n/// `{}`'s CAN id.\npub const {}_ID: CanId = {};",
-            l.name,
-            l.path,
-            constant(&l.name),
-            l.name,
-            constant(&l.name),
-            id(l)
-        );
-    }
-    for (k, l) in canif.rx.iter().enumerate() {
-        let _ = writeln!(
-            s,
-            "/// `{}` ({}).\npub const {}: RxPduId = RxPduId({k});\n/// `{}`'s CAN id.\npub const {}_ID: CanId = {};",
-            l.name,
-            l.path,
-            constant(&l.name),
-            l.name,
-            constant(&l.name),
-            id(l)
-        );
+    for (kind, list) in [("TxPduId", &canif.tx), ("RxPduId", &canif.rx)] {
+        for (k, l) in list.iter().enumerate() {
+            let _ = writeln!(
+                s,
+                "/// `{}` ({}).\npub const {}: {kind} = {kind}({k});\n/// `{}`'s CAN id.\npub const {}_ID: CanId = {};",
+                l.name,
+                l.path,
+                constant(&l.name),
+                l.name,
+                constant(&l.name),
+                id(l)
+            );
+        }
     }
     let (ntx, nrx) = (canif.tx.len(), canif.rx.len());
     let _ = writeln!(
@@ -593,10 +587,12 @@ fn emit_canif(ecu: &Ecu, s: &mut String) -> Result<(), Error> {
             ],
             s,
         );
-    let _ = writeln!(
+    module(
         out,
-        "/// `CanIf` ({}).\npub mod canif {{\n{imports}\n{s}}}\n",
-        canif.path
+        &format!("`CanIf` ({})", canif.path),
+        "canif",
+        &imports,
+        s,
     );
     Ok(())
 }
@@ -661,9 +657,12 @@ fn emit_pdur(ecu: &Ecu, s: &mut String) -> Result<(), Error> {
     let imports = uses_of("cw_core::canif", &["TxPduId"], &body)
         + &uses_of("cw_core::com::ipdu", &["RxIpduId"], &body)
         + &uses_of("cw_core::pdur", &["PduRConfig", "RxRoute"], &body);
-    let _ = writeln!(
+    module(
         s,
-        "/// `PduR` (its routing paths): Com's sent I-PDUs onto CanIf's TX PDUs, CanIf's RX PDUs onto\n/// Com's received I-PDUs.\npub mod pdur {{\n{imports}\n{body}}}\n"
+        "`PduR` (its routing paths): Com's sent I-PDUs onto CanIf's TX PDUs, CanIf's RX PDUs\n/// onto Com's received I-PDUs",
+        "pdur",
+        &imports,
+        &body,
     );
     Ok(())
 }
