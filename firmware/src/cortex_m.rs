@@ -42,6 +42,21 @@ pub fn report_supervision<B: Board>(name: &str, ecu: &Ecu<CortexMPort<Kernel>, B
             f.counted,
             f.expected
         );
+        // What the kernel refused until then: an activation refused by E_OS_LIMIT (a
+        // task that had not ended when its alarm came again) explains an extra or a
+        // missing alive indication.
+        let hooks = ecu.hooks();
+        let (service, status) = hooks
+            .last_error
+            .map_or((u8::MAX, E_OK), |(s, e)| (s as u8, e as u8));
+        defmt::println!(
+            "{=str}: kernel errors {}, ISR entries refused {}; the last error: service {}, status {}",
+            name,
+            hooks.errors,
+            hooks.port_errors,
+            service,
+            status
+        );
     }
 }
 

@@ -115,6 +115,20 @@ fn a_stalled_task_is_caught_by_the_watchdog_on_the_image_as_on_the_host() {
     };
     let wdgm = line("cw-qemu: WdgM: ");
     let watchdog = line("watchdog: ");
+    // With the failure, what the kernel refused until then: the hung task's alarm came
+    // again while it still ran, an activation refused with E_OS_LIMIT (service 0,
+    // ActivateTask; status 4).
+    let kernel = line("cw-qemu: kernel errors ");
+    let errors: u32 = kernel
+        .strip_prefix("cw-qemu: kernel errors ")
+        .and_then(|rest| rest.split(',').next())
+        .and_then(|n| n.parse().ok())
+        .unwrap_or_else(|| panic!("no count in `{kernel}`"));
+    assert!(errors >= 1, "{kernel}");
+    assert!(
+        kernel.ends_with(", ISR entries refused 0; the last error: service 0, status 4"),
+        "{kernel}"
+    );
     assert!(
         !run.report.contains("cw-qemu: end at"),
         "the run ended by the reset"

@@ -73,7 +73,7 @@ pub const STAGES: &[&str] = &[
 const BUDGET_S: &[(&str, u32)] = &[
     ("setup", 400),
     ("fmt", 5),
-    ("clippy", 76),
+    ("clippy", 90),
     ("test", 280),
     ("cross", 73),
     ("miri", 487),
@@ -82,13 +82,13 @@ const BUDGET_S: &[(&str, u32)] = &[
     ("mutants", 78),
     ("mutation", 280),
     ("qemu", 100),
-    ("eval", 40),
+    ("eval", 32),
     ("differential", 6),
     ("interop", 15),
     ("view", 6),
     ("docs", 166),
     ("fuzz", 392),
-    ("bench", 56),
+    ("bench", 50),
 ];
 
 fn budget_s(stage: &str) -> u32 {
