@@ -67,6 +67,14 @@ fn ids(s: &mut String, kind: &str, items: Vec<(&str, &str)>) {
     }
 }
 
+/// The length of the global PDU `name` (EcuC), or an error naming `from`, which refers
+/// to it.
+fn pdu_length(ecu: &Ecu, name: &str, from: &str) -> Result<u64, Error> {
+    find(&ecu.pdus, name, |p| &p.name)
+        .map(|(_, p)| p.length)
+        .ok_or_else(|| Error::new(format!("PDU {name} does not exist"), &[from]))
+}
+
 /// The index of `name` among `items`, or an error naming `from`.
 fn index_of<T>(
     items: &[T],
@@ -333,11 +341,7 @@ fn emit_os(ecu: &Ecu, s: &mut String) -> Result<(), Error> {
 
 fn emit_com(ecu: &Ecu, s: &mut String) -> Result<(), Error> {
     let com = &ecu.com;
-    let length = |name: &str, from: &str| -> Result<u64, Error> {
-        find(&ecu.pdus, name, |p| &p.name)
-            .map(|(_, p)| p.length)
-            .ok_or_else(|| Error::new(format!("PDU {name} does not exist"), &[from]))
-    };
+    let length = |name: &str, from: &str| pdu_length(ecu, name, from);
     let tx: Vec<_> = com
         .ipdus
         .iter()
@@ -546,9 +550,7 @@ fn emit_canif(ecu: &Ecu, s: &mut String) -> Result<(), Error> {
     let dlc = |l: &crate::model::LPdu| -> Result<u64, Error> {
         match l.dlc {
             Some(d) => Ok(d),
-            None => find(&ecu.pdus, &l.pdu, |p| &p.name)
-                .map(|(_, p)| p.length)
-                .ok_or_else(|| Error::new(format!("PDU {} does not exist", l.pdu), &[&l.path])),
+            None => pdu_length(ecu, &l.pdu, &l.path),
         }
     };
     for l in &canif.tx {

@@ -81,7 +81,8 @@ fn duplicates<T>(
 }
 
 /// The PDU bits (`byte * 8 + bit`) a Com signal of `bit_size` bits at `bit_position`
-/// occupies, or `None` if it does not fit `length` bytes. Little endian: the position is
+/// occupies, from its most significant bit, or `None` if it does not fit `length` bytes
+/// (1 to 64 bytes, 1 to 64 bits, as Com takes them). Little endian: the position is
 /// the least significant bit and the signal grows to higher bits; big endian: the position
 /// is the most significant bit (AUTOSAR's and the DBC's "sawtooth" numbering) and the
 /// signal grows towards the next byte's lower bits.
@@ -91,24 +92,25 @@ pub fn signal_bits(
     endianness: Endianness,
     length: u64,
 ) -> Option<Vec<u64>> {
-    let total = length.checked_mul(8)?;
-    if bit_size == 0 || bit_size > 64 || bit_position >= total {
+    // Com's own arithmetic (`cw_core::com::signal::spec`), which the core's codec is proved
+    // against: a layout the generator accepts is one the core's `SignalLayout` takes.
+    use cw_core::com::signal::{spec, ByteOrder};
+    let order = match endianness {
+        Endianness::Little => ByteOrder::Intel,
+        Endianness::Big => ByteOrder::Motorola,
+    };
+    let start = u16::try_from(bit_position).ok()?;
+    let size = u8::try_from(bit_size).ok()?;
+    let pdu_len = usize::try_from(length).ok()?;
+    if !spec::layout_fits(pdu_len, start, size, order) {
         return None;
     }
-    let mut bits = Vec::new();
-    let mut at = bit_position;
-    for _ in 0..bit_size {
-        if at >= total {
-            return None;
-        }
-        bits.push(at);
-        at = match endianness {
-            Endianness::Little => at + 1,
-            Endianness::Big if at % 8 == 0 => at.checked_add(15)?,
-            Endianness::Big => at - 1,
-        };
-    }
-    Some(bits)
+    Some(
+        (0..size)
+            .rev()
+            .map(|i| spec::bit_position(start, size, order, i) as u64)
+            .collect(),
+    )
 }
 
 /// Every check; empty when the description can be generated.
