@@ -1,6 +1,7 @@
-//! Stops the build when the ECU's description (`ecu.arxml`) has changed since its tables
-//! (`src/generated.rs`) were generated from it: the generated file records the digest of
-//! the description it came from, computed here by the same function the generator uses.
+//! Stops the build when one of the ECU's descriptions has changed since the Rust generated
+//! from it: `ecu.arxml` (the basic software's ECUC values) for `src/generated.rs`,
+//! `swc.arxml` (the software components) for `src/rte.rs`. Each generated file records the
+//! digest of its description, computed here by the same function the generator uses.
 //! The generator itself (ARXML, `autosar-data`) is not a dependency of the firmware: its
 //! output is committed, as generated configuration is in AUTOSAR projects, and
 //! `cargo xtask generate --check` proves it current in the check command.
@@ -8,22 +9,27 @@
 include!("../gen/src/digest.rs");
 
 fn main() {
-    println!("cargo:rerun-if-changed=ecu.arxml");
-    println!("cargo:rerun-if-changed=src/generated.rs");
-    let (arxml, generated) = match (
-        std::fs::read("ecu.arxml"),
-        std::fs::read_to_string("src/generated.rs"),
-    ) {
-        (Ok(a), Ok(g)) => (a, g),
-        (Err(e), _) => fail(&format!("cannot read ecu.arxml: {e}")),
-        (_, Err(e)) => fail(&format!("cannot read src/generated.rs: {e}")),
-    };
-    let line = format!("Description digest: {}", digest(&arxml));
-    if !generated.contains(&line) {
-        fail(
-            "firmware/ecu.arxml has changed since firmware/src/generated.rs was generated \
-             from it: run `cargo xtask generate`",
-        );
+    for (description, generated) in [
+        ("ecu.arxml", "src/generated.rs"),
+        ("swc.arxml", "src/rte.rs"),
+    ] {
+        println!("cargo:rerun-if-changed={description}");
+        println!("cargo:rerun-if-changed={generated}");
+        let (arxml, text) = match (
+            std::fs::read(description),
+            std::fs::read_to_string(generated),
+        ) {
+            (Ok(a), Ok(g)) => (a, g),
+            (Err(e), _) => fail(&format!("cannot read {description}: {e}")),
+            (_, Err(e)) => fail(&format!("cannot read {generated}: {e}")),
+        };
+        let line = format!("Description digest: {}", digest(&arxml));
+        if !text.contains(&line) {
+            fail(&format!(
+                "firmware/{description} has changed since firmware/{generated} was generated \
+                 from it: run `cargo xtask generate`"
+            ));
+        }
     }
 }
 

@@ -465,7 +465,7 @@ impl<P: Port<Kernel = Kernel>, B: Board> Ecu<P, B> {
 
     /// The level ObstacleDetection decided last.
     pub fn level(&mut self) -> WarningLevel {
-        self.rte.get_mut().led_request.read()
+        self.rte.get_mut().obstacle_detection_led_request.read()
     }
 
     /// WdgM's global status and the failure that expired it, unless `OsBswServiceTask` has
@@ -789,7 +789,9 @@ impl<P: Port<Kernel = Kernel>, B: Board> Ecu<P, B> {
     /// `OsLEDTask`: LEDActuator, prototypes RedLED and YellowLED.
     fn led_task(&self) {
         self.port.span(span::LOCK_PAIR, true);
-        let level = self.rte.lock(&self.port, |rte| rte.led_request.read());
+        let level = self
+            .rte
+            .lock(&self.port, |rte| rte.obstacle_detection_led_request.read());
         self.port.span(span::LOCK_PAIR, false);
         let Ok(level) = level else {
             return;
@@ -847,10 +849,10 @@ impl<P: Port<Kernel = Kernel>, B: Board> Ecu<P, B> {
                 .into_iter()
                 .flatten()
                 .flatten()
-                .filter(|&r| rte.mode_requests.send(r).is_err())
+                .filter(|&r| rte.bswm_mode_request.send(r).is_err())
                 .count();
             for slot in &mut requests {
-                *slot = rte.mode_requests.receive().ok();
+                *slot = rte.bswm_mode_request.receive().ok();
             }
             refused
         });
@@ -888,7 +890,7 @@ impl<P: Port<Kernel = Kernel>, B: Board> Ecu<P, B> {
         });
         let Ok(measurement) = self
             .rte
-            .lock(&self.port, |rte| rte.sonar_to_obstacle.read())
+            .lock(&self.port, |rte| rte.ultra_sonic_sonar_data.read())
         else {
             return;
         };
@@ -902,9 +904,9 @@ impl<P: Port<Kernel = Kernel>, B: Board> Ecu<P, B> {
             part.swc.run(measurement)
         });
         if let Some(level) = level {
-            let _ = self
-                .rte
-                .lock(&self.port, |rte| rte.led_request.write(level));
+            let _ = self.rte.lock(&self.port, |rte| {
+                rte.obstacle_detection_led_request.write(level)
+            });
         }
     }
 
@@ -919,8 +921,8 @@ impl<P: Port<Kernel = Kernel>, B: Board> Ecu<P, B> {
             return;
         };
         let notify = self.rte.lock(&self.port, |rte| {
-            let _ = rte.sonar_to_obstacle.write(measurement);
-            rte.sonar_to_can.write(measurement).0
+            let _ = rte.ultra_sonic_sonar_data.write(measurement);
+            rte.can_translate_sonar_recv.write(measurement).0
         });
         if notify == Ok(true) {
             self.port.span(span::ACTIVATE_TO_FIRST_LINE, true);
@@ -936,10 +938,10 @@ impl<P: Port<Kernel = Kernel>, B: Board> Ecu<P, B> {
     #[inline(never)]
     fn com_task(&self) {
         let input = self.rte.lock(&self.port, |rte| {
-            rte.sonar_to_can
+            rte.can_translate_sonar_recv
                 .take()
                 .ok()
-                .map(|m| (m, rte.led_request.read()))
+                .map(|m| (m, rte.obstacle_detection_led_request.read()))
         });
         let Ok(Some((measurement, level))) = input else {
             return;

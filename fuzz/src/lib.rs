@@ -295,18 +295,29 @@ mod targets {
             });
     }
 
-    /// The ECU's ARXML description with any of its values replaced by any text: it
-    /// generates, or is refused with every error naming the file or an ARXML path, never a
-    /// panic (`cw_gen::spec::a_changed_value_generates_or_names_paths`).
+    /// The ECU's ARXML descriptions with any of their texts replaced by any text: the basic
+    /// software's values (`ecu.arxml`) or the software components' short names, references,
+    /// periods, init values, queue lengths and Rust types (`swc.arxml`). They generate, or
+    /// are refused with every error naming the file or an ARXML path, never a panic
+    /// (`cw_gen::spec::a_changed_value_generates_or_names_paths`,
+    /// `cw_gen::spec::a_changed_component_generates_or_names_paths`).
     #[test]
     fn arxml_description() {
         bolero::check!()
-            .with_type::<(u8, String)>()
-            .for_each(|(which, value)| {
-                assert!(cw_gen::spec::a_changed_value_generates_or_names_paths(
-                    usize::from(*which),
-                    value
-                ));
+            .with_type::<(bool, u8, u8, String)>()
+            .for_each(|(components, tag, which, value)| {
+                if *components {
+                    assert!(cw_gen::spec::a_changed_component_generates_or_names_paths(
+                        usize::from(*tag),
+                        usize::from(*which),
+                        value
+                    ));
+                } else {
+                    assert!(cw_gen::spec::a_changed_value_generates_or_names_paths(
+                        usize::from(*which),
+                        value
+                    ));
+                }
             });
     }
 

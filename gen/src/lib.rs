@@ -27,6 +27,7 @@
 pub mod arxml;
 mod digest;
 pub mod model;
+pub mod rte;
 pub mod rust;
 pub mod spec;
 pub mod validate;
@@ -37,6 +38,10 @@ pub use digest::digest;
 pub const DESCRIPTION: &str = "firmware/ecu.arxml";
 /// The generated file, from the workspace's root.
 pub const GENERATED: &str = "firmware/src/generated.rs";
+/// The software components' description, from the workspace's root.
+pub const COMPONENTS: &str = "firmware/swc.arxml";
+/// The generated RTE, from the workspace's root.
+pub const GENERATED_RTE: &str = "firmware/src/rte.rs";
 
 /// Everything that stops generation: each error with every path involved.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -64,6 +69,24 @@ pub struct Generated {
     pub rust: String,
     /// One sentence per item read but not used, with its path.
     pub notes: Vec<String>,
+}
+
+/// Reads, checks and generates the RTE: the paper's step 3 for the software components in
+/// `bytes` (the file `source`, named in the generated header).
+///
+/// # Errors
+/// Everything that cannot be read, mapped or generated, at once.
+pub fn generate_rte(bytes: &[u8], source: &str) -> Result<Generated, Refused> {
+    let sw = rte::read(bytes, source).map_err(Refused)?;
+    let errors = rte::check(&sw);
+    if !errors.is_empty() {
+        return Err(Refused(errors));
+    }
+    let rust = rte::emit(&sw, source, &digest(bytes)).map_err(|e| Refused(vec![e]))?;
+    Ok(Generated {
+        rust,
+        notes: Vec::new(),
+    })
 }
 
 /// Reads, checks and generates: the paper's step 3 for the ECUC values in `bytes` (the

@@ -1,8 +1,10 @@
-//! `cargo xtask generate [--check]`: the paper's step 3. The ECU's description
-//! (`firmware/ecu.arxml`, ECUC values in ARXML) is read, checked and turned into the
-//! firmware's configuration tables (`firmware/src/generated.rs`, laid out by `rustfmt`).
-//! With `--check` (the check command's `clippy` stage), nothing is written: the command
-//! fails when the committed file is not what the description generates.
+//! `cargo xtask generate [--check]`: the paper's step 3. The ECU's descriptions are read,
+//! checked and turned into Rust the firmware compiles, laid out by `rustfmt`:
+//! `firmware/ecu.arxml` (the basic software's ECUC values) into its configuration tables
+//! (`firmware/src/generated.rs`), `firmware/swc.arxml` (the software components and their
+//! composition) into its RTE (`firmware/src/rte.rs`). With `--check` (the check command's
+//! `clippy` stage), nothing is written: the command fails when a committed file is not
+//! what its description generates.
 
 use crate::process::{root, target_dir, Cmd};
 use crate::Result;
@@ -10,19 +12,39 @@ use crate::Result;
 /// Options of `cargo xtask generate`.
 #[derive(clap::Args, Default)]
 pub struct Options {
-    /// Do not write: fail if firmware/src/generated.rs differs from what the description
-    /// generates
+    /// Do not write: fail if firmware/src/generated.rs or firmware/src/rte.rs differs from
+    /// what its description generates
     #[arg(long)]
     pub check: bool,
 }
 
-/// The generated text for the description's bytes, laid out by `rustfmt`; the notes on
+/// One description and the file generated from it.
+struct Pair {
+    description: &'static str,
+    generated: &'static str,
+    generate: fn(&[u8], &str) -> std::result::Result<cw_gen::Generated, cw_gen::Refused>,
+}
+
+const PAIRS: [Pair; 2] = [
+    Pair {
+        description: cw_gen::DESCRIPTION,
+        generated: cw_gen::GENERATED,
+        generate: cw_gen::generate,
+    },
+    Pair {
+        description: cw_gen::COMPONENTS,
+        generated: cw_gen::GENERATED_RTE,
+        generate: cw_gen::generate_rte,
+    },
+];
+
+/// The generated text for a description's bytes, laid out by `rustfmt`; the notes on
 /// what the description holds that the ECU does not use are printed.
-fn generated(bytes: &[u8]) -> Result<String> {
-    let out = cw_gen::generate(bytes, cw_gen::DESCRIPTION).map_err(|e| {
+fn generated(pair: &Pair, bytes: &[u8]) -> Result<String> {
+    let out = (pair.generate)(bytes, pair.description).map_err(|e| {
         format!(
             "{}: the description cannot be generated:\n{e}",
-            cw_gen::DESCRIPTION
+            pair.description
         )
     })?;
     for note in &out.notes {
@@ -30,7 +52,10 @@ fn generated(bytes: &[u8]) -> Result<String> {
     }
     let dir = target_dir().join("xtask-generate");
     std::fs::create_dir_all(&dir).map_err(|e| format!("creating {}: {e}", dir.display()))?;
-    let file = dir.join("generated.rs");
+    let name = std::path::Path::new(pair.generated)
+        .file_name()
+        .map_or_else(|| "generated.rs".into(), |n| n.to_os_string());
+    let file = dir.join(name);
     std::fs::write(&file, &out.rust).map_err(|e| format!("writing {}: {e}", file.display()))?;
     Cmd::new("rustfmt")
         .args(["--edition", "2021"])
@@ -41,41 +66,40 @@ fn generated(bytes: &[u8]) -> Result<String> {
 
 /// Generates, or checks what is committed.
 pub fn run(options: &Options) -> Result {
-    let source = root().join(cw_gen::DESCRIPTION);
-    let bytes = std::fs::read(&source).map_err(|e| format!("reading {}: {e}", source.display()))?;
-    let text = generated(&bytes)?;
-    let target = root().join(cw_gen::GENERATED);
-    let committed = std::fs::read_to_string(&target).unwrap_or_default();
-    if options.check {
-        if committed == text {
+    for pair in &PAIRS {
+        let source = root().join(pair.description);
+        let bytes =
+            std::fs::read(&source).map_err(|e| format!("reading {}: {e}", source.display()))?;
+        let text = generated(pair, &bytes)?;
+        let target = root().join(pair.generated);
+        let committed = std::fs::read_to_string(&target).unwrap_or_default();
+        if options.check {
+            if committed != text {
+                return Err(format!(
+                    "{} is not what {} generates: run `cargo xtask generate` and commit both",
+                    pair.generated, pair.description
+                ));
+            }
             println!(
                 "generate: {} is what {} generates",
-                cw_gen::GENERATED,
-                cw_gen::DESCRIPTION
+                pair.generated, pair.description
             );
-            Ok(())
         } else {
-            Err(format!(
-                "{} is not what {} generates: run `cargo xtask generate` and commit both",
-                cw_gen::GENERATED,
-                cw_gen::DESCRIPTION
-            ))
-        }
-    } else {
-        if committed != text {
-            std::fs::write(&target, &text)
-                .map_err(|e| format!("writing {}: {e}", target.display()))?;
-        }
-        println!(
-            "generate: {} from {} ({})",
-            cw_gen::GENERATED,
-            cw_gen::DESCRIPTION,
-            if committed == text {
-                "unchanged"
-            } else {
-                "written"
+            if committed != text {
+                std::fs::write(&target, &text)
+                    .map_err(|e| format!("writing {}: {e}", target.display()))?;
             }
-        );
-        Ok(())
+            println!(
+                "generate: {} from {} ({})",
+                pair.generated,
+                pair.description,
+                if committed == text {
+                    "unchanged"
+                } else {
+                    "written"
+                }
+            );
+        }
     }
+    Ok(())
 }

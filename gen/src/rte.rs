@@ -1,0 +1,1067 @@
+//! The software components and their RTE (paper §3.1, steps 1 and 3): the description's
+//! data types, sender-receiver interfaces, component types with their ports, runnables and
+//! events, and the composition that connects them (`firmware/swc.arxml`), read with
+//! `autosar-data`, checked, and generated into the RTE's typed connections
+//! (`firmware/src/rte.rs`).
+//!
+//! The RTE keeps one buffer per sender port for the receivers that read the newest value
+//! (last-is-best), one more for each receiver whose runnable a data-received event starts
+//! (it notes that new data came), and one queue per receiver of a queued data element. A
+//! data type names the Rust type that carries it in the SDG `cw-gen`, `RustType` of its
+//! `ADMIN-DATA`, the extension point AUTOSAR gives tools; an init value is a text value
+//! naming one of that type's constants (`Invalid`: `Measurement::Invalid`).
+
+use std::collections::HashMap;
+use std::fmt::Write as _;
+
+use autosar_data::{AttributeName, AutosarModel, Element, ElementName};
+
+use crate::validate::Error;
+
+/// Where an item came from: its ARXML path.
+pub type Path = String;
+
+/// The software components' description.
+#[derive(Debug, Clone, PartialEq, Eq, Default)]
+pub struct Software {
+    /// `IMPLEMENTATION-DATA-TYPE`s.
+    pub types: Vec<DataType>,
+    /// `SENDER-RECEIVER-INTERFACE`s.
+    pub interfaces: Vec<Interface>,
+    /// Application and service component types.
+    pub components: Vec<ComponentType>,
+    /// The composition (one).
+    pub composition: Composition,
+}
+
+/// A data type and the Rust type that carries it.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct DataType {
+    /// Its path.
+    pub path: Path,
+    /// Its short name.
+    pub name: String,
+    /// The Rust type's path (`cw_core::warning::Measurement`).
+    pub rust: String,
+}
+
+/// A sender-receiver interface of one data element.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Interface {
+    /// Its path.
+    pub path: Path,
+    /// Its short name.
+    pub name: String,
+    /// Its description (`DESC`), one line.
+    pub doc: String,
+    /// The data element's short name.
+    pub element: String,
+    /// The data element's type (a [`DataType`]'s name).
+    pub data_type: String,
+    /// `SW-IMPL-POLICY` `QUEUED`: every value is received once, in order.
+    pub queued: bool,
+}
+
+/// A port of a component type.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Port {
+    /// Its path.
+    pub path: Path,
+    /// Its short name.
+    pub name: String,
+    /// A provided (`P-PORT-PROTOTYPE`) port, else a required one.
+    pub provided: bool,
+    /// Its interface's name.
+    pub interface: String,
+    /// The com spec's init value (non-queued), as written.
+    pub init: Option<String>,
+    /// The receiver's queue length (queued).
+    pub queue_length: Option<u64>,
+}
+
+/// What starts a runnable.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum EventKind {
+    /// A `TIMING-EVENT` of this period, ms.
+    Timing {
+        /// The period, ms.
+        period_ms: u64,
+    },
+    /// A `DATA-RECEIVED-EVENT` on this required port.
+    DataReceived {
+        /// The port's name.
+        port: String,
+    },
+}
+
+/// An RTE event of a component's internal behaviour.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct RteEvent {
+    /// Its path.
+    pub path: Path,
+    /// Its short name.
+    pub name: String,
+    /// The runnable it starts (its name).
+    pub runnable: String,
+    /// What it is.
+    pub kind: EventKind,
+}
+
+/// A component type.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct ComponentType {
+    /// Its path.
+    pub path: Path,
+    /// Its short name.
+    pub name: String,
+    /// A `SERVICE-SW-COMPONENT-TYPE` (the basic software's side of a port).
+    pub service: bool,
+    /// Its ports.
+    pub ports: Vec<Port>,
+    /// Its runnables: name and path.
+    pub runnables: Vec<(String, Path)>,
+    /// Its events.
+    pub events: Vec<RteEvent>,
+}
+
+/// A component prototype of the composition.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Prototype {
+    /// Its path.
+    pub path: Path,
+    /// Its short name.
+    pub name: String,
+    /// Its component type's name.
+    pub component: String,
+}
+
+/// One end of a connector: a prototype and a port of its type.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct End {
+    /// The prototype's name.
+    pub prototype: String,
+    /// The port's name.
+    pub port: String,
+    /// The port's path as referenced.
+    pub port_path: Path,
+}
+
+/// An `ASSEMBLY-SW-CONNECTOR`.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Connector {
+    /// Its path.
+    pub path: Path,
+    /// The provided port's end.
+    pub provider: End,
+    /// The required port's end.
+    pub requester: End,
+}
+
+/// The composition.
+#[derive(Debug, Clone, PartialEq, Eq, Default)]
+pub struct Composition {
+    /// Its path.
+    pub path: Path,
+    /// Its short name.
+    pub name: String,
+    /// Its description, one line.
+    pub doc: String,
+    /// Its component prototypes.
+    pub prototypes: Vec<Prototype>,
+    /// Its connectors.
+    pub connectors: Vec<Connector>,
+}
+
+/// `e`'s path; for an element without a short name (a connector's end, an event's data
+/// reference), its nearest named parent's path and the element's name.
+fn path_of(e: &Element) -> String {
+    e.path().unwrap_or_else(
+        |_| match e.named_parent().ok().flatten().and_then(|p| p.path().ok()) {
+            Some(parent) => format!("{parent} ({})", e.element_name()),
+            None => format!("<{}>", e.element_name()),
+        },
+    )
+}
+
+fn name(e: &Element) -> String {
+    e.item_name().unwrap_or_default()
+}
+
+fn text(e: &Element, n: ElementName) -> Option<String> {
+    e.get_sub_element(n)
+        .and_then(|s| s.character_data())
+        .map(|c| c.to_string())
+}
+
+fn doc(e: &Element) -> String {
+    e.get_sub_element(ElementName::Desc)
+        .and_then(|d| d.get_sub_element(ElementName::L2))
+        .and_then(|l| l.character_data())
+        .map(|c| {
+            c.to_string()
+                .split_whitespace()
+                .collect::<Vec<_>>()
+                .join(" ")
+        })
+        .unwrap_or_default()
+}
+
+/// The element a reference sub-element `n` of `e` points to, or an error naming `e`.
+fn target(e: &Element, n: ElementName, out: &mut Vec<Error>) -> Option<Element> {
+    let at = path_of(e);
+    let Some(r) = e.get_sub_element(n) else {
+        out.push(Error::new(format!("no {n}"), &[&at]));
+        return None;
+    };
+    match r.get_reference_target() {
+        Ok(t) => Some(t),
+        Err(_) => {
+            let dest = r
+                .character_data()
+                .map(|c| c.to_string())
+                .unwrap_or_default();
+            out.push(Error::new(
+                format!("{n} {dest} refers to nothing in the description"),
+                &[&at],
+            ));
+            None
+        }
+    }
+}
+
+/// Elements below `e`'s sub-element `list`.
+fn each(e: &Element, list: ElementName) -> Vec<Element> {
+    e.get_sub_element(list)
+        .map(|l| l.sub_elements().collect())
+        .unwrap_or_default()
+}
+
+fn read_type(e: &Element, out: &mut Vec<Error>) -> Option<DataType> {
+    let path = path_of(e);
+    let rust = e
+        .get_sub_element(ElementName::AdminData)
+        .into_iter()
+        .flat_map(|a| each(&a, ElementName::Sdgs))
+        .filter(|sdg| {
+            sdg.attribute_value(AttributeName::Gid)
+                .is_some_and(|g| g.to_string() == "cw-gen")
+        })
+        .flat_map(|sdg| sdg.sub_elements().collect::<Vec<_>>())
+        .find(|sd| {
+            sd.element_name() == ElementName::Sd
+                && sd
+                    .attribute_value(AttributeName::Gid)
+                    .is_some_and(|g| g.to_string() == "RustType")
+        })
+        .and_then(|sd| sd.character_data())
+        .map(|c| c.to_string().trim().to_string());
+    let Some(rust) = rust else {
+        out.push(Error::new(
+            "data type without the Rust type that carries it (ADMIN-DATA, SDG cw-gen, SD RustType)",
+            &[&path],
+        ));
+        return None;
+    };
+    let valid = !rust.is_empty()
+        && rust.split("::").all(|segment| {
+            let mut chars = segment.chars();
+            chars
+                .next()
+                .is_some_and(|c| c.is_ascii_alphabetic() || c == '_')
+                && chars.all(|c| c.is_ascii_alphanumeric() || c == '_')
+        });
+    if !valid {
+        out.push(Error::new(
+            format!("data type's Rust type `{rust}` is not a Rust path"),
+            &[&path],
+        ));
+        return None;
+    }
+    Some(DataType {
+        name: name(e),
+        path,
+        rust,
+    })
+}
+
+fn read_interface(e: &Element, out: &mut Vec<Error>) -> Option<Interface> {
+    let path = path_of(e);
+    let elements = each(e, ElementName::DataElements);
+    let [element] = elements.as_slice() else {
+        out.push(Error::new(
+            format!(
+                "sender-receiver interface with {} data elements: one per interface can be generated",
+                elements.len()
+            ),
+            &[&path],
+        ));
+        return None;
+    };
+    let data_type = target(element, ElementName::TypeTref, out)?;
+    if data_type.element_name() != ElementName::ImplementationDataType {
+        out.push(Error::new(
+            format!(
+                "data element typed by a {}: an IMPLEMENTATION-DATA-TYPE can be generated",
+                data_type.element_name()
+            ),
+            &[&path_of(element)],
+        ));
+        return None;
+    }
+    let policy = element
+        .get_sub_element(ElementName::SwDataDefProps)
+        .and_then(|p| p.get_sub_element(ElementName::SwDataDefPropsVariants))
+        .and_then(|v| v.get_sub_element(ElementName::SwDataDefPropsConditional))
+        .and_then(|c| text(&c, ElementName::SwImplPolicy));
+    let queued = match policy.as_deref() {
+        None | Some("STANDARD") => false,
+        Some("QUEUED") => true,
+        Some(other) => {
+            out.push(Error::new(
+                format!("SW-IMPL-POLICY {other}: STANDARD and QUEUED can be generated"),
+                &[&path_of(element)],
+            ));
+            return None;
+        }
+    };
+    Some(Interface {
+        doc: doc(e),
+        name: name(e),
+        element: name(element),
+        data_type: name(&data_type),
+        queued,
+        path,
+    })
+}
+
+fn read_port(e: &Element, out: &mut Vec<Error>) -> Option<Port> {
+    let path = path_of(e);
+    let (provided, tref, specs) = match e.element_name() {
+        ElementName::PPortPrototype => (
+            true,
+            ElementName::ProvidedInterfaceTref,
+            ElementName::ProvidedComSpecs,
+        ),
+        ElementName::RPortPrototype => (
+            false,
+            ElementName::RequiredInterfaceTref,
+            ElementName::RequiredComSpecs,
+        ),
+        other => {
+            out.push(Error::new(
+                format!("{other}: P-PORT-PROTOTYPE and R-PORT-PROTOTYPE can be generated"),
+                &[&path],
+            ));
+            return None;
+        }
+    };
+    let interface = target(e, tref, out)?;
+    if interface.element_name() != ElementName::SenderReceiverInterface {
+        out.push(Error::new(
+            format!(
+                "port typed by a {}: sender-receiver interfaces can be generated",
+                interface.element_name()
+            ),
+            &[&path],
+        ));
+        return None;
+    }
+    let specs = each(e, specs);
+    if specs.len() > 1 {
+        out.push(Error::new(
+            format!(
+                "{} com specs: one (the interface's one data element) can be generated",
+                specs.len()
+            ),
+            &[&path],
+        ));
+        return None;
+    }
+    let mut init = None;
+    let mut queue_length = None;
+    if let Some(spec) = specs.first() {
+        init = spec
+            .get_sub_element(ElementName::InitValue)
+            .and_then(|v| v.get_sub_element(ElementName::TextValueSpecification))
+            .and_then(|t| text(&t, ElementName::Value));
+        if let Some(q) = text(spec, ElementName::QueueLength) {
+            match crate::arxml::parse_int(&q) {
+                Some(n) => queue_length = Some(n),
+                None => {
+                    out.push(Error::new(
+                        format!("QUEUE-LENGTH {q} is not a number"),
+                        &[&path],
+                    ));
+                    return None;
+                }
+            }
+        }
+        if spec.get_sub_element(ElementName::InitValue).is_some() && init.is_none() {
+            out.push(Error::new(
+                "an init value other than a TEXT-VALUE-SPECIFICATION naming a constant of the data type",
+                &[&path],
+            ));
+            return None;
+        }
+    }
+    Some(Port {
+        name: name(e),
+        path,
+        provided,
+        interface: name(&interface),
+        init,
+        queue_length,
+    })
+}
+
+fn read_component(e: &Element, out: &mut Vec<Error>) -> Option<ComponentType> {
+    let path = path_of(e);
+    let ports: Vec<Port> = each(e, ElementName::Ports)
+        .iter()
+        .filter_map(|p| read_port(p, out))
+        .collect();
+    let mut runnables = Vec::new();
+    let mut events = Vec::new();
+    let behaviors = each(e, ElementName::InternalBehaviors);
+    if behaviors.len() > 1 {
+        out.push(Error::new(
+            format!(
+                "{} internal behaviours: one can be generated",
+                behaviors.len()
+            ),
+            &[&path],
+        ));
+    }
+    for b in behaviors.iter().take(1) {
+        for r in each(b, ElementName::Runnables) {
+            runnables.push((name(&r), path_of(&r)));
+        }
+        for ev in each(b, ElementName::Events) {
+            let at = path_of(&ev);
+            let Some(runnable) = target(&ev, ElementName::StartOnEventRef, out) else {
+                continue;
+            };
+            if runnable.element_name() != ElementName::RunnableEntity {
+                out.push(Error::new(
+                    "the event starts something other than a runnable",
+                    &[&at],
+                ));
+                continue;
+            }
+            let kind = match ev.element_name() {
+                ElementName::TimingEvent => {
+                    let period = text(&ev, ElementName::Period).unwrap_or_default();
+                    match crate::arxml::parse_ms(&period) {
+                        Some(ms) if ms > 0 => EventKind::Timing { period_ms: ms },
+                        _ => {
+                            out.push(Error::new(
+                                format!("timing event period `{period}`: a whole number of ms above 0, in seconds, can be generated"),
+                                &[&at],
+                            ));
+                            continue;
+                        }
+                    }
+                }
+                ElementName::DataReceivedEvent => {
+                    let Some(iref) = ev.get_sub_element(ElementName::DataIref) else {
+                        out.push(Error::new(
+                            "a data-received event without DATA-IREF",
+                            &[&at],
+                        ));
+                        continue;
+                    };
+                    let Some(port) = target(&iref, ElementName::ContextRPortRef, out) else {
+                        continue;
+                    };
+                    EventKind::DataReceived { port: name(&port) }
+                }
+                other => {
+                    out.push(Error::new(
+                        format!("{other}: timing and data-received events can be generated"),
+                        &[&at],
+                    ));
+                    continue;
+                }
+            };
+            events.push(RteEvent {
+                name: name(&ev),
+                path: at,
+                runnable: name(&runnable),
+                kind,
+            });
+        }
+    }
+    Some(ComponentType {
+        name: name(e),
+        service: e.element_name() == ElementName::ServiceSwComponentType,
+        path,
+        ports,
+        runnables,
+        events,
+    })
+}
+
+fn read_end(e: &Element, port_ref: ElementName, out: &mut Vec<Error>) -> Option<End> {
+    let prototype = target(e, ElementName::ContextComponentRef, out)?;
+    let port = target(e, port_ref, out)?;
+    Some(End {
+        prototype: name(&prototype),
+        port: name(&port),
+        port_path: path_of(&port),
+    })
+}
+
+fn read_composition(e: &Element, out: &mut Vec<Error>) -> Composition {
+    let mut prototypes = Vec::new();
+    for p in each(e, ElementName::Components) {
+        if let Some(t) = target(&p, ElementName::TypeTref, out) {
+            prototypes.push(Prototype {
+                path: path_of(&p),
+                name: name(&p),
+                component: name(&t),
+            });
+        }
+    }
+    let mut connectors = Vec::new();
+    for c in each(e, ElementName::Connectors) {
+        let at = path_of(&c);
+        if c.element_name() != ElementName::AssemblySwConnector {
+            out.push(Error::new(
+                format!("{}: assembly connectors can be generated", c.element_name()),
+                &[&at],
+            ));
+            continue;
+        }
+        let provider = c
+            .get_sub_element(ElementName::ProviderIref)
+            .and_then(|p| read_end(&p, ElementName::TargetPPortRef, out));
+        let requester = c
+            .get_sub_element(ElementName::RequesterIref)
+            .and_then(|r| read_end(&r, ElementName::TargetRPortRef, out));
+        match (provider, requester) {
+            (Some(provider), Some(requester)) => connectors.push(Connector {
+                path: at,
+                provider,
+                requester,
+            }),
+            _ => out.push(Error::new(
+                "a connector without both its provider and its requester",
+                &[&at],
+            )),
+        }
+    }
+    Composition {
+        path: path_of(e),
+        name: name(e),
+        doc: doc(e),
+        prototypes,
+        connectors,
+    }
+}
+
+/// Reads the software components' description from an ARXML file's bytes.
+///
+/// # Errors
+/// The file does not parse, or an element cannot be mapped: each error with its path.
+pub fn read(bytes: &[u8], file_name: &str) -> Result<Software, Vec<Error>> {
+    let model = AutosarModel::new();
+    // As for the ECUC values: `autosar-data` 0.23.0 panics on some malformed input.
+    let loaded = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        model.load_buffer(bytes, file_name, true)
+    }));
+    match loaded {
+        Ok(Ok(_)) => {}
+        Ok(Err(e)) => return Err(vec![Error::new(e.to_string(), &[file_name])]),
+        Err(_) => {
+            return Err(vec![Error::new(
+                "the ARXML library failed on this file (it is not well-formed XML)",
+                &[file_name],
+            )])
+        }
+    }
+    let mut out = Vec::new();
+    let mut sw = Software::default();
+    let mut compositions = Vec::new();
+    for (_, e) in model.elements_dfs() {
+        if e.parent().ok().flatten().map(|p| p.element_name()) != Some(ElementName::Elements) {
+            continue;
+        }
+        match e.element_name() {
+            ElementName::ImplementationDataType => {
+                sw.types.extend(read_type(&e, &mut out));
+            }
+            ElementName::SenderReceiverInterface => {
+                sw.interfaces.extend(read_interface(&e, &mut out));
+            }
+            ElementName::ApplicationSwComponentType | ElementName::ServiceSwComponentType => {
+                sw.components.extend(read_component(&e, &mut out));
+            }
+            ElementName::CompositionSwComponentType => {
+                compositions.push(read_composition(&e, &mut out));
+            }
+            other => out.push(Error::new(
+                format!("{other} cannot be mapped onto the ECU's components"),
+                &[&path_of(&e)],
+            )),
+        }
+    }
+    match compositions.len() {
+        1 => sw.composition = compositions.remove(0),
+        0 => out.push(Error::new(
+            "the description has no composition",
+            &[file_name],
+        )),
+        _ => {
+            let paths: Vec<&str> = compositions.iter().map(|c| c.path.as_str()).collect();
+            out.push(Error::new(
+                "the description has several compositions: one is the ECU's",
+                &paths,
+            ));
+        }
+    }
+    if out.is_empty() {
+        Ok(sw)
+    } else {
+        Err(out)
+    }
+}
+
+fn find<'a, T>(items: &'a [T], wanted: &str, name: impl Fn(&T) -> &str) -> Option<&'a T> {
+    items.iter().find(|i| name(i) == wanted)
+}
+
+/// The largest queue a receiver may have (the core's `Queued` takes any; the RAM is the
+/// ECU's).
+pub const MAX_QUEUE_LENGTH: u64 = 64;
+
+/// Every check; empty when the components can be generated.
+pub fn check(sw: &Software) -> Vec<Error> {
+    let mut out = Vec::new();
+    let mut names: HashMap<String, &str> = HashMap::new();
+    for (kind, n, p) in sw
+        .types
+        .iter()
+        .map(|t| ("data type", &t.name, &t.path))
+        .chain(
+            sw.interfaces
+                .iter()
+                .map(|i| ("interface", &i.name, &i.path)),
+        )
+        .chain(
+            sw.components
+                .iter()
+                .map(|c| ("component type", &c.name, &c.path)),
+        )
+    {
+        if let Some(first) = names.insert(format!("{kind} {n}"), p) {
+            out.push(Error::new(
+                format!("two {kind}s are named {n}"),
+                &[p, first],
+            ));
+        }
+    }
+    for i in &sw.interfaces {
+        if find(&sw.types, &i.data_type, |t| &t.name).is_none() {
+            out.push(Error::new(
+                format!(
+                    "interface {}'s data type {} does not exist",
+                    i.name, i.data_type
+                ),
+                &[&i.path],
+            ));
+        }
+    }
+    for c in &sw.components {
+        check_component(sw, c, &mut out);
+    }
+    check_composition(sw, &mut out);
+    out
+}
+
+fn check_component(sw: &Software, c: &ComponentType, out: &mut Vec<Error>) {
+    for p in &c.ports {
+        let Some(i) = find(&sw.interfaces, &p.interface, |i| &i.name) else {
+            continue;
+        };
+        match (i.queued, p.provided) {
+            (false, _) if p.init.is_none() => out.push(Error::new(
+                format!(
+                    "port {}.{} of non-queued interface {} has no init value",
+                    c.name, p.name, i.name
+                ),
+                &[&p.path, &i.path],
+            )),
+            (true, false) => match p.queue_length {
+                Some(1..=MAX_QUEUE_LENGTH) => {}
+                other => out.push(Error::new(
+                    format!(
+                        "queued port {}.{}: a QUEUE-LENGTH of 1..={MAX_QUEUE_LENGTH} is needed (it has {})",
+                        c.name,
+                        p.name,
+                        other.map_or("none".to_string(), |n| n.to_string())
+                    ),
+                    &[&p.path, &i.path],
+                )),
+            },
+            _ => {}
+        }
+        if let Some(init) = &p.init {
+            let constant = !init.is_empty()
+                && init
+                    .chars()
+                    .all(|ch| ch.is_ascii_alphanumeric() || ch == '_')
+                && init
+                    .chars()
+                    .next()
+                    .is_some_and(|ch| ch.is_ascii_alphabetic());
+            if !constant {
+                out.push(Error::new(
+                    format!(
+                        "port {}.{}'s init value `{init}` does not name a constant",
+                        c.name, p.name
+                    ),
+                    &[&p.path],
+                ));
+            }
+        }
+    }
+    for (r, path) in &c.runnables {
+        if !c.events.iter().any(|e| &e.runnable == r) {
+            out.push(Error::new(
+                format!(
+                    "runnable {}.{r} is started by no event: it would never run",
+                    c.name
+                ),
+                &[path],
+            ));
+        }
+    }
+    for e in &c.events {
+        if let EventKind::DataReceived { port } = &e.kind {
+            let required = c.ports.iter().find(|p| &p.name == port && !p.provided);
+            let queued = required
+                .and_then(|p| find(&sw.interfaces, &p.interface, |i| &i.name))
+                .is_some_and(|i| i.queued);
+            if required.is_none() || queued {
+                out.push(Error::new(
+                    format!(
+                        "data-received event {} is on {}.{port}: a non-queued required port of the component can start a runnable",
+                        e.name, c.name
+                    ),
+                    &[&e.path],
+                ));
+            }
+        }
+    }
+}
+
+fn check_composition(sw: &Software, out: &mut Vec<Error>) {
+    let comp = &sw.composition;
+    let mut names: HashMap<&str, &str> = HashMap::new();
+    for p in &comp.prototypes {
+        if let Some(first) = names.insert(&p.name, &p.path) {
+            out.push(Error::new(
+                format!("two component prototypes are named {}", p.name),
+                &[&p.path, first],
+            ));
+        }
+        if find(&sw.components, &p.component, |c| &c.name).is_none() {
+            out.push(Error::new(
+                format!(
+                    "prototype {} is of an unknown component type {}",
+                    p.name, p.component
+                ),
+                &[&p.path],
+            ));
+        }
+    }
+    // Each connector's ends: a prototype of the composition and a port of its type, of
+    // the right direction; both ports of one interface.
+    let port_of = |end: &End, provided: bool| -> Option<(&ComponentType, &Port)> {
+        let proto = find(&comp.prototypes, &end.prototype, |p| &p.name)?;
+        let c = find(&sw.components, &proto.component, |c| &c.name)?;
+        let port = c
+            .ports
+            .iter()
+            .find(|p| p.path == end.port_path && p.provided == provided)?;
+        Some((c, port))
+    };
+    for k in &comp.connectors {
+        let p = port_of(&k.provider, true);
+        let r = port_of(&k.requester, false);
+        for (end, found, what) in [(&k.provider, p, "provided"), (&k.requester, r, "required")] {
+            if found.is_none() {
+                out.push(Error::new(
+                    format!(
+                        "connector's {what} port {} is not a {what} port of prototype {}",
+                        end.port_path, end.prototype
+                    ),
+                    &[&k.path, &end.port_path],
+                ));
+            }
+        }
+        if let (Some((_, pp)), Some((rc, rp))) = (p, r) {
+            let queued = find(&sw.interfaces, &pp.interface, |i| &i.name).is_some_and(|i| i.queued);
+            let event = rc
+                .events
+                .iter()
+                .any(|e| matches!(&e.kind, EventKind::DataReceived { port } if port == &rp.name));
+            if !queued && !event && pp.init != rp.init {
+                out.push(Error::new(
+                    format!(
+                        "{}.{} and {}.{} share the sender's buffer but not its init value ({} and {})",
+                        k.provider.prototype,
+                        pp.name,
+                        k.requester.prototype,
+                        rp.name,
+                        pp.init.as_deref().unwrap_or("none"),
+                        rp.init.as_deref().unwrap_or("none")
+                    ),
+                    &[&rp.path, &pp.path, &k.path],
+                ));
+            }
+            if pp.interface != rp.interface {
+                out.push(Error::new(
+                    format!(
+                        "connector joins {}.{} ({}) to {}.{} ({}): a connector joins ports of one interface",
+                        k.provider.prototype,
+                        pp.name,
+                        pp.interface,
+                        k.requester.prototype,
+                        rp.name,
+                        rp.interface
+                    ),
+                    &[&k.path, &pp.path, &rp.path],
+                ));
+            }
+        }
+    }
+    // Every required port connected, once where its data is not queued.
+    for proto in &comp.prototypes {
+        let Some(c) = find(&sw.components, &proto.component, |c| &c.name) else {
+            continue;
+        };
+        for port in c.ports.iter().filter(|p| !p.provided) {
+            let into: Vec<&Connector> = comp
+                .connectors
+                .iter()
+                .filter(|k| {
+                    k.requester.prototype == proto.name && k.requester.port_path == port.path
+                })
+                .collect();
+            let queued =
+                find(&sw.interfaces, &port.interface, |i| &i.name).is_some_and(|i| i.queued);
+            match into.as_slice() {
+                [] => out.push(Error::new(
+                    format!(
+                        "required port {}.{} is connected to nothing",
+                        proto.name, port.name
+                    ),
+                    &[&port.path, &proto.path],
+                )),
+                [_] => {}
+                [first, second, ..] if !queued => out.push(Error::new(
+                    format!(
+                        "required port {}.{} has two writers, {}.{} and {}.{}: a non-queued port has one",
+                        proto.name,
+                        port.name,
+                        first.provider.prototype,
+                        first.provider.port,
+                        second.provider.prototype,
+                        second.provider.port
+                    ),
+                    &[&port.path, &first.path, &second.path],
+                )),
+                _ => {}
+            }
+        }
+    }
+}
+
+/// A word of a CamelCase name, lower case, joined by `_`: `UltraSonic` is `ultra_sonic`,
+/// `LEDActuator` `led_actuator`, `BswM` `bswm` (a capital alone at the end stays with its
+/// word).
+pub fn snake(name: &str) -> String {
+    let chars: Vec<char> = name.chars().collect();
+    let mut s = String::new();
+    for (i, &c) in chars.iter().enumerate() {
+        let prev = i.checked_sub(1).and_then(|j| chars.get(j)).copied();
+        let next = chars.get(i + 1).copied();
+        let starts_word = c.is_ascii_uppercase()
+            && i > 0
+            && next.is_some()
+            && (prev.is_some_and(|p| p.is_ascii_lowercase() || p.is_ascii_digit())
+                || (prev.is_some_and(|p| p.is_ascii_uppercase())
+                    && next.is_some_and(|n| n.is_ascii_lowercase())));
+        if starts_word {
+            s.push('_');
+        }
+        s.push(c.to_ascii_lowercase());
+    }
+    s
+}
+
+/// One buffer of the generated RTE.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Buffer {
+    /// The field's name.
+    pub field: String,
+    /// The interface's name.
+    pub interface: String,
+    /// A queue of this length, else last-is-best.
+    pub queue: Option<u64>,
+    /// The init value (last-is-best).
+    pub init: Option<String>,
+    /// A data-received event reads it: a write notes new data.
+    pub notify: bool,
+    /// The connections it carries: `Sender.Port -> Receiver.Port`, with the connector's
+    /// path.
+    pub carries: Vec<(String, Path)>,
+}
+
+/// The RTE's buffers, in the order of the connectors that first need them.
+pub fn buffers(sw: &Software) -> Vec<Buffer> {
+    let comp = &sw.composition;
+    let mut out: Vec<Buffer> = Vec::new();
+    let port = |proto: &str, port_path: &str| {
+        find(&comp.prototypes, proto, |p| &p.name)
+            .and_then(|p| find(&sw.components, &p.component, |c| &c.name))
+            .and_then(|c| c.ports.iter().find(|p| p.path == port_path).map(|p| (c, p)))
+    };
+    for k in &comp.connectors {
+        let (Some((_, pp)), Some((rc, rp))) = (
+            port(&k.provider.prototype, &k.provider.port_path),
+            port(&k.requester.prototype, &k.requester.port_path),
+        ) else {
+            continue;
+        };
+        let Some(i) = find(&sw.interfaces, &pp.interface, |i| &i.name) else {
+            continue;
+        };
+        let carries = (
+            format!(
+                "{}.{} -> {}.{}",
+                k.provider.prototype, pp.name, k.requester.prototype, rp.name
+            ),
+            k.path.clone(),
+        );
+        let event = rc
+            .events
+            .iter()
+            .any(|e| matches!(&e.kind, EventKind::DataReceived { port } if port == &rp.name));
+        let (field, queue, init, notify) = if i.queued {
+            let field = format!("{}_{}", snake(&k.requester.prototype), snake(&rp.name));
+            (field, rp.queue_length, None, false)
+        } else if event {
+            let field = format!("{}_{}", snake(&k.requester.prototype), snake(&rp.name));
+            (field, None, rp.init.clone(), true)
+        } else {
+            let field = format!("{}_{}", snake(&k.provider.prototype), snake(&pp.name));
+            (field, None, pp.init.clone(), false)
+        };
+        match out.iter_mut().find(|b| b.field == field) {
+            Some(b) => b.carries.push(carries),
+            None => out.push(Buffer {
+                field,
+                interface: i.name.clone(),
+                queue,
+                init,
+                notify,
+                carries: vec![carries],
+            }),
+        }
+    }
+    out
+}
+
+/// The generated RTE module's text (before `rustfmt`).
+///
+/// # Errors
+/// An item the checks passed refers to something missing (a broken invariant, named).
+pub fn emit(sw: &Software, source: &str, digest: &str) -> Result<String, Error> {
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "//! The RTE of this ECU: the interfaces and the connections between its software \
+         components, generated by `cargo xtask generate` from `{source}` (ARXML, AUTOSAR 4). \
+         Do not edit: change the description and generate again; the check command fails \
+         when this file and the description disagree.\n//!\n//! Each connection is a typed \
+         port from `cw_core::rte`; the task bodies in [`crate::ecu`] call the runnables with \
+         exactly these ports, so a missing or mistyped connection does not compile. Each item \
+         names the ARXML path it came from.\n//!\n//! Description digest: {digest}\n"
+    );
+    let queued = sw.interfaces.iter().any(|i| i.queued);
+    let _ = writeln!(
+        s,
+        "use cw_core::rte::{{LastIsBest, {}SenderReceiverInterface}};\n",
+        if queued { "Queued, " } else { "" }
+    );
+    for i in &sw.interfaces {
+        let t = find(&sw.types, &i.data_type, |t| &t.name).ok_or_else(|| {
+            Error::new(
+                format!("data type {} does not exist", i.data_type),
+                &[&i.path],
+            )
+        })?;
+        let _ = writeln!(
+            s,
+            "/// `{}` ({}): {} Its data element `{}` is a `{}` ({}).\npub struct {};\nimpl SenderReceiverInterface for {} {{\n    type Data = {};\n    const NAME: &'static str = \"{}\";\n}}\n",
+            i.name, i.path, i.doc, i.element, t.name, t.path, i.name, i.name, t.rust, i.name
+        );
+    }
+    let bufs = buffers(sw);
+    let _ = writeln!(
+        s,
+        "/// All connections of `{}` ({}): {}\npub struct Rte {{",
+        sw.composition.name, sw.composition.path, sw.composition.doc
+    );
+    for b in &bufs {
+        for (what, path) in &b.carries {
+            let _ = writeln!(s, "    /// {what} ({path})");
+        }
+        if b.notify {
+            let _ = writeln!(
+                s,
+                "    ///\n    /// A data-received event reads it: a write notes new data."
+            );
+        }
+        let ty = match b.queue {
+            Some(n) => format!("Queued<{}, {n}>", b.interface),
+            None => format!("LastIsBest<{}>", b.interface),
+        };
+        let _ = writeln!(s, "    pub {}: {ty},", b.field);
+    }
+    let _ = writeln!(
+        s,
+        "}}\n\nimpl Rte {{\n    /// The connections before any write: each holds its init value.\n    pub const fn new() -> Self {{\n        Self {{"
+    );
+    for b in &bufs {
+        let value = match (b.queue, &b.init) {
+            (Some(_), _) => "Queued::new()".to_string(),
+            (None, Some(init)) => {
+                let rust = find(&sw.interfaces, &b.interface, |i| &i.name)
+                    .and_then(|i| find(&sw.types, &i.data_type, |t| &t.name))
+                    .map(|t| t.rust.clone())
+                    .ok_or_else(|| {
+                        Error::new(
+                            format!("interface {} has no data type", b.interface),
+                            &[&sw.composition.path],
+                        )
+                    })?;
+                format!("LastIsBest::new({rust}::{init}, {})", b.notify)
+            }
+            (None, None) => {
+                return Err(Error::new(
+                    format!("buffer {} has no init value", b.field),
+                    &[&sw.composition.path],
+                ))
+            }
+        };
+        let _ = writeln!(s, "            {}: {value},", b.field);
+    }
+    let _ = writeln!(
+        s,
+        "        }}\n    }}\n}}\n\nimpl Default for Rte {{\n    fn default() -> Self {{\n        Self::new()\n    }}\n}}"
+    );
+    Ok(s)
+}

@@ -1,0 +1,203 @@
+//! The software components' description (`firmware/swc.arxml`) read and generated into the
+//! RTE, and refused with the paths named wherever it is changed into something the RTE
+//! cannot be generated from.
+
+use cw_gen::rte;
+use cw_gen::spec::{self, COMPONENTS};
+
+/// Every error of generating the RTE from `text`, as the user sees them.
+fn refused(text: &str) -> Vec<String> {
+    match cw_gen::generate_rte(text.as_bytes(), "swc.arxml") {
+        Ok(_) => Vec::new(),
+        Err(e) => e.0.iter().map(ToString::to_string).collect(),
+    }
+}
+
+/// `COMPONENTS` with `from` (which must be there, once) replaced by `to`.
+fn edited(from: &str, to: &str) -> String {
+    assert_eq!(COMPONENTS.matches(from).count(), 1, "{from}");
+    COMPONENTS.replacen(from, to, 1)
+}
+
+const PKG: &str = "/CollisionWarning/SwComponentTypes";
+
+#[test]
+fn the_components_read_check_and_generate_the_rte_the_ecu_uses() {
+    let sw = rte::read(COMPONENTS.as_bytes(), "swc.arxml").expect("the description reads");
+    assert_eq!(rte::check(&sw), Vec::new());
+    assert_eq!(sw.components.len(), 6);
+    assert_eq!(sw.composition.prototypes.len(), 7);
+    assert_eq!(sw.composition.connectors.len(), 6);
+    let fields: Vec<(String, Option<u64>, bool, usize)> = rte::buffers(&sw)
+        .into_iter()
+        .map(|b| (b.field, b.queue, b.notify, b.carries.len()))
+        .collect();
+    assert_eq!(
+        fields,
+        [
+            // One buffer for the sender's plain receivers (ObstacleDetection), one for the
+            // receiver whose runnable a data-received event starts (CanTranslate).
+            ("ultra_sonic_sonar_data".to_string(), None, false, 1),
+            ("can_translate_sonar_recv".to_string(), None, true, 1),
+            // RedLED, YellowLED and CanTranslate read the newest level from one buffer.
+            ("obstacle_detection_led_request".to_string(), None, false, 3),
+            ("bswm_mode_request".to_string(), Some(4), false, 1),
+        ]
+    );
+    let out = cw_gen::generate_rte(COMPONENTS.as_bytes(), "swc.arxml").expect("it generates");
+    assert!(out.rust.contains(
+        "ultra_sonic_sonar_data: LastIsBest::new(cw_core::warning::Measurement::Invalid, false)"
+    ));
+    assert!(out.rust.contains(&format!(
+        "/// UltraSonic.SonarData -> CanTranslate.SonarRecv ({PKG}/CollisionWarning/UltraSonic_SonarData_CanTranslate_SonarRecv)"
+    )));
+    assert!(out.rust.contains("type Data = cw_core::ecum::BswMRequest;"));
+}
+
+#[test]
+fn names_become_snake_case_fields() {
+    for (name, snake) in [
+        ("UltraSonic", "ultra_sonic"),
+        ("LEDActuator", "led_actuator"),
+        ("RedLED", "red_led"),
+        ("BswM", "bswm"),
+        ("SonarRecv", "sonar_recv"),
+        ("Can2Bus", "can2_bus"),
+    ] {
+        assert_eq!(rte::snake(name), snake);
+    }
+}
+
+#[test]
+fn a_required_port_connected_to_nothing_is_refused_with_its_path() {
+    // The connector into RedLED removed.
+    let start = COMPONENTS
+        .find("<ASSEMBLY-SW-CONNECTOR>\n                  <SHORT-NAME>ObstacleDetection_LedRequest_RedLED_LedRequest")
+        .expect("the connector");
+    let end = start
+        + COMPONENTS[start..]
+            .find("</ASSEMBLY-SW-CONNECTOR>")
+            .expect("its end")
+        + "</ASSEMBLY-SW-CONNECTOR>".len();
+    let text = format!("{}{}", &COMPONENTS[..start], &COMPONENTS[end..]);
+    assert_eq!(
+        refused(&text),
+        [format!(
+            "required port RedLED.LedRequest is connected to nothing\n  at {PKG}/LEDActuator/LedRequest\n  and {PKG}/CollisionWarning/RedLED"
+        )]
+    );
+}
+
+#[test]
+fn two_writers_of_one_port_are_refused_naming_both_connectors() {
+    // A second sensor (a rear UltraSonic) wired to the same receiver.
+    let text = edited(
+        "<SW-COMPONENT-PROTOTYPE>\n                  <SHORT-NAME>ObstacleDetection</SHORT-NAME>",
+        "<SW-COMPONENT-PROTOTYPE>\n                  <SHORT-NAME>RearSonic</SHORT-NAME>\n                  <TYPE-TREF DEST=\"APPLICATION-SW-COMPONENT-TYPE\">/CollisionWarning/SwComponentTypes/UltraSonic</TYPE-TREF>\n                </SW-COMPONENT-PROTOTYPE>\n                <SW-COMPONENT-PROTOTYPE>\n                  <SHORT-NAME>ObstacleDetection</SHORT-NAME>",
+    );
+    let text = text.replacen(
+        "<CONNECTORS>",
+        &format!(
+            "<CONNECTORS>\n<ASSEMBLY-SW-CONNECTOR><SHORT-NAME>Rear</SHORT-NAME><PROVIDER-IREF><CONTEXT-COMPONENT-REF DEST=\"SW-COMPONENT-PROTOTYPE\">{PKG}/CollisionWarning/RearSonic</CONTEXT-COMPONENT-REF><TARGET-P-PORT-REF DEST=\"P-PORT-PROTOTYPE\">{PKG}/UltraSonic/SonarData</TARGET-P-PORT-REF></PROVIDER-IREF><REQUESTER-IREF><CONTEXT-COMPONENT-REF DEST=\"SW-COMPONENT-PROTOTYPE\">{PKG}/CollisionWarning/ObstacleDetection</CONTEXT-COMPONENT-REF><TARGET-R-PORT-REF DEST=\"R-PORT-PROTOTYPE\">{PKG}/ObstacleDetection/SonarData</TARGET-R-PORT-REF></REQUESTER-IREF></ASSEMBLY-SW-CONNECTOR>"
+        ),
+        1,
+    );
+    assert_eq!(
+        refused(&text),
+        [format!(
+            "required port ObstacleDetection.SonarData has two writers, RearSonic.SonarData and UltraSonic.SonarData: a non-queued port has one\n  at {PKG}/ObstacleDetection/SonarData\n  and {PKG}/CollisionWarning/Rear\n  and {PKG}/CollisionWarning/UltraSonic_SonarData_ObstacleDetection_SonarData"
+        )]
+    );
+}
+
+#[test]
+fn a_connector_between_ports_of_two_interfaces_is_refused() {
+    // The level's connector into CanTranslate aimed at its distance port instead.
+    let text = edited(
+        &format!("{PKG}/CanTranslate/LedRequest</TARGET-R-PORT-REF>"),
+        &format!("{PKG}/CanTranslate/SonarRecv</TARGET-R-PORT-REF>"),
+    );
+    let errors = refused(&text);
+    assert!(
+        errors.contains(&format!(
+            "connector joins ObstacleDetection.LedRequest (LedRequestInterface) to CanTranslate.SonarRecv (SonarDataInterface): a connector joins ports of one interface\n  at {PKG}/CollisionWarning/ObstacleDetection_LedRequest_CanTranslate_LedRequest\n  and {PKG}/ObstacleDetection/LedRequest\n  and {PKG}/CanTranslate/SonarRecv"
+        )),
+        "{errors:#?}"
+    );
+    // CanTranslate's level port is then connected to nothing, its distance port twice.
+    assert!(errors
+        .iter()
+        .any(|e| e.starts_with("required port CanTranslate.LedRequest is connected to nothing")));
+}
+
+#[test]
+fn what_the_rte_cannot_carry_is_refused_with_its_path() {
+    let cases = [
+        (
+            edited(
+                "<SD GID=\"RustType\">cw_core::warning::Measurement</SD>",
+                "<SD GID=\"RustType\">cw_core::warning::Measure ment</SD>",
+            ),
+            "data type's Rust type `cw_core::warning::Measure ment` is not a Rust path\n  at /CollisionWarning/DataTypes/Measurement".to_string(),
+        ),
+        (
+            edited("<QUEUE-LENGTH>4</QUEUE-LENGTH>", "<QUEUE-LENGTH>0</QUEUE-LENGTH>"),
+            format!("queued port BswM.ModeRequest: a QUEUE-LENGTH of 1..=64 is needed (it has 0)\n  at {PKG}/BswM/ModeRequest\n  and /CollisionWarning/PortInterfaces/ModeRequestInterface"),
+        ),
+        (
+            edited("<PERIOD>0.02</PERIOD>", "<PERIOD>0.0205</PERIOD>"),
+            format!("timing event period `0.0205`: a whole number of ms above 0, in seconds, can be generated\n  at {PKG}/ObstacleDetection/ObstacleDetectionBehavior/Every20ms"),
+        ),
+        (
+            edited(
+                &format!("<START-ON-EVENT-REF DEST=\"RUNNABLE-ENTITY\">{PKG}/LEDActuator/LEDActuatorBehavior/LEDActuatorRunnable</START-ON-EVENT-REF>"),
+                &format!("<START-ON-EVENT-REF DEST=\"RUNNABLE-ENTITY\">{PKG}/LEDActuator/LEDActuatorBehavior/Blink</START-ON-EVENT-REF>"),
+            ),
+            format!("START-ON-EVENT-REF {PKG}/LEDActuator/LEDActuatorBehavior/Blink refers to nothing in the description\n  at {PKG}/LEDActuator/LEDActuatorBehavior/Every10ms"),
+        ),
+    ];
+    for (text, expected) in cases {
+        let errors = refused(&text);
+        assert!(
+            errors.contains(&expected),
+            "{expected}\nnot in\n{errors:#?}"
+        );
+    }
+    // The LED's timing event removed: its runnable would never run.
+    let event =
+        format!("{PKG}/LEDActuator/LEDActuatorBehavior/LEDActuatorRunnable</START-ON-EVENT-REF>");
+    let at = COMPONENTS.find(&event).expect("the event");
+    let start = COMPONENTS[..at].rfind("<TIMING-EVENT>").expect("its start");
+    let end =
+        at + COMPONENTS[at..].find("</TIMING-EVENT>").expect("its end") + "</TIMING-EVENT>".len();
+    let text = format!("{}{}", &COMPONENTS[..start], &COMPONENTS[end..]);
+    assert_eq!(
+        refused(&text),
+        [format!("runnable LEDActuator.LEDActuatorRunnable is started by no event: it would never run\n  at {PKG}/LEDActuator/LEDActuatorBehavior/LEDActuatorRunnable")]
+    );
+}
+
+#[test]
+fn a_kind_of_element_the_rte_does_not_generate_is_refused_never_dropped() {
+    let text = edited(
+        "<SENDER-RECEIVER-INTERFACE>\n              <SHORT-NAME>LedRequestInterface</SHORT-NAME>",
+        "<CLIENT-SERVER-INTERFACE>\n              <SHORT-NAME>Calibration</SHORT-NAME>\n            </CLIENT-SERVER-INTERFACE>\n            <SENDER-RECEIVER-INTERFACE>\n              <SHORT-NAME>LedRequestInterface</SHORT-NAME>",
+    );
+    assert_eq!(
+        refused(&text),
+        ["CLIENT-SERVER-INTERFACE cannot be mapped onto the ECU's components\n  at /CollisionWarning/PortInterfaces/Calibration"]
+    );
+}
+
+#[test]
+fn any_text_of_the_components_changed_generates_or_is_refused_with_a_path() {
+    bolero::check!()
+        .with_type::<(u8, u8, String)>()
+        .for_each(|(tag, which, value)| {
+            assert!(spec::a_changed_component_generates_or_names_paths(
+                usize::from(*tag),
+                usize::from(*which),
+                value
+            ));
+        });
+}
