@@ -4,7 +4,7 @@
 //!
 //! Each item names the ARXML path it came from.
 //!
-//! Description digest: 9b019296dee4d035
+//! Description digest: 05db8df9db4a2f4f
 
 /// `Os` (/CollisionWarning/EcucValues/Os).
 pub mod os {

@@ -300,11 +300,46 @@ pub fn parse_int(text: &str) -> Option<u64> {
     }
 }
 
-/// A time in seconds (ECUC's unit for times) as whole milliseconds.
+/// A time in seconds (ECUC's unit for times, an `xsd:double` literal: `0.01`, `1.5E-2`) as
+/// whole milliseconds, up to `u32::MAX`; read exactly from its decimal digits, so a time
+/// that is not a whole number of milliseconds (`0.0205`) is `None` at any size.
 pub fn parse_ms(text: &str) -> Option<u64> {
-    let s: f64 = text.parse().ok()?;
-    let ms = (s * 1000.0).round();
-    ((ms - s * 1000.0).abs() < 1e-6 && (0.0..=u32::MAX as f64).contains(&ms)).then_some(ms as u64)
+    let text = text.trim();
+    let text = text.strip_prefix('+').unwrap_or(text);
+    let (mantissa, exponent) = match text.find(['e', 'E']) {
+        Some(at) => (text.get(..at)?, text.get(at + 1..)?.parse::<i32>().ok()?),
+        None => (text, 0),
+    };
+    let (whole, fraction) = mantissa.split_once('.').unwrap_or((mantissa, ""));
+    if whole.is_empty() && fraction.is_empty()
+        || !whole
+            .chars()
+            .chain(fraction.chars())
+            .all(|c| c.is_ascii_digit())
+    {
+        return None;
+    }
+    // The digits as one integer, and the power of ten that makes them milliseconds.
+    let digits = format!("{whole}{fraction}");
+    let digits = digits.trim_start_matches('0');
+    let fraction_len = i32::try_from(fraction.len()).ok()?;
+    let mut shift = exponent.checked_add(3)?.checked_sub(fraction_len)?;
+    let mut digits = digits.to_string();
+    while shift < 0 && digits.ends_with('0') {
+        digits.pop();
+        shift += 1;
+    }
+    if digits.is_empty() {
+        return Some(0);
+    }
+    if shift < 0 || digits.len() > 20 {
+        return None;
+    }
+    let mut ms: u64 = digits.parse().ok()?;
+    for _ in 0..shift {
+        ms = ms.checked_mul(10)?;
+    }
+    (ms <= u64::from(u32::MAX)).then_some(ms)
 }
 
 impl<'a> Take<'a> {
@@ -931,6 +966,23 @@ fn map_com(
         let mut timeouts: Vec<(String, u64, String)> = Vec::new();
         for s in t.subs("ComSignal") {
             let mut s = Take::new(s);
+            let (signed, type_bits) = s
+                .literal(
+                    "ComSignalType",
+                    &[
+                        ("BOOLEAN", (false, 1)),
+                        ("UINT8", (false, 8)),
+                        ("UINT16", (false, 16)),
+                        ("UINT32", (false, 32)),
+                        ("UINT64", (false, 64)),
+                        ("SINT8", (true, 8)),
+                        ("SINT16", (true, 16)),
+                        ("SINT32", (true, 32)),
+                        ("SINT64", (true, 64)),
+                    ],
+                    out,
+                )
+                .unwrap_or((false, 64));
             let signal = Signal {
                 path: s.c.path.clone(),
                 name: name_of(s.c),
@@ -946,44 +998,27 @@ fn map_com(
                         out,
                     )
                     .unwrap_or(Endianness::Little),
-                signed: s
-                    .literal(
-                        "ComSignalType",
-                        &[
-                            ("BOOLEAN", false),
-                            ("UINT8", false),
-                            ("UINT16", false),
-                            ("UINT32", false),
-                            ("UINT64", false),
-                            ("SINT8", true),
-                            ("SINT16", true),
-                            ("SINT32", true),
-                            ("SINT64", true),
-                        ],
-                        out,
-                    )
-                    .unwrap_or(false),
+                signed,
+                type_bits,
                 init: s.value("ComSignalInitValue", out).unwrap_or(0),
                 invalid: s.value("ComSignalDataInvalidValue", out),
-                transfer: s
-                    .literal(
-                        "ComTransferProperty",
-                        &[
-                            ("PENDING", Transfer::Pending),
-                            ("TRIGGERED", Transfer::Triggered),
-                            ("TRIGGERED_ON_CHANGE", Transfer::TriggeredOnChange),
-                            (
-                                "TRIGGERED_WITHOUT_REPETITION",
-                                Transfer::TriggeredWithoutRepetition,
-                            ),
-                            (
-                                "TRIGGERED_ON_CHANGE_WITHOUT_REPETITION",
-                                Transfer::TriggeredOnChangeWithoutRepetition,
-                            ),
-                        ],
-                        out,
-                    )
-                    .unwrap_or(Transfer::Pending),
+                transfer: s.literal(
+                    "ComTransferProperty",
+                    &[
+                        ("PENDING", Transfer::Pending),
+                        ("TRIGGERED", Transfer::Triggered),
+                        ("TRIGGERED_ON_CHANGE", Transfer::TriggeredOnChange),
+                        (
+                            "TRIGGERED_WITHOUT_REPETITION",
+                            Transfer::TriggeredWithoutRepetition,
+                        ),
+                        (
+                            "TRIGGERED_ON_CHANGE_WITHOUT_REPETITION",
+                            Transfer::TriggeredOnChangeWithoutRepetition,
+                        ),
+                    ],
+                    out,
+                ),
                 update_bit: s.int("ComUpdateBitPosition", out),
             };
             if let Some(t) = s.ms("ComTimeout", out) {
@@ -1118,6 +1153,24 @@ fn map_com(
                 signals,
             });
             i.finish(out, notes);
+        }
+    }
+    // A received signal's transfer property is read, not used: it says when a sent
+    // signal's write triggers a transmission.
+    for ipdu in com
+        .ipdus
+        .iter()
+        .filter(|i| matches!(i.direction, Direction::Receive { .. }))
+    {
+        for signal in com
+            .signals
+            .iter()
+            .filter(|s| s.transfer.is_some() && ipdu.signals.contains(&s.name))
+        {
+            notes.push(format!(
+                "{}: parameter ComTransferProperty is not used: {} is received (in I-PDU {}), and the property applies to sent signals",
+                signal.path, signal.name, ipdu.name
+            ));
         }
     }
 }
@@ -1815,32 +1868,27 @@ impl Writer<'_> {
                 Kind::Text,
                 &s.init.to_string(),
             )?;
-            let width = match s.bit_size {
-                0..=8 => 8,
-                9..=16 => 16,
-                17..=32 => 32,
-                _ => 64,
+            let signal_type = match (s.type_bits, s.signed) {
+                (1, _) => "BOOLEAN".to_string(),
+                (width, signed) => format!("{}INT{width}", if signed { "S" } else { "U" }),
             };
-            Self::param(
-                &c,
-                &format!("{sd}/ComSignalType"),
-                Kind::Enum,
-                &format!("{}INT{width}", if s.signed { "S" } else { "U" }),
-            )?;
-            Self::param(
-                &c,
-                &format!("{sd}/ComTransferProperty"),
-                Kind::Enum,
-                match s.transfer {
-                    Transfer::Pending => "PENDING",
-                    Transfer::Triggered => "TRIGGERED",
-                    Transfer::TriggeredOnChange => "TRIGGERED_ON_CHANGE",
-                    Transfer::TriggeredWithoutRepetition => "TRIGGERED_WITHOUT_REPETITION",
-                    Transfer::TriggeredOnChangeWithoutRepetition => {
-                        "TRIGGERED_ON_CHANGE_WITHOUT_REPETITION"
-                    }
-                },
-            )?;
+            Self::param(&c, &format!("{sd}/ComSignalType"), Kind::Enum, &signal_type)?;
+            if let Some(transfer) = s.transfer {
+                Self::param(
+                    &c,
+                    &format!("{sd}/ComTransferProperty"),
+                    Kind::Enum,
+                    match transfer {
+                        Transfer::Pending => "PENDING",
+                        Transfer::Triggered => "TRIGGERED",
+                        Transfer::TriggeredOnChange => "TRIGGERED_ON_CHANGE",
+                        Transfer::TriggeredWithoutRepetition => "TRIGGERED_WITHOUT_REPETITION",
+                        Transfer::TriggeredOnChangeWithoutRepetition => {
+                            "TRIGGERED_ON_CHANGE_WITHOUT_REPETITION"
+                        }
+                    },
+                )?;
+            }
             let deadline = com.ipdus.iter().find_map(|i| match i.direction {
                 Direction::Receive { deadline_ms }
                     if deadline_ms > 0 && i.signals.contains(&s.name) =>

@@ -291,12 +291,14 @@ pub struct Signal {
     pub endianness: Endianness,
     /// `ComSignalType`: `SINT*` (true) or `UINT*`/`BOOLEAN`.
     pub signed: bool,
+    /// `ComSignalType`'s width in bits: 1 (`BOOLEAN`), 8, 16, 32 or 64.
+    pub type_bits: u64,
     /// `ComSignalInitValue`.
     pub init: u64,
     /// `ComSignalDataInvalidValue`.
     pub invalid: Option<u64>,
-    /// `ComTransferProperty` (sent signals).
-    pub transfer: Transfer,
+    /// `ComTransferProperty` (sent signals; `PENDING` where it is not given).
+    pub transfer: Option<Transfer>,
     /// `ComUpdateBitPosition`.
     pub update_bit: Option<u64>,
 }

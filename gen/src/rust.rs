@@ -456,7 +456,7 @@ fn emit_com(ecu: &Ecu, s: &mut String) -> Result<(), Error> {
             })?;
         let direction = match owner.direction {
             Direction::Send(_) => {
-                let transfer = match sig.transfer {
+                let transfer = match sig.transfer.unwrap_or(Transfer::Pending) {
                     Transfer::Pending => "Pending",
                     Transfer::Triggered => "Triggered",
                     Transfer::TriggeredOnChange => "TriggeredOnChange",

@@ -651,6 +651,16 @@ fn check_com(ecu: &Ecu, out: &mut Vec<Error>) {
         }
     }
     for signal in &com.signals {
+        // The signal's bits within its type's (`ComSignalType`: BOOLEAN is one bit).
+        if signal.bit_size > signal.type_bits {
+            out.push(Error::new(
+                format!(
+                    "signal {} has {} bits, more than its ComSignalType's {}",
+                    signal.name, signal.bit_size, signal.type_bits
+                ),
+                &[&signal.path],
+            ));
+        }
         // Init and invalid values within the signal's bits (signed ones as the two's
         // complement of 64 bits).
         for (what, v) in [

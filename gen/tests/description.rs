@@ -298,3 +298,62 @@ fn one_received_pdu_routed_to_two_i_pdus_fans_out() {
         ecu.routes
     );
 }
+
+#[test]
+fn times_are_read_exactly_as_whole_milliseconds() {
+    for (text, ms) in [
+        ("0.01", Some(10)),
+        ("0.020", Some(20)),
+        ("1", Some(1000)),
+        ("1.5E-2", Some(15)),
+        ("2e-3", Some(2)),
+        ("+0.04", Some(40)),
+        ("0", Some(0)),
+        ("0.0", Some(0)),
+        ("4294967.295", Some(4_294_967_295)),
+        ("4294967.296", None),
+        ("0.0205", None),
+        ("1E-4", None),
+        ("-0.01", None),
+        ("0.01.0", None),
+        ("", None),
+        (".", None),
+        ("NaN", None),
+        ("1e", None),
+        ("123456789012345678901234567890", None),
+    ] {
+        assert_eq!(arxml::parse_ms(text), ms, "{text}");
+    }
+}
+
+#[test]
+fn a_signal_wider_than_its_type_is_refused() {
+    // DistanceFrame's WarningLevel (8 bits) typed BOOLEAN.
+    let text = with_value("ComSignalType", 1, "BOOLEAN");
+    assert_eq!(
+        refused(&text),
+        ["signal WarningLevel has 8 bits, more than its ComSignalType's 1\n  at /CollisionWarning/EcucValues/Com/ComConfig/WarningLevel"]
+    );
+}
+
+#[test]
+fn a_received_signals_transfer_property_is_a_note_not_dropped() {
+    let at = ECU
+        .find("<SHORT-NAME>RedBelow</SHORT-NAME>")
+        .expect("RedBelow");
+    let params = at
+        + ECU[at..]
+            .find("<PARAMETER-VALUES>")
+            .expect("its parameters")
+        + "<PARAMETER-VALUES>".len();
+    let text = format!(
+        "{}<ECUC-TEXTUAL-PARAM-VALUE><DEFINITION-REF DEST=\"ECUC-ENUMERATION-PARAM-DEF\">/AUTOSAR/EcucDefs/Com/ComConfig/ComSignal/ComTransferProperty</DEFINITION-REF><VALUE>TRIGGERED</VALUE></ECUC-TEXTUAL-PARAM-VALUE>{}",
+        &ECU[..params],
+        &ECU[params..]
+    );
+    let read = arxml::read(text.as_bytes(), "ecu.arxml").expect("it reads");
+    assert_eq!(
+        read.notes,
+        ["/CollisionWarning/EcucValues/Com/ComConfig/RedBelow: parameter ComTransferProperty is not used: RedBelow is received (in I-PDU ThresholdConfig), and the property applies to sent signals"]
+    );
+}
