@@ -1,7 +1,8 @@
 //! Stops the build when one of the ECU's descriptions has changed since the Rust generated
 //! from it: `ecu.arxml` (the basic software's ECUC values) for `src/generated.rs`,
-//! `swc.arxml` (the software components) for `src/rte.rs`. Each generated file records the
-//! digest of its description, computed here by the same function the generator uses.
+//! `swc.arxml` (the software components) and `ecu.arxml` (their tasks) for `src/rte.rs`.
+//! Each generated file records the digests of its descriptions, computed here by the same
+//! function the generator uses.
 //! The generator itself (ARXML, `autosar-data`) is not a dependency of the firmware: its
 //! output is committed, as generated configuration is in AUTOSAR projects, and
 //! `cargo xtask generate --check` proves it current in the check command.
@@ -30,6 +31,18 @@ fn main() {
                  from it: run `cargo xtask generate`"
             ));
         }
+    }
+    // The RTE's tasks are the OS's: `src/rte.rs` records the ECU description's digest too.
+    match (
+        std::fs::read("ecu.arxml"),
+        std::fs::read_to_string("src/rte.rs"),
+    ) {
+        (Ok(ecu), Ok(rte))
+            if rte.contains(&format!("ECU description digest: {}", digest(&ecu))) => {}
+        _ => fail(
+            "firmware/ecu.arxml has changed since firmware/src/rte.rs was generated with its \
+             tasks: run `cargo xtask generate`",
+        ),
     }
 }
 

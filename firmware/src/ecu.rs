@@ -926,8 +926,11 @@ impl<P: Port<Kernel = Kernel>, B: Board> Ecu<P, B> {
         });
         if notify == Ok(true) {
             self.port.span(span::ACTIVATE_TO_FIRST_LINE, true);
-            // An error here reaches ErrorHook, which counts it.
-            let _ = self.port.activate_task(config::os::OS_COM_TASK);
+            // The RTE activates the task CanTranslate's data-received event is mapped to
+            // (the generated RTE's). An error here reaches ErrorHook, which counts it.
+            let _ = self
+                .port
+                .activate_task(crate::rte::tasks::CAN_TRANSLATE_SONAR_RECV);
             self.dispatch();
         }
     }

@@ -35,9 +35,10 @@ use cw_core::os::TaskId;
 use crate::config;
 
 /// Tasks activated by another task's job, not by an alarm: (task, the task whose job
-/// activates it).
-pub const RELEASED_BY: [(TaskId, TaskId); 1] =
-    [(config::os::OS_COM_TASK, config::os::OS_SONAR_TASK)];
+/// activates it), as the generated RTE maps the data-received events and their senders'
+/// runnables to tasks.
+pub const RELEASED_BY: [(TaskId, TaskId); crate::rte::tasks::RELEASED_BY.len()] =
+    crate::rte::tasks::RELEASED_BY;
 
 /// The tasks and ISRs analysed, in this order: the five tasks after start-up, then
 /// `SysTickIsr` and `CanIsr`.

@@ -72,17 +72,31 @@ pub struct Generated {
 }
 
 /// Reads, checks and generates the RTE: the paper's step 3 for the software components in
-/// `bytes` (the file `source`, named in the generated header).
+/// `bytes` (the file `source`, named in the generated header), whose runnables run in the
+/// tasks of the OS that `ecu` (the ECUC values of `ecu_source`) describes.
 ///
 /// # Errors
 /// Everything that cannot be read, mapped or generated, at once.
-pub fn generate_rte(bytes: &[u8], source: &str) -> Result<Generated, Refused> {
+pub fn generate_rte(
+    bytes: &[u8],
+    source: &str,
+    ecu: &[u8],
+    ecu_source: &str,
+) -> Result<Generated, Refused> {
     let sw = rte::read(bytes, source).map_err(Refused)?;
-    let errors = rte::check(&sw);
+    let ecu_bytes = ecu;
+    let ecu = arxml::read(ecu_bytes, ecu_source).map_err(Refused)?.ecu;
+    let errors = rte::check(&sw, &ecu);
     if !errors.is_empty() {
         return Err(Refused(errors));
     }
-    let rust = rte::emit(&sw, source, &digest(bytes)).map_err(|e| Refused(vec![e]))?;
+    // Both descriptions' digests: the firmware's build script checks the file against each.
+    let digests = format!(
+        "{}\n//! ECU description digest: {}",
+        digest(bytes),
+        digest(ecu_bytes)
+    );
+    let rust = rte::emit(&sw, &ecu, source, &digests).map_err(|e| Refused(vec![e]))?;
     Ok(Generated {
         rust,
         notes: Vec::new(),

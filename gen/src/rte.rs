@@ -21,9 +21,28 @@ use crate::validate::Error;
 /// Where an item came from: its ARXML path.
 pub type Path = String;
 
+/// An `RteEventToTaskMapping`: one RTE event of one prototype, run in a task.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Mapping {
+    /// Its path.
+    pub path: Path,
+    /// The prototype (`RteSoftwareComponentInstanceRef` of its instance), by name.
+    pub prototype: String,
+    /// The event's path (`RteEventRef`).
+    pub event: Path,
+    /// The task's path (`RteMappedToTaskRef`), in the ECU's OS description.
+    pub task: Path,
+    /// `RtePositionInTask`.
+    pub position: u64,
+}
+
 /// The software components' description.
 #[derive(Debug, Clone, PartialEq, Eq, Default)]
 pub struct Software {
+    /// The RTE's ECUC values: each prototype's events mapped to tasks.
+    pub mappings: Vec<Mapping>,
+    /// The `Rte` module's path.
+    pub rte_path: Path,
     /// `IMPLEMENTATION-DATA-TYPE`s.
     pub types: Vec<DataType>,
     /// `SENDER-RECEIVER-INTERFACE`s.
@@ -559,6 +578,104 @@ fn read_composition(e: &Element, out: &mut Vec<Error>) -> Composition {
     }
 }
 
+/// The last segment of `e`'s definition.
+fn def_of(e: &Element) -> String {
+    text(e, ElementName::DefinitionRef)
+        .and_then(|d| d.rsplit('/').next().map(str::to_string))
+        .unwrap_or_default()
+}
+
+/// The `Rte` module's instances and their event-to-task mappings.
+fn read_rte(module: &Element, mappings: &mut Vec<Mapping>, out: &mut Vec<Error>) {
+    for instance in each(module, ElementName::Containers) {
+        let at = path_of(&instance);
+        if def_of(&instance) != "RteSwComponentInstance" {
+            out.push(Error::new(
+                format!(
+                    "container {} cannot be mapped onto the RTE (RteSwComponentInstance can)",
+                    def_of(&instance)
+                ),
+                &[&at],
+            ));
+            continue;
+        }
+        let mut prototype = None;
+        for r in each(&instance, ElementName::ReferenceValues) {
+            match def_of(&r).as_str() {
+                "RteSoftwareComponentInstanceRef" => {
+                    prototype = target(&r, ElementName::ValueRef, out).map(|p| name(&p));
+                }
+                other => out.push(Error::new(
+                    format!("reference {other} cannot be mapped onto the RTE"),
+                    &[&at],
+                )),
+            }
+        }
+        let Some(prototype) = prototype else {
+            out.push(Error::new(
+                "an RteSwComponentInstance without its RteSoftwareComponentInstanceRef",
+                &[&at],
+            ));
+            continue;
+        };
+        for m in each(&instance, ElementName::SubContainers) {
+            let at = path_of(&m);
+            if def_of(&m) != "RteEventToTaskMapping" {
+                out.push(Error::new(
+                    format!(
+                        "container {} cannot be mapped onto the RTE (RteEventToTaskMapping can)",
+                        def_of(&m)
+                    ),
+                    &[&at],
+                ));
+                continue;
+            }
+            let mut position = None;
+            for p in each(&m, ElementName::ParameterValues) {
+                let value = text(&p, ElementName::Value).unwrap_or_default();
+                match (def_of(&p).as_str(), crate::arxml::parse_int(&value)) {
+                    ("RtePositionInTask", Some(n)) => position = Some(n),
+                    ("RtePositionInTask", None) => out.push(Error::new(
+                        format!("RtePositionInTask = `{value}` is not a number"),
+                        &[&at],
+                    )),
+                    (other, _) => out.push(Error::new(
+                        format!("parameter {other} cannot be mapped onto the RTE"),
+                        &[&at],
+                    )),
+                }
+            }
+            let (mut event, mut task) = (None, None);
+            for r in each(&m, ElementName::ReferenceValues) {
+                match def_of(&r).as_str() {
+                    "RteEventRef" => {
+                        event = target(&r, ElementName::ValueRef, out).map(|e| path_of(&e))
+                    }
+                    // The task is in the OS's description, another file: kept as its path.
+                    "RteMappedToTaskRef" => task = text(&r, ElementName::ValueRef),
+                    other => out.push(Error::new(
+                        format!("reference {other} cannot be mapped onto the RTE"),
+                        &[&at],
+                    )),
+                }
+            }
+            match (event, task, position) {
+                (Some(event), Some(task), Some(position)) => mappings.push(Mapping {
+                    path: at,
+                    prototype: prototype.clone(),
+                    event,
+                    task,
+                    position,
+                }),
+                _ => out.push(Error::new(
+                    "an RteEventToTaskMapping needs its RteEventRef, RteMappedToTaskRef and RtePositionInTask",
+                    &[&at],
+                )),
+            }
+        }
+    }
+}
+
 /// Reads the software components' description from an ARXML file's bytes.
 ///
 /// # Errors
@@ -599,6 +716,19 @@ pub fn read(bytes: &[u8], file_name: &str) -> Result<Software, Vec<Error>> {
             ElementName::CompositionSwComponentType => {
                 compositions.push(read_composition(&e, &mut out));
             }
+            ElementName::EcucModuleConfigurationValues
+                if text(&e, ElementName::DefinitionRef).is_some_and(|d| d.ends_with("/Rte")) =>
+            {
+                if sw.rte_path.is_empty() {
+                    sw.rte_path = path_of(&e);
+                    read_rte(&e, &mut sw.mappings, &mut out);
+                } else {
+                    out.push(Error::new(
+                        "a second Rte module",
+                        &[&path_of(&e), &sw.rte_path],
+                    ));
+                }
+            }
             other => out.push(Error::new(
                 format!("{other} cannot be mapped onto the ECU's components"),
                 &[&path_of(&e)],
@@ -634,8 +764,144 @@ fn find<'a, T>(items: &'a [T], wanted: &str, name: impl Fn(&T) -> &str) -> Optio
 /// ECU's).
 pub const MAX_QUEUE_LENGTH: u64 = 64;
 
-/// Every check; empty when the components can be generated.
-pub fn check(sw: &Software) -> Vec<Error> {
+/// The port's OS tick, ms: an alarm's cycle in ticks of the system counter is this many
+/// milliseconds (SysTick every millisecond on every board).
+pub const TICK_MS: u64 = 1;
+
+/// The cycle, ms, of the autostarted cyclic alarm that activates `task` or sets its event
+/// (the first, if several: the ECUC checks refuse two).
+pub fn task_period_ms(ecu: &crate::model::Ecu, task: &str) -> Option<u64> {
+    use crate::model::AlarmAction;
+    ecu.os.alarms.iter().find_map(|a| {
+        let target = match &a.action {
+            AlarmAction::ActivateTask(t) | AlarmAction::SetEvent(t, _) => t,
+        };
+        match a.autostart {
+            Some((_, cycle)) if cycle > 0 && target == task => Some(cycle * TICK_MS),
+            _ => None,
+        }
+    })
+}
+
+/// The mappings of events to tasks against the components and the OS: every event of every
+/// application prototype mapped once, to a task of the OS; a timing event to a task its
+/// alarm runs at the event's period; a data-received event to a task no alarm runs (the
+/// RTE activates it); one runnable per position in a task.
+fn check_mappings(sw: &Software, ecu: &crate::model::Ecu, out: &mut Vec<Error>) {
+    let comp = &sw.composition;
+    for m in &sw.mappings {
+        let Some(proto) = find(&comp.prototypes, &m.prototype, |p| &p.name) else {
+            out.push(Error::new(
+                format!(
+                    "mapping of prototype {}, which the composition does not have",
+                    m.prototype
+                ),
+                &[&m.path],
+            ));
+            continue;
+        };
+        let Some(c) = find(&sw.components, &proto.component, |c| &c.name) else {
+            continue;
+        };
+        let Some(event) = c.events.iter().find(|e| e.path == m.event) else {
+            out.push(Error::new(
+                format!(
+                    "event {} is not an event of {}'s component type {}",
+                    m.event, proto.name, c.name
+                ),
+                &[&m.path, &proto.path],
+            ));
+            continue;
+        };
+        let Some(task) = ecu.os.tasks.iter().find(|t| t.path == m.task) else {
+            out.push(Error::new(
+                format!(
+                    "RteMappedToTaskRef {} is not a task of the OS's description",
+                    m.task
+                ),
+                &[&m.path],
+            ));
+            continue;
+        };
+        let period = task_period_ms(ecu, &task.name);
+        match (&event.kind, period) {
+            (EventKind::Timing { period_ms }, Some(p)) if *period_ms == p => {}
+            (EventKind::Timing { period_ms }, _) => out.push(Error::new(
+                format!(
+                    "runnable {}.{} runs every {period_ms} ms ({}), but task {} {}",
+                    proto.name,
+                    event.runnable,
+                    event.name,
+                    task.name,
+                    period.map_or("is run by no cyclic alarm".to_string(), |p| format!("runs every {p} ms"))
+                ),
+                &[&m.path, &event.path, &task.path],
+            )),
+            (EventKind::DataReceived { port }, Some(p)) => out.push(Error::new(
+                format!(
+                    "runnable {}.{} runs when {port} receives data, but task {} runs every {p} ms: the RTE activates a data-received event's task",
+                    proto.name, event.runnable, task.name
+                ),
+                &[&m.path, &event.path, &task.path],
+            )),
+            (EventKind::DataReceived { .. }, None) => {}
+        }
+    }
+    // Every event of every application prototype mapped once.
+    for proto in &comp.prototypes {
+        let Some(c) = find(&sw.components, &proto.component, |c| &c.name) else {
+            continue;
+        };
+        if c.service {
+            continue;
+        }
+        for event in &c.events {
+            let mapped: Vec<&Mapping> = sw
+                .mappings
+                .iter()
+                .filter(|m| m.prototype == proto.name && m.event == event.path)
+                .collect();
+            match mapped.as_slice() {
+                [] => out.push(Error::new(
+                    format!(
+                        "runnable {}.{} ({}) is mapped to no task: it would never run",
+                        proto.name, event.runnable, event.name
+                    ),
+                    &[&event.path, &proto.path, &sw.rte_path],
+                )),
+                [_] => {}
+                [first, second, ..] => out.push(Error::new(
+                    format!(
+                        "runnable {}.{} ({}) is mapped to two tasks",
+                        proto.name, event.runnable, event.name
+                    ),
+                    &[&first.path, &second.path],
+                )),
+            }
+        }
+    }
+    // One runnable per position in a task.
+    for (i, a) in sw.mappings.iter().enumerate() {
+        if let Some(b) = sw
+            .mappings
+            .iter()
+            .skip(i + 1)
+            .find(|b| b.task == a.task && b.position == a.position)
+        {
+            out.push(Error::new(
+                format!(
+                    "two runnables at position {} of task {}",
+                    a.position, a.task
+                ),
+                &[&b.path, &a.path],
+            ));
+        }
+    }
+}
+
+/// Every check; empty when the components can be generated for the ECU whose OS `ecu`
+/// describes.
+pub fn check(sw: &Software, ecu: &crate::model::Ecu) -> Vec<Error> {
     let mut out = Vec::new();
     let mut names: HashMap<String, &str> = HashMap::new();
     for (kind, n, p) in sw
@@ -675,6 +941,7 @@ pub fn check(sw: &Software) -> Vec<Error> {
         check_component(sw, c, &mut out);
     }
     check_composition(sw, &mut out);
+    check_mappings(sw, ecu, &mut out);
     out
 }
 
@@ -917,6 +1184,10 @@ pub struct Buffer {
     /// The connections it carries: `Sender.Port -> Receiver.Port`, with the connector's
     /// path.
     pub carries: Vec<(String, Path)>,
+    /// The sending prototype.
+    pub sender: String,
+    /// For a buffer a data-received event reads: the receiving prototype and its port.
+    pub receiver: Option<(String, String)>,
 }
 
 /// The RTE's buffers, in the order of the connectors that first need them.
@@ -968,17 +1239,156 @@ pub fn buffers(sw: &Software) -> Vec<Buffer> {
                 init,
                 notify,
                 carries: vec![carries],
+                sender: k.provider.prototype.clone(),
+                receiver: notify.then(|| (k.requester.prototype.clone(), rp.name.clone())),
             }),
         }
     }
     out
 }
 
+/// The task a prototype's event is mapped to (its short name), if mapped.
+fn task_of<'a>(
+    sw: &Software,
+    ecu: &'a crate::model::Ecu,
+    prototype: &str,
+    event: impl Fn(&RteEvent) -> bool,
+) -> Option<&'a crate::model::Task> {
+    let proto = find(&sw.composition.prototypes, prototype, |p| &p.name)?;
+    let c = find(&sw.components, &proto.component, |c| &c.name)?;
+    let m = sw.mappings.iter().find(|m| {
+        m.prototype == prototype && c.events.iter().any(|e| e.path == m.event && event(e))
+    })?;
+    ecu.os.tasks.iter().find(|t| t.path == m.task)
+}
+
+/// The `tasks` module: the runnables each task runs, the task each data-received event
+/// activates, and which task's write releases it.
+fn emit_tasks(sw: &Software, ecu: &crate::model::Ecu, s: &mut String) -> Result<(), Error> {
+    let _ = writeln!(
+        s,
+        "/// The runnables each task runs, in order (`RtePositionInTask`), as the RTE's ECUC \
+         values ({}) map the prototypes' events:\n///\n/// | task | runnables |\n/// |---|---|",
+        sw.rte_path
+    );
+    for task in &ecu.os.tasks {
+        let mut runs: Vec<(u64, String)> = Vec::new();
+        for m in sw.mappings.iter().filter(|m| m.task == task.path) {
+            let event = find(&sw.composition.prototypes, &m.prototype, |p| &p.name)
+                .and_then(|p| find(&sw.components, &p.component, |c| &c.name))
+                .and_then(|c| c.events.iter().find(|e| e.path == m.event));
+            if let Some(e) = event {
+                let when = match &e.kind {
+                    EventKind::Timing { period_ms } => format!("every {period_ms} ms"),
+                    EventKind::DataReceived { port } => format!("on data received on {port}"),
+                };
+                runs.push((
+                    m.position,
+                    format!("{}.{} ({when})", m.prototype, e.runnable),
+                ));
+            }
+        }
+        if runs.is_empty() {
+            continue;
+        }
+        runs.sort();
+        let list: Vec<String> = runs.into_iter().map(|(_, r)| r).collect();
+        let _ = writeln!(s, "/// | `{}` | {} |", task.name, list.join(", "));
+    }
+    let _ = writeln!(
+        s,
+        "pub mod tasks {{\n    use crate::generated::os;\n    use cw_core::os::TaskId;\n"
+    );
+    let mut released = Vec::new();
+    for b in sw.buffers_with_events() {
+        let Some((receiver, port)) = &b.receiver else {
+            continue;
+        };
+        let activated = task_of(
+            sw,
+            ecu,
+            receiver,
+            |e| matches!(&e.kind, EventKind::DataReceived { port: p } if p == port),
+        )
+        .ok_or_else(|| {
+            Error::new(
+                format!("{receiver}.{port}'s data-received event is mapped to no task"),
+                &[&sw.rte_path],
+            )
+        })?;
+        // The sender's task: the one task its prototype's runnables are mapped to.
+        let mut writers: Vec<&crate::model::Task> = Vec::new();
+        for m in sw.mappings.iter().filter(|m| m.prototype == b.sender) {
+            if let Some(t) = ecu.os.tasks.iter().find(|t| t.path == m.task) {
+                if !writers.iter().any(|w| w.path == t.path) {
+                    writers.push(t);
+                }
+            }
+        }
+        let [writer] = writers.as_slice() else {
+            return Err(Error::new(
+                format!(
+                    "{}'s runnables run in {} tasks: which one's write activates {} cannot be told (one task can be generated)",
+                    b.sender,
+                    writers.len(),
+                    activated.name
+                ),
+                &[&sw.rte_path],
+            ));
+        };
+        let _ = writeln!(
+            s,
+            "    /// `{receiver}.{port}`'s data-received event runs in `{}` ({}): a write into \
+             [`super::Rte::{}`] activates it.\n    pub const {}: TaskId = os::{};\n",
+            activated.name,
+            activated.path,
+            b.field,
+            crate::rust::constant(&format!("{receiver}{port}")),
+            crate::rust::constant(&activated.name)
+        );
+        released.push((
+            crate::rust::constant(&activated.name),
+            crate::rust::constant(&writer.name),
+            writer.name.clone(),
+            b.sender.clone(),
+        ));
+    }
+    let _ = writeln!(
+        s,
+        "    /// Each task a write activates, and the task whose runnable writes (activated, \
+         writer): {}.\n    pub const RELEASED_BY: [(TaskId, TaskId); {}] = [{}];\n}}\n",
+        released
+            .iter()
+            .map(|(_, _, w, sender)| format!("{sender}'s runnable in `{w}`"))
+            .collect::<Vec<_>>()
+            .join(", "),
+        released.len(),
+        released
+            .iter()
+            .map(|(a, w, _, _)| format!("(os::{a}, os::{w})"))
+            .collect::<Vec<_>>()
+            .join(", ")
+    );
+    Ok(())
+}
+
+impl Software {
+    /// The RTE's buffers ([`buffers`]) that a data-received event reads.
+    fn buffers_with_events(&self) -> Vec<Buffer> {
+        buffers(self).into_iter().filter(|b| b.notify).collect()
+    }
+}
+
 /// The generated RTE module's text (before `rustfmt`).
 ///
 /// # Errors
 /// An item the checks passed refers to something missing (a broken invariant, named).
-pub fn emit(sw: &Software, source: &str, digest: &str) -> Result<String, Error> {
+pub fn emit(
+    sw: &Software,
+    ecu: &crate::model::Ecu,
+    source: &str,
+    digest: &str,
+) -> Result<String, Error> {
     let mut s = String::new();
     let _ = writeln!(
         s,
@@ -988,7 +1398,7 @@ pub fn emit(sw: &Software, source: &str, digest: &str) -> Result<String, Error> 
          when this file and the description disagree.\n//!\n//! Each connection is a typed \
          port from `cw_core::rte`; the task bodies in [`crate::ecu`] call the runnables with \
          exactly these ports, so a missing or mistyped connection does not compile. Each item \
-         names the ARXML path it came from.\n//!\n//! Description digest: {digest}\n"
+         names the ARXML path it came from; the tasks are the OS's of the ECU's description.\n//!\n//! Description digest: {digest}\n"
     );
     let queued = sw.interfaces.iter().any(|i| i.queued);
     let _ = writeln!(
@@ -1061,7 +1471,8 @@ pub fn emit(sw: &Software, source: &str, digest: &str) -> Result<String, Error> 
     }
     let _ = writeln!(
         s,
-        "        }}\n    }}\n}}\n\nimpl Default for Rte {{\n    fn default() -> Self {{\n        Self::new()\n    }}\n}}"
+        "        }}\n    }}\n}}\n\nimpl Default for Rte {{\n    fn default() -> Self {{\n        Self::new()\n    }}\n}}\n"
     );
+    emit_tasks(sw, ecu, &mut s)?;
     Ok(s)
 }

@@ -9,12 +9,15 @@ pub const COMPONENTS: &str = include_str!("../../firmware/swc.arxml");
 /// Any bytes: they generate, or are refused with at least one error, never a panic; as
 /// basic software values and as software components.
 pub fn bytes_generate_or_are_refused(bytes: &[u8]) -> bool {
-    [crate::generate, crate::generate_rte]
-        .iter()
-        .all(|generate| match generate(bytes, "fuzz.arxml") {
-            Ok(out) => !out.rust.is_empty(),
-            Err(e) => !e.0.is_empty(),
-        })
+    [
+        crate::generate(bytes, "fuzz.arxml"),
+        crate::generate_rte(bytes, "fuzz.arxml", ECU.as_bytes(), "ecu.arxml"),
+    ]
+    .iter()
+    .all(|generated| match generated {
+        Ok(out) => !out.rust.is_empty(),
+        Err(e) => !e.0.is_empty(),
+    })
 }
 
 /// `text` with its `which`-th element `tag` (counted modulo their number) holding `value`
@@ -67,7 +70,7 @@ pub fn a_changed_component_generates_or_names_paths(tag: usize, which: usize, va
     let Some(text) = with_text(COMPONENTS, tag, which, value) else {
         return false;
     };
-    match crate::generate_rte(text.as_bytes(), "swc.arxml") {
+    match crate::generate_rte(text.as_bytes(), "swc.arxml", ECU.as_bytes(), "ecu.arxml") {
         Ok(out) => out.rust.contains("pub struct Rte"),
         Err(e) => names_paths(&e, "swc.arxml"),
     }

@@ -3,11 +3,11 @@
 //! cannot be generated from.
 
 use cw_gen::rte;
-use cw_gen::spec::{self, COMPONENTS};
+use cw_gen::spec::{self, COMPONENTS, ECU};
 
 /// Every error of generating the RTE from `text`, as the user sees them.
 fn refused(text: &str) -> Vec<String> {
-    match cw_gen::generate_rte(text.as_bytes(), "swc.arxml") {
+    match cw_gen::generate_rte(text.as_bytes(), "swc.arxml", ECU.as_bytes(), "ecu.arxml") {
         Ok(_) => Vec::new(),
         Err(e) => e.0.iter().map(ToString::to_string).collect(),
     }
@@ -24,7 +24,10 @@ const PKG: &str = "/CollisionWarning/SwComponentTypes";
 #[test]
 fn the_components_read_check_and_generate_the_rte_the_ecu_uses() {
     let sw = rte::read(COMPONENTS.as_bytes(), "swc.arxml").expect("the description reads");
-    assert_eq!(rte::check(&sw), Vec::new());
+    let ecu = cw_gen::arxml::read(ECU.as_bytes(), "ecu.arxml")
+        .expect("reads")
+        .ecu;
+    assert_eq!(rte::check(&sw, &ecu), Vec::new());
     assert_eq!(sw.components.len(), 6);
     assert_eq!(sw.composition.prototypes.len(), 7);
     assert_eq!(sw.composition.connectors.len(), 6);
@@ -44,7 +47,13 @@ fn the_components_read_check_and_generate_the_rte_the_ecu_uses() {
             ("bswm_mode_request".to_string(), Some(4), false, 1),
         ]
     );
-    let out = cw_gen::generate_rte(COMPONENTS.as_bytes(), "swc.arxml").expect("it generates");
+    let out = cw_gen::generate_rte(
+        COMPONENTS.as_bytes(),
+        "swc.arxml",
+        ECU.as_bytes(),
+        "ecu.arxml",
+    )
+    .expect("it generates");
     assert!(out.rust.contains(
         "ultra_sonic_sonar_data: LastIsBest::new(cw_core::warning::Measurement::Invalid, false)"
     ));
@@ -102,11 +111,17 @@ fn two_writers_of_one_port_are_refused_naming_both_connectors() {
         ),
         1,
     );
+    // (The new sensor's runnable is mapped to no task either.)
     assert_eq!(
         refused(&text),
-        [format!(
-            "required port ObstacleDetection.SonarData has two writers, RearSonic.SonarData and UltraSonic.SonarData: a non-queued port has one\n  at {PKG}/ObstacleDetection/SonarData\n  and {PKG}/CollisionWarning/Rear\n  and {PKG}/CollisionWarning/UltraSonic_SonarData_ObstacleDetection_SonarData"
-        )]
+        [
+            format!(
+                "required port ObstacleDetection.SonarData has two writers, RearSonic.SonarData and UltraSonic.SonarData: a non-queued port has one\n  at {PKG}/ObstacleDetection/SonarData\n  and {PKG}/CollisionWarning/Rear\n  and {PKG}/CollisionWarning/UltraSonic_SonarData_ObstacleDetection_SonarData"
+            ),
+            format!(
+                "runnable RearSonic.UltraSonicRunnable (Every40ms) is mapped to no task: it would never run\n  at {PKG}/UltraSonic/UltraSonicBehavior/Every40ms\n  and {PKG}/CollisionWarning/RearSonic\n  and /CollisionWarning/EcucValues/Rte"
+            ),
+        ]
     );
 }
 
@@ -163,17 +178,14 @@ fn what_the_rte_cannot_carry_is_refused_with_its_path() {
             "{expected}\nnot in\n{errors:#?}"
         );
     }
-    // The LED's timing event removed: its runnable would never run.
-    let event =
-        format!("{PKG}/LEDActuator/LEDActuatorBehavior/LEDActuatorRunnable</START-ON-EVENT-REF>");
-    let at = COMPONENTS.find(&event).expect("the event");
-    let start = COMPONENTS[..at].rfind("<TIMING-EVENT>").expect("its start");
-    let end =
-        at + COMPONENTS[at..].find("</TIMING-EVENT>").expect("its end") + "</TIMING-EVENT>".len();
-    let text = format!("{}{}", &COMPONENTS[..start], &COMPONENTS[end..]);
+    // A second runnable of the LED, which no event starts.
+    let text = edited(
+        "<SHORT-NAME>LEDActuatorRunnable</SHORT-NAME>",
+        "<SHORT-NAME>Blink</SHORT-NAME>\n<SYMBOL>Blink</SYMBOL>\n</RUNNABLE-ENTITY>\n<RUNNABLE-ENTITY>\n<SHORT-NAME>LEDActuatorRunnable</SHORT-NAME>",
+    );
     assert_eq!(
         refused(&text),
-        [format!("runnable LEDActuator.LEDActuatorRunnable is started by no event: it would never run\n  at {PKG}/LEDActuator/LEDActuatorBehavior/LEDActuatorRunnable")]
+        [format!("runnable LEDActuator.Blink is started by no event: it would never run\n  at {PKG}/LEDActuator/LEDActuatorBehavior/Blink")]
     );
 }
 
@@ -200,4 +212,120 @@ fn any_text_of_the_components_changed_generates_or_is_refused_with_a_path() {
                 value
             ));
         });
+}
+
+/// The mapping container of `instance` (`<prototype>Instance`), whole.
+fn mapping_of(instance: &str) -> (usize, usize) {
+    let at = COMPONENTS
+        .find(&format!("<SHORT-NAME>{instance}Instance</SHORT-NAME>"))
+        .expect("the instance");
+    let start = at
+        + COMPONENTS[at..]
+            .find("<SUB-CONTAINERS>")
+            .expect("its mappings")
+        + "<SUB-CONTAINERS>".len();
+    let end = start
+        + COMPONENTS[start..]
+            .find("</SUB-CONTAINERS>")
+            .expect("their end");
+    (start, end)
+}
+
+/// `COMPONENTS` with `from` replaced by `to` inside `instance`'s mappings.
+fn in_mapping(instance: &str, from: &str, to: &str) -> String {
+    let (start, end) = mapping_of(instance);
+    let inside = &COMPONENTS[start..end];
+    assert_eq!(inside.matches(from).count(), 1, "{from}");
+    format!(
+        "{}{}{}",
+        &COMPONENTS[..start],
+        inside.replacen(from, to, 1),
+        &COMPONENTS[end..]
+    )
+}
+
+const RTE: &str = "/CollisionWarning/EcucValues/Rte";
+const OS: &str = "/CollisionWarning/EcucValues/Os";
+
+#[test]
+fn the_runnables_tasks_are_generated_from_the_rte_mapping() {
+    let out = cw_gen::generate_rte(
+        COMPONENTS.as_bytes(),
+        "swc.arxml",
+        ECU.as_bytes(),
+        "ecu.arxml",
+    )
+    .expect("it generates");
+    assert!(out.rust.contains("/// | `OsLEDTask` | RedLED.LEDActuatorRunnable (every 10 ms), YellowLED.LEDActuatorRunnable (every 10 ms) |"));
+    assert!(out
+        .rust
+        .contains("pub const CAN_TRANSLATE_SONAR_RECV: TaskId = os::OS_COM_TASK;"));
+    assert!(out.rust.contains(
+        "pub const RELEASED_BY: [(TaskId, TaskId); 1] = [(os::OS_COM_TASK, os::OS_SONAR_TASK)];"
+    ));
+}
+
+#[test]
+fn a_runnable_mapped_to_no_task_or_two_is_refused() {
+    // ObstacleDetection's mapping removed.
+    let (start, end) = mapping_of("ObstacleDetection");
+    let text = format!("{}{}", &COMPONENTS[..start], &COMPONENTS[end..]);
+    assert_eq!(
+        refused(&text),
+        [format!("runnable ObstacleDetection.ObstacleDetectionRunnable (Every20ms) is mapped to no task: it would never run\n  at {PKG}/ObstacleDetection/ObstacleDetectionBehavior/Every20ms\n  and {PKG}/CollisionWarning/ObstacleDetection\n  and {RTE}")]
+    );
+    // RedLED's mapping written twice, the second in another position.
+    let (start, end) = mapping_of("RedLED");
+    let twice = COMPONENTS[start..end]
+        .replace("Every10msMapping", "AgainMapping")
+        .replace("<VALUE>0</VALUE>", "<VALUE>2</VALUE>");
+    let text = format!("{}{twice}{}", &COMPONENTS[..end], &COMPONENTS[end..]);
+    assert_eq!(
+        refused(&text),
+        [format!("runnable RedLED.LEDActuatorRunnable (Every10ms) is mapped to two tasks\n  at {RTE}/RedLEDInstance/Every10msMapping\n  and {RTE}/RedLEDInstance/AgainMapping")]
+    );
+}
+
+#[test]
+fn a_runnable_in_a_task_of_another_period_or_kind_is_refused() {
+    let errors = refused(&in_mapping(
+        "ObstacleDetection",
+        &format!("{OS}/OsObstacleDetectionTask<"),
+        &format!("{OS}/OsLEDTask<"),
+    ));
+    // (It also takes RedLED's position 0 in that task.)
+    assert_eq!(
+        errors,
+        [
+            format!("runnable ObstacleDetection.ObstacleDetectionRunnable runs every 20 ms (Every20ms), but task OsLEDTask runs every 10 ms\n  at {RTE}/ObstacleDetectionInstance/Every20msMapping\n  and {PKG}/ObstacleDetection/ObstacleDetectionBehavior/Every20ms\n  and {OS}/OsLEDTask"),
+            format!("two runnables at position 0 of task {OS}/OsLEDTask\n  at {RTE}/RedLEDInstance/Every10msMapping\n  and {RTE}/ObstacleDetectionInstance/Every20msMapping"),
+        ]
+    );
+    let errors = refused(&in_mapping(
+        "CanTranslate",
+        &format!("{OS}/OsComTask<"),
+        &format!("{OS}/OsSonarTask<"),
+    ));
+    assert!(
+        errors.contains(&format!("runnable CanTranslate.CanTranslateRunnable runs when SonarRecv receives data, but task OsSonarTask runs every 40 ms: the RTE activates a data-received event's task\n  at {RTE}/CanTranslateInstance/OnSonarRecvMapping\n  and {PKG}/CanTranslate/CanTranslateBehavior/OnSonarRecv\n  and {OS}/OsSonarTask")),
+        "{errors:#?}"
+    );
+    let errors = refused(&in_mapping(
+        "ModeManager",
+        &format!("{OS}/OsBswServiceTask<"),
+        &format!("{OS}/OsNoSuchTask<"),
+    ));
+    assert_eq!(
+        errors,
+        [format!("RteMappedToTaskRef {OS}/OsNoSuchTask is not a task of the OS's description\n  at {RTE}/ModeManagerInstance/Every10msMapping")]
+    );
+    let errors = refused(&in_mapping(
+        "YellowLED",
+        "<VALUE>1</VALUE>",
+        "<VALUE>0</VALUE>",
+    ));
+    assert_eq!(
+        errors,
+        [format!("two runnables at position 0 of task {OS}/OsLEDTask\n  at {RTE}/YellowLEDInstance/Every10msMapping\n  and {RTE}/RedLEDInstance/Every10msMapping")]
+    );
 }

@@ -18,30 +18,38 @@ pub struct Options {
     pub check: bool,
 }
 
+/// What generates a file: from a description's bytes, its file name and the ECU
+/// description's bytes.
+type Generate = fn(&[u8], &str, &[u8]) -> std::result::Result<cw_gen::Generated, cw_gen::Refused>;
+
 /// One description and the file generated from it.
 struct Pair {
     description: &'static str,
     generated: &'static str,
-    generate: fn(&[u8], &str) -> std::result::Result<cw_gen::Generated, cw_gen::Refused>,
+    /// Generates from the description's bytes and the ECU description's.
+    generate: Generate,
 }
 
 const PAIRS: [Pair; 2] = [
     Pair {
         description: cw_gen::DESCRIPTION,
         generated: cw_gen::GENERATED,
-        generate: cw_gen::generate,
+        generate: |bytes, source, _| cw_gen::generate(bytes, source),
     },
     Pair {
         description: cw_gen::COMPONENTS,
         generated: cw_gen::GENERATED_RTE,
-        generate: cw_gen::generate_rte,
+        // The runnables' tasks are the OS's, in the ECU's description.
+        generate: |bytes, source, ecu| {
+            cw_gen::generate_rte(bytes, source, ecu, cw_gen::DESCRIPTION)
+        },
     },
 ];
 
 /// The generated text for a description's bytes, laid out by `rustfmt`; the notes on
 /// what the description holds that the ECU does not use are printed.
-fn generated(pair: &Pair, bytes: &[u8]) -> Result<String> {
-    let out = (pair.generate)(bytes, pair.description).map_err(|e| {
+fn generated(pair: &Pair, bytes: &[u8], ecu: &[u8]) -> Result<String> {
+    let out = (pair.generate)(bytes, pair.description, ecu).map_err(|e| {
         format!(
             "{}: the description cannot be generated:\n{e}",
             pair.description
@@ -66,11 +74,14 @@ fn generated(pair: &Pair, bytes: &[u8]) -> Result<String> {
 
 /// Generates, or checks what is committed.
 pub fn run(options: &Options) -> Result {
+    let ecu_path = root().join(cw_gen::DESCRIPTION);
+    let ecu =
+        std::fs::read(&ecu_path).map_err(|e| format!("reading {}: {e}", ecu_path.display()))?;
     for pair in &PAIRS {
         let source = root().join(pair.description);
         let bytes =
             std::fs::read(&source).map_err(|e| format!("reading {}: {e}", source.display()))?;
-        let text = generated(pair, &bytes)?;
+        let text = generated(pair, &bytes, &ecu)?;
         let target = root().join(pair.generated);
         let committed = std::fs::read_to_string(&target).unwrap_or_default();
         if options.check {
