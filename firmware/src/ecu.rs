@@ -463,9 +463,9 @@ impl<P: Port<Kernel = Kernel>, B: Board> Ecu<P, B> {
         self.sonar.get_mut().last
     }
 
-    /// The level ObstacleDetection decided last.
+    /// The level ObstacleDetection decided last (as the LEDs read it).
     pub fn level(&mut self) -> WarningLevel {
-        self.rte.get_mut().obstacle_detection_led_request.read()
+        self.rte.get_mut().red_led().read_led_request()
     }
 
     /// WdgM's global status and the failure that expired it, unless `OsBswServiceTask` has
@@ -789,11 +789,16 @@ impl<P: Port<Kernel = Kernel>, B: Board> Ecu<P, B> {
     /// `OsLEDTask`: LEDActuator, prototypes RedLED and YellowLED.
     fn led_task(&self) {
         self.port.span(span::LOCK_PAIR, true);
-        let level = self
-            .rte
-            .lock(&self.port, |rte| rte.obstacle_detection_led_request.read());
+        // Each prototype reads its own port (both are connected to ObstacleDetection's
+        // one buffer: the two reads are one load).
+        let levels = self.rte.lock(&self.port, |rte| {
+            (
+                rte.red_led().read_led_request(),
+                rte.yellow_led().read_led_request(),
+            )
+        });
         self.port.span(span::LOCK_PAIR, false);
-        let Ok(level) = level else {
+        let Ok((red_level, yellow_level)) = levels else {
             return;
         };
         let now_ms = self.port.now_ms();
@@ -803,7 +808,10 @@ impl<P: Port<Kernel = Kernel>, B: Board> Ecu<P, B> {
                 // WdgM's supervision expired: dark until the watchdog's reset.
                 (false, false)
             } else {
-                (leds.red.run(level, now_ms), leds.yellow.run(level, now_ms))
+                (
+                    leds.red.run(red_level, now_ms),
+                    leds.yellow.run(yellow_level, now_ms),
+                )
             };
             leds.set(LedColor::Red, red);
             leds.set(LedColor::Yellow, yellow);
@@ -849,10 +857,11 @@ impl<P: Port<Kernel = Kernel>, B: Board> Ecu<P, B> {
                 .into_iter()
                 .flatten()
                 .flatten()
-                .filter(|&r| rte.bswm_mode_request.send(r).is_err())
+                .filter(|&r| rte.mode_manager().send_mode_request(r).is_err())
                 .count();
+            // BswM's side: the requests it takes in its main function below.
             for slot in &mut requests {
-                *slot = rte.bswm_mode_request.receive().ok();
+                *slot = rte.bswm().receive_mode_request().ok();
             }
             refused
         });
@@ -890,7 +899,7 @@ impl<P: Port<Kernel = Kernel>, B: Board> Ecu<P, B> {
         });
         let Ok(measurement) = self
             .rte
-            .lock(&self.port, |rte| rte.ultra_sonic_sonar_data.read())
+            .lock(&self.port, |rte| rte.obstacle_detection().read_sonar_data())
         else {
             return;
         };
@@ -905,7 +914,7 @@ impl<P: Port<Kernel = Kernel>, B: Board> Ecu<P, B> {
         });
         if let Some(level) = level {
             let _ = self.rte.lock(&self.port, |rte| {
-                rte.obstacle_detection_led_request.write(level)
+                rte.obstacle_detection().write_led_request(level)
             });
         }
     }
@@ -921,8 +930,7 @@ impl<P: Port<Kernel = Kernel>, B: Board> Ecu<P, B> {
             return;
         };
         let notify = self.rte.lock(&self.port, |rte| {
-            let _ = rte.ultra_sonic_sonar_data.write(measurement);
-            rte.can_translate_sonar_recv.write(measurement).0
+            rte.ultra_sonic().write_sonar_data(measurement).0
         });
         if notify == Ok(true) {
             self.port.span(span::ACTIVATE_TO_FIRST_LINE, true);
@@ -941,10 +949,11 @@ impl<P: Port<Kernel = Kernel>, B: Board> Ecu<P, B> {
     #[inline(never)]
     fn com_task(&self) {
         let input = self.rte.lock(&self.port, |rte| {
-            rte.can_translate_sonar_recv
-                .take()
+            let mut ports = rte.can_translate();
+            ports
+                .take_sonar_recv()
                 .ok()
-                .map(|m| (m, rte.obstacle_detection_led_request.read()))
+                .map(|m| (m, ports.read_led_request()))
         });
         let Ok(Some((measurement, level))) = input else {
             return;

@@ -5,6 +5,45 @@
 //!
 //! The book: [the ECU](../../book/ecu.html), [its scenarios](../../book/scenarios.html) and
 //! [the Cortex-M4 image](../../book/cortex-m4.html).
+//!
+//! # The RTE's contract
+//!
+//! [`rte`] is generated from the components' description (`firmware/swc.arxml`): each
+//! prototype reaches the connections through its own ports, typed by their interfaces.
+//!
+//! ```
+//! use cw_core::warning::{Measurement, WarningLevel};
+//! let mut rte = cw_firmware::rte::Rte::new();
+//! // UltraSonic's write reaches ObstacleDetection, and notes new data for CanTranslate,
+//! // whose data-received event then runs.
+//! let noted = rte.ultra_sonic().write_sonar_data(Measurement::Distance { distance_mm: 800 });
+//! assert!(noted.0);
+//! assert_eq!(rte.obstacle_detection().read_sonar_data(), Measurement::Distance { distance_mm: 800 });
+//! assert_eq!(rte.can_translate().take_sonar_recv(), Ok(Measurement::Distance { distance_mm: 800 }));
+//! let _ = rte.obstacle_detection().write_led_request(WarningLevel::Red);
+//! assert_eq!(rte.red_led().read_led_request(), WarningLevel::Red);
+//! ```
+//!
+//! A component cannot write a port it only reads (ObstacleDetection requires SonarData):
+//!
+//! ```compile_fail,E0599
+//! let mut rte = cw_firmware::rte::Rte::new();
+//! rte.obstacle_detection().write_sonar_data(cw_core::warning::Measurement::Invalid);
+//! ```
+//!
+//! nor write a value of another interface's data type into its port:
+//!
+//! ```compile_fail,E0308
+//! let mut rte = cw_firmware::rte::Rte::new();
+//! rte.obstacle_detection().write_led_request(cw_core::warning::Measurement::Invalid);
+//! ```
+//!
+//! nor use a port its component type does not have (an LED has no distance port):
+//!
+//! ```compile_fail,E0599
+//! let mut rte = cw_firmware::rte::Rte::new();
+//! let _ = rte.red_led().read_sonar_data();
+//! ```
 #![cfg_attr(not(any(test, feature = "host")), no_std)]
 #![forbid(unsafe_code)]
 

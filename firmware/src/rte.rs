@@ -5,7 +5,7 @@
 //! Description digest: 47ad40f79f960aa3
 //! ECU description digest: 05db8df9db4a2f4f
 
-use cw_core::rte::{LastIsBest, Queued, SenderReceiverInterface};
+use cw_core::rte::{DataReceived, LastIsBest, Queued, RteError, SenderReceiverInterface};
 
 /// `SonarDataInterface` (/CollisionWarning/PortInterfaces/SonarDataInterface): The distance measured by UltraSonic, with its validity. Its data element `Distance` is a `Measurement` (/CollisionWarning/DataTypes/Measurement).
 pub struct SonarDataInterface;
@@ -62,6 +62,143 @@ impl Rte {
 impl Default for Rte {
     fn default() -> Self {
         Self::new()
+    }
+}
+
+/// The ports of `UltraSonic` (/CollisionWarning/SwComponentTypes/CollisionWarning/UltraSonic), of component type `UltraSonic` (/CollisionWarning/SwComponentTypes/UltraSonic): what its runnables may read and write, typed by the interfaces' data.
+pub struct UltraSonicPorts<'a> {
+    rte: &'a mut Rte,
+}
+
+impl UltraSonicPorts<'_> {
+    /// `SonarData` (provided, /CollisionWarning/SwComponentTypes/UltraSonic/SonarData): writes `ultra_sonic_sonar_data`, `can_translate_sonar_recv`; whether a data-received event's buffer noted it (its task is then to be activated).
+    pub fn write_sonar_data(&mut self, value: cw_core::warning::Measurement) -> DataReceived {
+        let _ = self.rte.ultra_sonic_sonar_data.write(value);
+        DataReceived(self.rte.can_translate_sonar_recv.write(value).0)
+    }
+}
+
+/// The ports of `ObstacleDetection` (/CollisionWarning/SwComponentTypes/CollisionWarning/ObstacleDetection), of component type `ObstacleDetection` (/CollisionWarning/SwComponentTypes/ObstacleDetection): what its runnables may read and write, typed by the interfaces' data.
+pub struct ObstacleDetectionPorts<'a> {
+    rte: &'a mut Rte,
+}
+
+impl ObstacleDetectionPorts<'_> {
+    /// `SonarData` (required, /CollisionWarning/SwComponentTypes/ObstacleDetection/SonarData): the newest value in `ultra_sonic_sonar_data`.
+    pub fn read_sonar_data(&self) -> cw_core::warning::Measurement {
+        self.rte.ultra_sonic_sonar_data.read()
+    }
+
+    /// `LedRequest` (provided, /CollisionWarning/SwComponentTypes/ObstacleDetection/LedRequest): writes `obstacle_detection_led_request`; whether a data-received event's buffer noted it (its task is then to be activated).
+    pub fn write_led_request(&mut self, value: cw_core::warning::WarningLevel) -> DataReceived {
+        let _ = self.rte.obstacle_detection_led_request.write(value);
+        DataReceived(false)
+    }
+}
+
+/// The ports of `RedLED` (/CollisionWarning/SwComponentTypes/CollisionWarning/RedLED), of component type `LEDActuator` (/CollisionWarning/SwComponentTypes/LEDActuator): what its runnables may read and write, typed by the interfaces' data.
+pub struct RedLedPorts<'a> {
+    rte: &'a mut Rte,
+}
+
+impl RedLedPorts<'_> {
+    /// `LedRequest` (required, /CollisionWarning/SwComponentTypes/LEDActuator/LedRequest): the newest value in `obstacle_detection_led_request`.
+    pub fn read_led_request(&self) -> cw_core::warning::WarningLevel {
+        self.rte.obstacle_detection_led_request.read()
+    }
+}
+
+/// The ports of `YellowLED` (/CollisionWarning/SwComponentTypes/CollisionWarning/YellowLED), of component type `LEDActuator` (/CollisionWarning/SwComponentTypes/LEDActuator): what its runnables may read and write, typed by the interfaces' data.
+pub struct YellowLedPorts<'a> {
+    rte: &'a mut Rte,
+}
+
+impl YellowLedPorts<'_> {
+    /// `LedRequest` (required, /CollisionWarning/SwComponentTypes/LEDActuator/LedRequest): the newest value in `obstacle_detection_led_request`.
+    pub fn read_led_request(&self) -> cw_core::warning::WarningLevel {
+        self.rte.obstacle_detection_led_request.read()
+    }
+}
+
+/// The ports of `CanTranslate` (/CollisionWarning/SwComponentTypes/CollisionWarning/CanTranslate), of component type `CanTranslate` (/CollisionWarning/SwComponentTypes/CanTranslate): what its runnables may read and write, typed by the interfaces' data.
+pub struct CanTranslatePorts<'a> {
+    rte: &'a mut Rte,
+}
+
+impl CanTranslatePorts<'_> {
+    /// `SonarRecv` (required, /CollisionWarning/SwComponentTypes/CanTranslate/SonarRecv): the value in `can_translate_sonar_recv` if it is new since the last take (its data-received event), else `RteError::NoData`.
+    pub fn take_sonar_recv(&mut self) -> Result<cw_core::warning::Measurement, RteError> {
+        self.rte.can_translate_sonar_recv.take()
+    }
+
+    /// `LedRequest` (required, /CollisionWarning/SwComponentTypes/CanTranslate/LedRequest): the newest value in `obstacle_detection_led_request`.
+    pub fn read_led_request(&self) -> cw_core::warning::WarningLevel {
+        self.rte.obstacle_detection_led_request.read()
+    }
+}
+
+/// The ports of `ModeManager` (/CollisionWarning/SwComponentTypes/CollisionWarning/ModeManager), of component type `ModeManager` (/CollisionWarning/SwComponentTypes/ModeManager): what its runnables may read and write, typed by the interfaces' data.
+pub struct ModeManagerPorts<'a> {
+    rte: &'a mut Rte,
+}
+
+impl ModeManagerPorts<'_> {
+    /// `ModeRequest` (provided, /CollisionWarning/SwComponentTypes/ModeManager/ModeRequest): sends into `bswm_mode_request`; refused when a queue is full (a queue after it then does not get the value).
+    pub fn send_mode_request(
+        &mut self,
+        value: cw_core::ecum::BswMRequest,
+    ) -> Result<DataReceived, RteError> {
+        self.rte.bswm_mode_request.send(value)
+    }
+}
+
+/// The ports of `BswM` (/CollisionWarning/SwComponentTypes/CollisionWarning/BswM), of component type `BswM` (/CollisionWarning/SwComponentTypes/BswM): what its runnables may read and write, typed by the interfaces' data.
+pub struct BswmPorts<'a> {
+    rte: &'a mut Rte,
+}
+
+impl BswmPorts<'_> {
+    /// `ModeRequest` (required, /CollisionWarning/SwComponentTypes/BswM/ModeRequest): the oldest value in `bswm_mode_request`, or `RteError::NoData`.
+    pub fn receive_mode_request(&mut self) -> Result<cw_core::ecum::BswMRequest, RteError> {
+        self.rte.bswm_mode_request.receive()
+    }
+}
+
+/// Each prototype's ports (a context borrows the connections for as long as it is used).
+impl Rte {
+    /// The ports of `UltraSonic` (/CollisionWarning/SwComponentTypes/CollisionWarning/UltraSonic), of component type `UltraSonic`.
+    pub fn ultra_sonic(&mut self) -> UltraSonicPorts<'_> {
+        UltraSonicPorts { rte: self }
+    }
+
+    /// The ports of `ObstacleDetection` (/CollisionWarning/SwComponentTypes/CollisionWarning/ObstacleDetection), of component type `ObstacleDetection`.
+    pub fn obstacle_detection(&mut self) -> ObstacleDetectionPorts<'_> {
+        ObstacleDetectionPorts { rte: self }
+    }
+
+    /// The ports of `RedLED` (/CollisionWarning/SwComponentTypes/CollisionWarning/RedLED), of component type `LEDActuator`.
+    pub fn red_led(&mut self) -> RedLedPorts<'_> {
+        RedLedPorts { rte: self }
+    }
+
+    /// The ports of `YellowLED` (/CollisionWarning/SwComponentTypes/CollisionWarning/YellowLED), of component type `LEDActuator`.
+    pub fn yellow_led(&mut self) -> YellowLedPorts<'_> {
+        YellowLedPorts { rte: self }
+    }
+
+    /// The ports of `CanTranslate` (/CollisionWarning/SwComponentTypes/CollisionWarning/CanTranslate), of component type `CanTranslate`.
+    pub fn can_translate(&mut self) -> CanTranslatePorts<'_> {
+        CanTranslatePorts { rte: self }
+    }
+
+    /// The ports of `ModeManager` (/CollisionWarning/SwComponentTypes/CollisionWarning/ModeManager), of component type `ModeManager`.
+    pub fn mode_manager(&mut self) -> ModeManagerPorts<'_> {
+        ModeManagerPorts { rte: self }
+    }
+
+    /// The ports of `BswM` (/CollisionWarning/SwComponentTypes/CollisionWarning/BswM), of component type `BswM`.
+    pub fn bswm(&mut self) -> BswmPorts<'_> {
+        BswmPorts { rte: self }
     }
 }
 

@@ -1403,7 +1403,7 @@ pub fn emit(
     let queued = sw.interfaces.iter().any(|i| i.queued);
     let _ = writeln!(
         s,
-        "use cw_core::rte::{{LastIsBest, {}SenderReceiverInterface}};\n",
+        "use cw_core::rte::{{DataReceived, LastIsBest, {}RteError, SenderReceiverInterface}};\n",
         if queued { "Queued, " } else { "" }
     );
     for i in &sw.interfaces {
@@ -1473,6 +1473,169 @@ pub fn emit(
         s,
         "        }}\n    }}\n}}\n\nimpl Default for Rte {{\n    fn default() -> Self {{\n        Self::new()\n    }}\n}}\n"
     );
+    emit_ports(sw, &mut s)?;
     emit_tasks(sw, ecu, &mut s)?;
     Ok(s)
+}
+
+/// `snake`'s words joined in CamelCase: `red_led` is `RedLed`.
+fn camel(snake_name: &str) -> String {
+    snake_name
+        .split('_')
+        .map(|w| {
+            let mut c = w.chars();
+            c.next()
+                .map(|f| f.to_ascii_uppercase().to_string() + c.as_str())
+                .unwrap_or_default()
+        })
+        .collect()
+}
+
+/// Each prototype's typed context: a method per port, reading, taking, writing, sending or
+/// receiving the buffers its connectors use, and nothing else, so that a component that
+/// uses a port it does not have, or in the wrong direction, or with the wrong data type,
+/// does not compile.
+fn emit_ports(sw: &Software, s: &mut String) -> Result<(), Error> {
+    let comp = &sw.composition;
+    let bufs = buffers(sw);
+    let mut accessors = String::new();
+    for proto in &comp.prototypes {
+        let c = find(&sw.components, &proto.component, |c| &c.name).ok_or_else(|| {
+            Error::new(
+                format!("component type {} does not exist", proto.component),
+                &[&proto.path],
+            )
+        })?;
+        let ty = format!("{}Ports", camel(&snake(&proto.name)));
+        let _ = writeln!(
+            accessors,
+            "    /// The ports of `{}` ({}), of component type `{}`.\n    pub fn {}(&mut self) -> {ty}<'_> {{\n        {ty} {{ rte: self }}\n    }}\n",
+            proto.name,
+            proto.path,
+            c.name,
+            snake(&proto.name)
+        );
+        let _ = writeln!(
+            s,
+            "/// The ports of `{}` ({}), of component type `{}` ({}): what its runnables may \
+             read and write, typed by the interfaces' data.\npub struct {ty}<'a> {{\n    rte: &'a mut Rte,\n}}\n\nimpl {ty}<'_> {{",
+            proto.name, proto.path, c.name, c.path
+        );
+        for port in &c.ports {
+            let i = find(&sw.interfaces, &port.interface, |i| &i.name).ok_or_else(|| {
+                Error::new(
+                    format!("interface {} does not exist", port.interface),
+                    &[&port.path],
+                )
+            })?;
+            let data = find(&sw.types, &i.data_type, |t| &t.name)
+                .map(|t| t.rust.clone())
+                .ok_or_else(|| {
+                    Error::new(
+                        format!("data type {} does not exist", i.data_type),
+                        &[&i.path],
+                    )
+                })?;
+            let connection = |b: &Buffer| {
+                b.carries.iter().any(|(what, _)| {
+                    let (from, to) = what.split_once(" -> ").unwrap_or((what, ""));
+                    if port.provided {
+                        from == format!("{}.{}", proto.name, port.name)
+                    } else {
+                        to == format!("{}.{}", proto.name, port.name)
+                    }
+                })
+            };
+            let used: Vec<&Buffer> = bufs.iter().filter(|b| connection(b)).collect();
+            let port_name = snake(&port.name);
+            let doc = format!(
+                "    /// `{}` ({}, {}): ",
+                port.name,
+                if port.provided {
+                    "provided"
+                } else {
+                    "required"
+                },
+                port.path
+            );
+            match (port.provided, i.queued) {
+                (true, false) => {
+                    let fields: Vec<&str> = used.iter().map(|b| b.field.as_str()).collect();
+                    let _ = writeln!(
+                        s,
+                        "{doc}writes `{}`; whether a data-received event's buffer noted it (its task is then to be activated).\n    pub fn write_{port_name}(&mut self, value: {data}) -> DataReceived {{",
+                        fields.join("`, `")
+                    );
+                    // A buffer no data-received event reads notes nothing: its answer is
+                    // not asked for.
+                    let mut noted = Vec::new();
+                    for b in &used {
+                        if b.notify {
+                            noted.push(format!("self.rte.{}.write(value).0", b.field));
+                        } else {
+                            let _ =
+                                writeln!(s, "        let _ = self.rte.{}.write(value);", b.field);
+                        }
+                    }
+                    if noted.is_empty() {
+                        noted.push("false".to_string());
+                    }
+                    let _ = writeln!(s, "        DataReceived({})\n    }}\n", noted.join(" | "));
+                }
+                (true, true) => {
+                    let fields: Vec<&str> = used.iter().map(|b| b.field.as_str()).collect();
+                    let _ = writeln!(
+                        s,
+                        "{doc}sends into `{}`; refused when a queue is full (a queue after it \
+                         then does not get the value).\n    pub fn send_{port_name}(&mut self, value: {data}) -> Result<DataReceived, RteError> {{",
+                        fields.join("`, `")
+                    );
+                    match fields.split_last() {
+                        Some((last, before)) => {
+                            for f in before {
+                                let _ = writeln!(s, "        self.rte.{f}.send(value)?;");
+                            }
+                            let _ = writeln!(s, "        self.rte.{last}.send(value)\n    }}\n");
+                        }
+                        None => {
+                            let _ = writeln!(
+                                s,
+                                "        let _ = value;\n        Ok(DataReceived(false))\n    }}\n"
+                            );
+                        }
+                    }
+                }
+                (false, queued) => {
+                    let [b] = used.as_slice() else {
+                        continue;
+                    };
+                    if queued {
+                        let _ = writeln!(
+                            s,
+                            "{doc}the oldest value in `{}`, or `RteError::NoData`.\n    pub fn receive_{port_name}(&mut self) -> Result<{data}, RteError> {{\n        self.rte.{}.receive()\n    }}\n",
+                            b.field, b.field
+                        );
+                    } else if b.notify {
+                        let _ = writeln!(
+                            s,
+                            "{doc}the value in `{}` if it is new since the last take (its data-received event), else `RteError::NoData`.\n    pub fn take_{port_name}(&mut self) -> Result<{data}, RteError> {{\n        self.rte.{}.take()\n    }}\n",
+                            b.field, b.field
+                        );
+                    } else {
+                        let _ = writeln!(
+                            s,
+                            "{doc}the newest value in `{}`.\n    pub fn read_{port_name}(&self) -> {data} {{\n        self.rte.{}.read()\n    }}\n",
+                            b.field, b.field
+                        );
+                    }
+                }
+            }
+        }
+        let _ = writeln!(s, "}}\n");
+    }
+    let _ = writeln!(
+        s,
+        "/// Each prototype's ports (a context borrows the connections for as long as it is used).\nimpl Rte {{\n{accessors}}}\n"
+    );
+    Ok(())
 }

@@ -61,6 +61,24 @@ fn the_components_read_check_and_generate_the_rte_the_ecu_uses() {
         "/// UltraSonic.SonarData -> CanTranslate.SonarRecv ({PKG}/CollisionWarning/UltraSonic_SonarData_CanTranslate_SonarRecv)"
     )));
     assert!(out.rust.contains("type Data = cw_core::ecum::BswMRequest;"));
+    // Each prototype's context has its ports, in their directions, and no other.
+    for method in [
+        "impl UltraSonicPorts<'_> {\n    /// `SonarData` (provided",
+        "pub fn write_sonar_data(&mut self, value: cw_core::warning::Measurement) -> DataReceived {\n        let _ = self.rte.ultra_sonic_sonar_data.write(value);\n        DataReceived(self.rte.can_translate_sonar_recv.write(value).0)",
+        "pub fn take_sonar_recv(&mut self) -> Result<cw_core::warning::Measurement, RteError>",
+        "pub fn send_mode_request(&mut self, value: cw_core::ecum::BswMRequest) -> Result<DataReceived, RteError>",
+        "pub fn receive_mode_request(&mut self) -> Result<cw_core::ecum::BswMRequest, RteError>",
+        "pub fn red_led(&mut self) -> RedLedPorts<'_>",
+    ] {
+        assert!(out.rust.contains(method), "{method}");
+    }
+    let red = out
+        .rust
+        .find("impl RedLedPorts<'_> {")
+        .expect("RedLED's ports");
+    let red = &out.rust[red..red + out.rust[red..].find("\n}\n").expect("their end")];
+    assert_eq!(red.matches("pub fn ").count(), 1, "{red}");
+    assert!(red.contains("pub fn read_led_request(&self) -> cw_core::warning::WarningLevel"));
 }
 
 #[test]
