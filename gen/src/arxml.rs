@@ -221,12 +221,11 @@ fn read_container(e: &Element, module_def: &str, out: &mut Vec<Error>) -> Option
     })
 }
 
-/// Every module's values in an ARXML file, as generic trees.
+/// An ARXML file's bytes loaded, strictly (valid against the schema), into a new model.
 ///
 /// # Errors
-/// The file does not parse as AUTOSAR 4 ARXML (with its line), or a container has no
-/// definition below its module's, or a reference points to nothing.
-pub fn modules(bytes: &[u8], file_name: &str) -> Result<Vec<Module>, Vec<Error>> {
+/// The file does not parse: the library's message (with its line), naming the file.
+pub fn load(bytes: &[u8], file_name: &str) -> Result<AutosarModel, Vec<Error>> {
     let model = AutosarModel::new();
     // `autosar-data` 0.23.0 panics on some malformed input (`<?>`: a slice out of range in
     // its lexer, found by this crate's bolero harness): its panic is this file's error.
@@ -234,15 +233,22 @@ pub fn modules(bytes: &[u8], file_name: &str) -> Result<Vec<Module>, Vec<Error>>
         model.load_buffer(bytes, file_name, true)
     }));
     match loaded {
-        Ok(Ok(_)) => {}
-        Ok(Err(e)) => return Err(vec![Error::new(e.to_string(), &[file_name])]),
-        Err(_) => {
-            return Err(vec![Error::new(
-                "the ARXML library failed on this file (it is not well-formed XML)",
-                &[file_name],
-            )])
-        }
+        Ok(Ok(_)) => Ok(model),
+        Ok(Err(e)) => Err(vec![Error::new(e.to_string(), &[file_name])]),
+        Err(_) => Err(vec![Error::new(
+            "the ARXML library failed on this file (it is not well-formed XML)",
+            &[file_name],
+        )]),
     }
+}
+
+/// Every module's values in an ARXML file, as generic trees.
+///
+/// # Errors
+/// The file does not parse as AUTOSAR 4 ARXML (with its line), or a container has no
+/// definition below its module's, or a reference points to nothing.
+pub fn modules(bytes: &[u8], file_name: &str) -> Result<Vec<Module>, Vec<Error>> {
+    let model = load(bytes, file_name)?;
     let mut out = Vec::new();
     let mut modules = Vec::new();
     for (_, e) in model.elements_dfs() {

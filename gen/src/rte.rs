@@ -14,7 +14,7 @@
 use std::collections::HashMap;
 use std::fmt::Write as _;
 
-use autosar_data::{AttributeName, AutosarModel, Element, ElementName};
+use autosar_data::{AttributeName, Element, ElementName};
 
 use crate::validate::Error;
 
@@ -681,21 +681,7 @@ fn read_rte(module: &Element, mappings: &mut Vec<Mapping>, out: &mut Vec<Error>)
 /// # Errors
 /// The file does not parse, or an element cannot be mapped: each error with its path.
 pub fn read(bytes: &[u8], file_name: &str) -> Result<Software, Vec<Error>> {
-    let model = AutosarModel::new();
-    // As for the ECUC values: `autosar-data` 0.23.0 panics on some malformed input.
-    let loaded = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-        model.load_buffer(bytes, file_name, true)
-    }));
-    match loaded {
-        Ok(Ok(_)) => {}
-        Ok(Err(e)) => return Err(vec![Error::new(e.to_string(), &[file_name])]),
-        Err(_) => {
-            return Err(vec![Error::new(
-                "the ARXML library failed on this file (it is not well-formed XML)",
-                &[file_name],
-            )])
-        }
-    }
+    let model = crate::arxml::load(bytes, file_name)?;
     let mut out = Vec::new();
     let mut sw = Software::default();
     let mut compositions = Vec::new();

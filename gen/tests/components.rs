@@ -5,9 +5,19 @@
 use cw_gen::rte;
 use cw_gen::spec::{self, COMPONENTS, ECU};
 
+/// The RTE generated from `text` and the ECU's committed description.
+fn rte_of(text: &str) -> Result<cw_gen::Generated, cw_gen::Refused> {
+    cw_gen::generate_rte(text.as_bytes(), "swc.arxml", ECU.as_bytes(), "ecu.arxml")
+}
+
+/// What `text` generates; it must.
+fn generated(text: &str) -> cw_gen::Generated {
+    rte_of(text).expect("it generates")
+}
+
 /// Every error of generating the RTE from `text`, as the user sees them.
 fn refused(text: &str) -> Vec<String> {
-    match cw_gen::generate_rte(text.as_bytes(), "swc.arxml", ECU.as_bytes(), "ecu.arxml") {
+    match rte_of(text) {
         Ok(_) => Vec::new(),
         Err(e) => e.0.iter().map(ToString::to_string).collect(),
     }
@@ -47,13 +57,7 @@ fn the_components_read_check_and_generate_the_rte_the_ecu_uses() {
             ("bswm_mode_request".to_string(), Some(4), false, 1),
         ]
     );
-    let out = cw_gen::generate_rte(
-        COMPONENTS.as_bytes(),
-        "swc.arxml",
-        ECU.as_bytes(),
-        "ecu.arxml",
-    )
-    .expect("it generates");
+    let out = generated(COMPONENTS);
     assert!(out.rust.contains(
         "ultra_sonic_sonar_data: LastIsBest::new(cw_core::warning::Measurement::Invalid, false)"
     ));
@@ -267,13 +271,7 @@ const OS: &str = "/CollisionWarning/EcucValues/Os";
 
 #[test]
 fn the_runnables_tasks_are_generated_from_the_rte_mapping() {
-    let out = cw_gen::generate_rte(
-        COMPONENTS.as_bytes(),
-        "swc.arxml",
-        ECU.as_bytes(),
-        "ecu.arxml",
-    )
-    .expect("it generates");
+    let out = generated(COMPONENTS);
     assert!(out.rust.contains("/// | `OsLEDTask` | RedLED.LEDActuatorRunnable (every 10 ms), YellowLED.LEDActuatorRunnable (every 10 ms) |"));
     assert!(out
         .rust
