@@ -29,19 +29,21 @@ impl SenderReceiverInterface for ModeRequestInterface {
 }
 
 /// All connections of `CollisionWarning` (/CollisionWarning/SwComponentTypes/CollisionWarning): The collision-warning system (paper Figure 4): the components and their connections.
+///
+/// Its buffers are private: each prototype reaches them through its ports (`Rte::ultra_sonic()`, ...), typed by their direction and data.
 pub struct Rte {
     /// UltraSonic.SonarData -> ObstacleDetection.SonarData (/CollisionWarning/SwComponentTypes/CollisionWarning/UltraSonic_SonarData_ObstacleDetection_SonarData)
-    pub ultra_sonic_sonar_data: LastIsBest<SonarDataInterface>,
+    ultra_sonic_sonar_data: LastIsBest<SonarDataInterface>,
     /// UltraSonic.SonarData -> CanTranslate.SonarRecv (/CollisionWarning/SwComponentTypes/CollisionWarning/UltraSonic_SonarData_CanTranslate_SonarRecv)
     ///
     /// A data-received event reads it: a write notes new data.
-    pub can_translate_sonar_recv: LastIsBest<SonarDataInterface>,
+    can_translate_sonar_recv: LastIsBest<SonarDataInterface>,
     /// ObstacleDetection.LedRequest -> RedLED.LedRequest (/CollisionWarning/SwComponentTypes/CollisionWarning/ObstacleDetection_LedRequest_RedLED_LedRequest)
     /// ObstacleDetection.LedRequest -> YellowLED.LedRequest (/CollisionWarning/SwComponentTypes/CollisionWarning/ObstacleDetection_LedRequest_YellowLED_LedRequest)
     /// ObstacleDetection.LedRequest -> CanTranslate.LedRequest (/CollisionWarning/SwComponentTypes/CollisionWarning/ObstacleDetection_LedRequest_CanTranslate_LedRequest)
-    pub obstacle_detection_led_request: LastIsBest<LedRequestInterface>,
+    obstacle_detection_led_request: LastIsBest<LedRequestInterface>,
     /// ModeManager.ModeRequest -> BswM.ModeRequest (/CollisionWarning/SwComponentTypes/CollisionWarning/ModeManager_ModeRequest_BswM_ModeRequest)
-    pub bswm_mode_request: Queued<ModeRequestInterface, 4>,
+    bswm_mode_request: Queued<ModeRequestInterface, 4>,
 }
 
 impl Rte {
@@ -215,7 +217,7 @@ pub mod tasks {
     use crate::generated::os;
     use cw_core::os::TaskId;
 
-    /// `CanTranslate.SonarRecv`'s data-received event runs in `OsComTask` (/CollisionWarning/EcucValues/Os/OsComTask): a write into [`super::Rte::can_translate_sonar_recv`] activates it.
+    /// `CanTranslate.SonarRecv`'s data-received event runs in `OsComTask` (/CollisionWarning/EcucValues/Os/OsComTask): a write into the buffer `can_translate_sonar_recv` activates it.
     pub const CAN_TRANSLATE_SONAR_RECV: TaskId = os::OS_COM_TASK;
 
     /// Each task a write activates, and the task whose runnable writes (activated, writer): UltraSonic's runnable in `OsSonarTask`.

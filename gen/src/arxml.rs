@@ -309,7 +309,7 @@ pub fn parse_int(text: &str) -> Option<u64> {
 /// A time in seconds (ECUC's unit for times, an `xsd:double` literal: `0.01`, `1.5E-2`) as
 /// whole milliseconds, up to `u32::MAX`; read exactly from its decimal digits, so a time
 /// that is not a whole number of milliseconds (`0.0205`) is `None` at any size.
-pub fn parse_ms(text: &str) -> Option<u64> {
+pub fn parse_exact_ms(text: &str) -> Option<u64> {
     let text = text.trim();
     let text = text.strip_prefix('+').unwrap_or(text);
     let (mantissa, exponent) = match text.find(['e', 'E']) {
@@ -346,6 +346,17 @@ pub fn parse_ms(text: &str) -> Option<u64> {
         ms = ms.checked_mul(10)?;
     }
     (ms <= u64::from(u32::MAX)).then_some(ms)
+}
+
+/// [`parse_exact_ms`], or a double that a tool printed with all its 17 digits
+/// (`0.10000000000000001` for 0.1 s) within a nanosecond of a whole millisecond.
+pub fn parse_ms(text: &str) -> Option<u64> {
+    parse_exact_ms(text).or_else(|| {
+        let s: f64 = text.trim().parse().ok()?;
+        let ms = (s * 1000.0).round();
+        let near = (s * 1000.0 - ms).abs() <= 1e-6_f64.max(ms * 1e-15);
+        (s.is_finite() && near && (0.0..=f64::from(u32::MAX)).contains(&ms)).then_some(ms as u64)
+    })
 }
 
 impl<'a> Take<'a> {
@@ -972,6 +983,12 @@ fn map_com(
         let mut timeouts: Vec<(String, u64, String)> = Vec::new();
         for s in t.subs("ComSignal") {
             let mut s = Take::new(s);
+            if s.c.params.iter().all(|p| p.def != "ComSignalType") {
+                out.push(Error::new(
+                    format!("{} {} has no ComSignalType", s.last(), s.name()),
+                    &[&s.c.path],
+                ));
+            }
             let (signed, type_bits) = s
                 .literal(
                     "ComSignalType",

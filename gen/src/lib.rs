@@ -99,7 +99,7 @@ pub fn generate_rte(
     let rust = rte::emit(&sw, &ecu, source, &digests).map_err(|e| Refused(vec![e]))?;
     Ok(Generated {
         rust,
-        notes: Vec::new(),
+        notes: sw.notes,
     })
 }
 

@@ -41,8 +41,10 @@ pub struct Mapping {
 pub struct Software {
     /// The RTE's ECUC values: each prototype's events mapped to tasks.
     pub mappings: Vec<Mapping>,
-    /// The `Rte` module's path.
+    /// The `Rte` module's path (empty: the description has none).
     pub rte_path: Path,
+    /// One sentence per element read but not used, with its path.
+    pub notes: Vec<String>,
     /// `IMPLEMENTATION-DATA-TYPE`s.
     pub types: Vec<DataType>,
     /// `SENDER-RECEIVER-INTERFACE`s.
@@ -96,6 +98,9 @@ pub struct Port {
     pub init: Option<String>,
     /// The receiver's queue length (queued).
     pub queue_length: Option<u64>,
+    /// The com spec's kind: `Some(true)` for a queued one, `Some(false)` for a non-queued
+    /// one, `None` without a com spec.
+    pub queued_spec: Option<bool>,
 }
 
 /// What starts a runnable.
@@ -248,6 +253,32 @@ fn target(e: &Element, n: ElementName, out: &mut Vec<Error>) -> Option<Element> 
     }
 }
 
+/// Notes for `e`'s sub-elements other than `used` (and `SHORT-NAME`, `DESC`), and for
+/// those of `defaults` whose text is not the default given: read, not used.
+fn note_unused(
+    e: &Element,
+    used: &[ElementName],
+    defaults: &[(ElementName, &str)],
+    notes: &mut Vec<String>,
+) {
+    for sub in e.sub_elements() {
+        let n = sub.element_name();
+        if [ElementName::ShortName, ElementName::Desc].contains(&n) || used.contains(&n) {
+            continue;
+        }
+        let default = defaults.iter().find(|(d, _)| *d == n).map(|(_, v)| *v);
+        let value = sub.character_data().map(|c| c.to_string());
+        if default.is_some() && value.as_deref() == default {
+            continue;
+        }
+        notes.push(format!(
+            "{}: {n}{} is not used by the generated RTE",
+            path_of(e),
+            value.map(|v| format!(" `{v}`")).unwrap_or_default()
+        ));
+    }
+}
+
 /// Elements below `e`'s sub-element `list`.
 fn each(e: &Element, list: ElementName) -> Vec<Element> {
     e.get_sub_element(list)
@@ -353,7 +384,7 @@ fn read_interface(e: &Element, out: &mut Vec<Error>) -> Option<Interface> {
     })
 }
 
-fn read_port(e: &Element, out: &mut Vec<Error>) -> Option<Port> {
+fn read_port(e: &Element, out: &mut Vec<Error>, notes: &mut Vec<String>) -> Option<Port> {
     let path = path_of(e);
     let (provided, tref, specs) = match e.element_name() {
         ElementName::PPortPrototype => (
@@ -398,7 +429,33 @@ fn read_port(e: &Element, out: &mut Vec<Error>) -> Option<Port> {
     }
     let mut init = None;
     let mut queue_length = None;
+    let mut queued_spec = None;
     if let Some(spec) = specs.first() {
+        queued_spec = match spec.element_name() {
+            ElementName::QueuedSenderComSpec | ElementName::QueuedReceiverComSpec => Some(true),
+            ElementName::NonqueuedSenderComSpec | ElementName::NonqueuedReceiverComSpec => {
+                Some(false)
+            }
+            other => {
+                out.push(Error::new(
+                    format!(
+                        "{other}: sender and receiver com specs, queued or not, can be generated"
+                    ),
+                    &[&path],
+                ));
+                return None;
+            }
+        };
+        note_unused(
+            spec,
+            &[
+                ElementName::DataElementRef,
+                ElementName::InitValue,
+                ElementName::QueueLength,
+            ],
+            &[],
+            notes,
+        );
         init = spec
             .get_sub_element(ElementName::InitValue)
             .and_then(|v| v.get_sub_element(ElementName::TextValueSpecification))
@@ -430,14 +487,19 @@ fn read_port(e: &Element, out: &mut Vec<Error>) -> Option<Port> {
         interface: name(&interface),
         init,
         queue_length,
+        queued_spec,
     })
 }
 
-fn read_component(e: &Element, out: &mut Vec<Error>) -> Option<ComponentType> {
+fn read_component(
+    e: &Element,
+    out: &mut Vec<Error>,
+    notes: &mut Vec<String>,
+) -> Option<ComponentType> {
     let path = path_of(e);
     let ports: Vec<Port> = each(e, ElementName::Ports)
         .iter()
-        .filter_map(|p| read_port(p, out))
+        .filter_map(|p| read_port(p, out, notes))
         .collect();
     let mut runnables = Vec::new();
     let mut events = Vec::new();
@@ -452,17 +514,50 @@ fn read_component(e: &Element, out: &mut Vec<Error>) -> Option<ComponentType> {
         ));
     }
     for b in behaviors.iter().take(1) {
+        let behavior = path_of(b);
+        note_unused(
+            b,
+            &[ElementName::Events, ElementName::Runnables],
+            &[],
+            notes,
+        );
         for r in each(b, ElementName::Runnables) {
+            // The RTE runs each runnable from one task, never two jobs at once, with no
+            // minimum interval: those defaults need no note.
+            note_unused(
+                &r,
+                &[ElementName::Symbol],
+                &[
+                    (ElementName::MinimumStartInterval, "0"),
+                    (ElementName::CanBeInvokedConcurrently, "false"),
+                ],
+                notes,
+            );
             runnables.push((name(&r), path_of(&r)));
         }
         for ev in each(b, ElementName::Events) {
             let at = path_of(&ev);
+            note_unused(
+                &ev,
+                &[
+                    ElementName::StartOnEventRef,
+                    ElementName::Period,
+                    ElementName::DataIref,
+                ],
+                &[],
+                notes,
+            );
             let Some(runnable) = target(&ev, ElementName::StartOnEventRef, out) else {
                 continue;
             };
-            if runnable.element_name() != ElementName::RunnableEntity {
+            if runnable.element_name() != ElementName::RunnableEntity
+                || !path_of(&runnable).starts_with(&format!("{behavior}/"))
+            {
                 out.push(Error::new(
-                    "the event starts something other than a runnable",
+                    format!(
+                        "the event starts {}, which is not a runnable of its component's behaviour",
+                        path_of(&runnable)
+                    ),
                     &[&at],
                 ));
                 continue;
@@ -492,6 +587,18 @@ fn read_component(e: &Element, out: &mut Vec<Error>) -> Option<ComponentType> {
                     let Some(port) = target(&iref, ElementName::ContextRPortRef, out) else {
                         continue;
                     };
+                    if port.element_name() != ElementName::RPortPrototype
+                        || !path_of(&port).starts_with(&format!("{path}/"))
+                    {
+                        out.push(Error::new(
+                            format!(
+                                "the data-received event is on {}, which is not a required port of its component",
+                                path_of(&port)
+                            ),
+                            &[&at],
+                        ));
+                        continue;
+                    }
                     EventKind::DataReceived { port: name(&port) }
                 }
                 other => {
@@ -522,6 +629,16 @@ fn read_component(e: &Element, out: &mut Vec<Error>) -> Option<ComponentType> {
 
 fn read_end(e: &Element, port_ref: ElementName, out: &mut Vec<Error>) -> Option<End> {
     let prototype = target(e, ElementName::ContextComponentRef, out)?;
+    if prototype.element_name() != ElementName::SwComponentPrototype {
+        out.push(Error::new(
+            format!(
+                "CONTEXT-COMPONENT-REF points to a {}: a component prototype of the composition",
+                prototype.element_name()
+            ),
+            &[&path_of(e)],
+        ));
+        return None;
+    }
     let port = target(e, port_ref, out)?;
     Some(End {
         prototype: name(&prototype),
@@ -534,6 +651,21 @@ fn read_composition(e: &Element, out: &mut Vec<Error>) -> Composition {
     let mut prototypes = Vec::new();
     for p in each(e, ElementName::Components) {
         if let Some(t) = target(&p, ElementName::TypeTref, out) {
+            if ![
+                ElementName::ApplicationSwComponentType,
+                ElementName::ServiceSwComponentType,
+            ]
+            .contains(&t.element_name())
+            {
+                out.push(Error::new(
+                    format!(
+                        "prototype of a {}: application and service component types can be generated",
+                        t.element_name()
+                    ),
+                    &[&path_of(&p)],
+                ));
+                continue;
+            }
             prototypes.push(Prototype {
                 path: path_of(&p),
                 name: name(&p),
@@ -602,9 +734,25 @@ fn read_rte(module: &Element, mappings: &mut Vec<Mapping>, out: &mut Vec<Error>)
         let mut prototype = None;
         for r in each(&instance, ElementName::ReferenceValues) {
             match def_of(&r).as_str() {
-                "RteSoftwareComponentInstanceRef" => {
-                    prototype = target(&r, ElementName::ValueRef, out).map(|p| name(&p));
-                }
+                "RteSoftwareComponentInstanceRef" => match target(&r, ElementName::ValueRef, out) {
+                    Some(p) if p.element_name() == ElementName::SwComponentPrototype => {
+                        let first = prototype.replace(name(&p));
+                        if first.is_some() {
+                            out.push(Error::new(
+                                "a second RteSoftwareComponentInstanceRef",
+                                &[&at],
+                            ));
+                        }
+                    }
+                    Some(p) => out.push(Error::new(
+                        format!(
+                            "RteSoftwareComponentInstanceRef points to a {}: a component prototype",
+                            p.element_name()
+                        ),
+                        &[&at],
+                    )),
+                    None => {}
+                },
                 other => out.push(Error::new(
                     format!("reference {other} cannot be mapped onto the RTE"),
                     &[&at],
@@ -683,6 +831,7 @@ fn read_rte(module: &Element, mappings: &mut Vec<Mapping>, out: &mut Vec<Error>)
 pub fn read(bytes: &[u8], file_name: &str) -> Result<Software, Vec<Error>> {
     let model = crate::arxml::load(bytes, file_name)?;
     let mut out = Vec::new();
+    let mut notes = Vec::new();
     let mut sw = Software::default();
     let mut compositions = Vec::new();
     for (_, e) in model.elements_dfs() {
@@ -697,7 +846,8 @@ pub fn read(bytes: &[u8], file_name: &str) -> Result<Software, Vec<Error>> {
                 sw.interfaces.extend(read_interface(&e, &mut out));
             }
             ElementName::ApplicationSwComponentType | ElementName::ServiceSwComponentType => {
-                sw.components.extend(read_component(&e, &mut out));
+                sw.components
+                    .extend(read_component(&e, &mut out, &mut notes));
             }
             ElementName::CompositionSwComponentType => {
                 compositions.push(read_composition(&e, &mut out));
@@ -721,8 +871,19 @@ pub fn read(bytes: &[u8], file_name: &str) -> Result<Software, Vec<Error>> {
             )),
         }
     }
+    sw.notes = notes;
+    if sw.rte_path.is_empty() {
+        out.push(Error::new(
+            "the description has no Rte module: no runnable is mapped to a task",
+            &[file_name],
+        ));
+    }
     match compositions.len() {
-        1 => sw.composition = compositions.remove(0),
+        1 => {
+            if let Some(c) = compositions.pop() {
+                sw.composition = c;
+            }
+        }
         0 => out.push(Error::new(
             "the description has no composition",
             &[file_name],
@@ -858,7 +1019,7 @@ fn check_mappings(sw: &Software, ecu: &crate::model::Ecu, out: &mut Vec<Error>) 
                 [_] => {}
                 [first, second, ..] => out.push(Error::new(
                     format!(
-                        "runnable {}.{} ({}) is mapped to two tasks",
+                        "runnable {}.{} ({}) is mapped twice: an event runs its runnable in one task, once",
                         proto.name, event.runnable, event.name
                     ),
                     &[&first.path, &second.path],
@@ -880,6 +1041,135 @@ fn check_mappings(sw: &Software, ecu: &crate::model::Ecu, out: &mut Vec<Error>) 
                     a.position, a.task
                 ),
                 &[&b.path, &a.path],
+            ));
+        }
+    }
+}
+
+/// Rust's keywords (strict and reserved, 2021): a generated method or field cannot be one.
+const KEYWORDS: [&str; 51] = [
+    "as", "break", "const", "continue", "crate", "else", "enum", "extern", "false", "fn", "for",
+    "if", "impl", "in", "let", "loop", "match", "mod", "move", "mut", "pub", "ref", "return",
+    "self", "static", "struct", "super", "trait", "true", "type", "unsafe", "use", "where",
+    "while", "async", "await", "dyn", "abstract", "become", "box", "do", "final", "macro",
+    "override", "priv", "typeof", "unsized", "virtual", "yield", "try", "union",
+];
+
+/// Names the generated module already uses: an interface or a context cannot take them.
+const RESERVED_TYPES: [&str; 7] = [
+    "Rte",
+    "LastIsBest",
+    "Queued",
+    "SenderReceiverInterface",
+    "DataReceived",
+    "RteError",
+    "TaskId",
+];
+
+/// Every name the generated Rust gives an item is one Rust item: two prototypes, two ports
+/// of one type, two buffers or two interfaces that would be generated as one name, or a
+/// name that is a keyword or one the module already uses, are refused with both paths.
+fn check_names(sw: &Software, out: &mut Vec<Error>) {
+    let comp = &sw.composition;
+    // Prototypes: the accessor `rte.red_led()` and the context `RedLedPorts`.
+    let mut seen: HashMap<String, &str> = HashMap::new();
+    for p in &comp.prototypes {
+        let method = snake(&p.name);
+        if KEYWORDS.contains(&method.as_str()) || ["new", "default"].contains(&method.as_str()) {
+            out.push(Error::new(
+                format!("prototype {} would be generated as `rte.{method}()`, a name Rust or the RTE already has", p.name),
+                &[&p.path],
+            ));
+        }
+        if let Some(first) = seen.insert(method.clone(), &p.path) {
+            out.push(Error::new(
+                format!("two prototypes would be generated as `rte.{method}()`"),
+                &[&p.path, first],
+            ));
+        }
+    }
+    let contexts: Vec<String> = comp
+        .prototypes
+        .iter()
+        .map(|p| format!("{}Ports", camel(&snake(&p.name))))
+        .collect();
+    for i in &sw.interfaces {
+        if RESERVED_TYPES.contains(&i.name.as_str()) || contexts.contains(&i.name) {
+            out.push(Error::new(
+                format!(
+                    "interface {} has the name of an item the generated RTE defines or uses",
+                    i.name
+                ),
+                &[&i.path],
+            ));
+        }
+    }
+    // Ports of one type: one method each.
+    for c in &sw.components {
+        let mut methods: HashMap<String, &str> = HashMap::new();
+        for port in &c.ports {
+            if let Some(first) = methods.insert(snake(&port.name), &port.path) {
+                out.push(Error::new(
+                    format!(
+                        "two ports of {} would be generated as one method (`{}`)",
+                        c.name,
+                        snake(&port.name)
+                    ),
+                    &[&port.path, first],
+                ));
+            }
+        }
+    }
+    // Buffers: one field each, and one constant for each data-received event's task.
+    let bufs = buffers(sw);
+    let mut constants: HashMap<String, &str> = HashMap::new();
+    for b in &bufs {
+        let Some((receiver, port)) = &b.receiver else {
+            continue;
+        };
+        let name = crate::rust::constant(&format!("{receiver}{port}"));
+        let path = b.carries.first().map_or("", |(_, p)| p.as_str());
+        if name == "RELEASED_BY" {
+            out.push(Error::new(
+                format!("{receiver}.{port}'s task would be generated as `RELEASED_BY`, which the RTE already has"),
+                &[path],
+            ));
+        }
+        if let Some(first) = constants.insert(name.clone(), path) {
+            out.push(Error::new(
+                format!(
+                    "two data-received events' tasks would be generated as one constant `{name}`"
+                ),
+                &[path, first],
+            ));
+        }
+    }
+    for (i, a) in bufs.iter().enumerate() {
+        if let Some(b) = bufs.iter().skip(i + 1).find(|b| b.field == a.field) {
+            let path = |x: &Buffer| {
+                x.carries
+                    .first()
+                    .map(|(_, p)| p.clone())
+                    .unwrap_or_default()
+            };
+            out.push(Error::new(
+                format!(
+                    "the buffers of {} and {} would be generated as one field `{}`",
+                    a.owner, b.owner, a.field
+                ),
+                &[&path(b), &path(a)],
+            ));
+        }
+        if KEYWORDS.contains(&a.field.as_str()) {
+            out.push(Error::new(
+                format!(
+                    "the buffer of {} would be generated as the keyword `{}`",
+                    a.owner, a.field
+                ),
+                &[&a.carries
+                    .first()
+                    .map(|(_, p)| p.clone())
+                    .unwrap_or_default()],
             ));
         }
     }
@@ -927,6 +1217,7 @@ pub fn check(sw: &Software, ecu: &crate::model::Ecu) -> Vec<Error> {
         check_component(sw, c, &mut out);
     }
     check_composition(sw, &mut out);
+    check_names(sw, &mut out);
     check_mappings(sw, ecu, &mut out);
     out
 }
@@ -936,6 +1227,19 @@ fn check_component(sw: &Software, c: &ComponentType, out: &mut Vec<Error>) {
         let Some(i) = find(&sw.interfaces, &p.interface, |i| &i.name) else {
             continue;
         };
+        if p.queued_spec.is_some_and(|q| q != i.queued) {
+            out.push(Error::new(
+                format!(
+                    "port {}.{} has a {}queued com spec for the {} data of interface {}",
+                    c.name,
+                    p.name,
+                    if i.queued { "non-" } else { "" },
+                    if i.queued { "queued" } else { "non-queued" },
+                    i.name
+                ),
+                &[&p.path, &i.path],
+            ));
+        }
         match (i.queued, p.provided) {
             (false, _) if p.init.is_none() => out.push(Error::new(
                 format!(
@@ -1174,6 +1478,10 @@ pub struct Buffer {
     pub sender: String,
     /// For a buffer a data-received event reads: the receiving prototype and its port.
     pub receiver: Option<(String, String)>,
+    /// Whose buffer it is: the sender's port (`Sender.Port`, the receivers that read the
+    /// newest value share it) or the receiver's (`Receiver.Port`, a data-received event's or
+    /// a queue).
+    pub owner: String,
 }
 
 /// The RTE's buffers, in the order of the connectors that first need them.
@@ -1206,17 +1514,20 @@ pub fn buffers(sw: &Software) -> Vec<Buffer> {
             .events
             .iter()
             .any(|e| matches!(&e.kind, EventKind::DataReceived { port } if port == &rp.name));
-        let (field, queue, init, notify) = if i.queued {
-            let field = format!("{}_{}", snake(&k.requester.prototype), snake(&rp.name));
-            (field, rp.queue_length, None, false)
+        let receiver = format!("{}.{}", k.requester.prototype, rp.name);
+        let sender = format!("{}.{}", k.provider.prototype, pp.name);
+        let (owner, queue, init, notify) = if i.queued {
+            (receiver, rp.queue_length, None, false)
         } else if event {
-            let field = format!("{}_{}", snake(&k.requester.prototype), snake(&rp.name));
-            (field, None, rp.init.clone(), true)
+            (receiver, None, rp.init.clone(), true)
         } else {
-            let field = format!("{}_{}", snake(&k.provider.prototype), snake(&pp.name));
-            (field, None, pp.init.clone(), false)
+            (sender, None, pp.init.clone(), false)
         };
-        match out.iter_mut().find(|b| b.field == field) {
+        let field = match owner.split_once('.') {
+            Some((proto, port)) => format!("{}_{}", snake(proto), snake(port)),
+            None => snake(&owner),
+        };
+        match out.iter_mut().find(|b| b.owner == owner) {
             Some(b) => b.carries.push(carries),
             None => out.push(Buffer {
                 field,
@@ -1227,6 +1538,7 @@ pub fn buffers(sw: &Software) -> Vec<Buffer> {
                 carries: vec![carries],
                 sender: k.provider.prototype.clone(),
                 receiver: notify.then(|| (k.requester.prototype.clone(), rp.name.clone())),
+                owner,
             }),
         }
     }
@@ -1281,10 +1593,7 @@ fn emit_tasks(sw: &Software, ecu: &crate::model::Ecu, s: &mut String) -> Result<
         let list: Vec<String> = runs.into_iter().map(|(_, r)| r).collect();
         let _ = writeln!(s, "/// | `{}` | {} |", task.name, list.join(", "));
     }
-    let _ = writeln!(
-        s,
-        "pub mod tasks {{\n    use crate::generated::os;\n    use cw_core::os::TaskId;\n"
-    );
+    let mut body = String::new();
     let mut released = Vec::new();
     for b in sw.buffers_with_events() {
         let Some((receiver, port)) = &b.receiver else {
@@ -1323,9 +1632,9 @@ fn emit_tasks(sw: &Software, ecu: &crate::model::Ecu, s: &mut String) -> Result<
             ));
         };
         let _ = writeln!(
-            s,
+            body,
             "    /// `{receiver}.{port}`'s data-received event runs in `{}` ({}): a write into \
-             [`super::Rte::{}`] activates it.\n    pub const {}: TaskId = os::{};\n",
+             the buffer `{}` activates it.\n    pub const {}: TaskId = os::{};\n",
             activated.name,
             activated.path,
             b.field,
@@ -1339,6 +1648,15 @@ fn emit_tasks(sw: &Software, ecu: &crate::model::Ecu, s: &mut String) -> Result<
             b.sender.clone(),
         ));
     }
+    let _ = writeln!(
+        s,
+        "pub mod tasks {{\n{}    use cw_core::os::TaskId;\n\n{body}",
+        if released.is_empty() {
+            ""
+        } else {
+            "    use crate::generated::os;\n"
+        }
+    );
     let _ = writeln!(
         s,
         "    /// Each task a write activates, and the task whose runnable writes (activated, \
@@ -1386,12 +1704,33 @@ pub fn emit(
          exactly these ports, so a missing or mistyped connection does not compile. Each item \
          names the ARXML path it came from; the tasks are the OS's of the ECU's description.\n//!\n//! Description digest: {digest}\n"
     );
-    let queued = sw.interfaces.iter().any(|i| i.queued);
-    let _ = writeln!(
-        s,
-        "use cw_core::rte::{{DataReceived, LastIsBest, {}RteError, SenderReceiverInterface}};\n",
-        if queued { "Queued, " } else { "" }
-    );
+    // What the generated items use, and nothing else (an unused import is a warning).
+    let bufs = buffers(sw);
+    let ports = || {
+        sw.composition
+            .prototypes
+            .iter()
+            .filter_map(|p| find(&sw.components, &p.component, |c| &c.name))
+            .flat_map(|c| c.ports.iter())
+    };
+    let queued_or_taken = ports()
+        .any(|p| find(&sw.interfaces, &p.interface, |i| &i.name).is_some_and(|i| i.queued))
+        || bufs.iter().any(|b| b.notify);
+    let mut uses = vec!["SenderReceiverInterface"];
+    if ports().any(|p| p.provided) {
+        uses.push("DataReceived");
+    }
+    if bufs.iter().any(|b| b.queue.is_none()) {
+        uses.push("LastIsBest");
+    }
+    if bufs.iter().any(|b| b.queue.is_some()) {
+        uses.push("Queued");
+    }
+    if queued_or_taken {
+        uses.push("RteError");
+    }
+    uses.sort_unstable();
+    let _ = writeln!(s, "use cw_core::rte::{{{}}};\n", uses.join(", "));
     for i in &sw.interfaces {
         let t = find(&sw.types, &i.data_type, |t| &t.name).ok_or_else(|| {
             Error::new(
@@ -1405,10 +1744,11 @@ pub fn emit(
             i.name, i.path, i.doc, i.element, t.name, t.path, i.name, i.name, t.rust, i.name
         );
     }
-    let bufs = buffers(sw);
     let _ = writeln!(
         s,
-        "/// All connections of `{}` ({}): {}\npub struct Rte {{",
+        "/// All connections of `{}` ({}): {}\n///\n/// Its buffers are private: each prototype \
+         reaches them through its ports (`Rte::ultra_sonic()`, ...), typed by their direction \
+         and data.\npub struct Rte {{",
         sw.composition.name, sw.composition.path, sw.composition.doc
     );
     for b in &bufs {
@@ -1425,7 +1765,7 @@ pub fn emit(
             Some(n) => format!("Queued<{}, {n}>", b.interface),
             None => format!("LastIsBest<{}>", b.interface),
         };
-        let _ = writeln!(s, "    pub {}: {ty},", b.field);
+        let _ = writeln!(s, "    {}: {ty},", b.field);
     }
     let _ = writeln!(
         s,
@@ -1562,6 +1902,9 @@ fn emit_ports(sw: &Software, s: &mut String) -> Result<(), Error> {
                             let _ =
                                 writeln!(s, "        let _ = self.rte.{}.write(value);", b.field);
                         }
+                    }
+                    if used.is_empty() {
+                        let _ = writeln!(s, "        let _ = value;");
                     }
                     if noted.is_empty() {
                         noted.push("false".to_string());

@@ -282,7 +282,7 @@ fn the_runnables_tasks_are_generated_from_the_rte_mapping() {
 }
 
 #[test]
-fn a_runnable_mapped_to_no_task_or_two_is_refused() {
+fn a_runnable_mapped_to_no_task_or_twice_is_refused() {
     // ObstacleDetection's mapping removed.
     let (start, end) = mapping_of("ObstacleDetection");
     let text = format!("{}{}", &COMPONENTS[..start], &COMPONENTS[end..]);
@@ -298,7 +298,7 @@ fn a_runnable_mapped_to_no_task_or_two_is_refused() {
     let text = format!("{}{twice}{}", &COMPONENTS[..end], &COMPONENTS[end..]);
     assert_eq!(
         refused(&text),
-        [format!("runnable RedLED.LEDActuatorRunnable (Every10ms) is mapped to two tasks\n  at {RTE}/RedLEDInstance/Every10msMapping\n  and {RTE}/RedLEDInstance/AgainMapping")]
+        [format!("runnable RedLED.LEDActuatorRunnable (Every10ms) is mapped twice: an event runs its runnable in one task, once\n  at {RTE}/RedLEDInstance/Every10msMapping\n  and {RTE}/RedLEDInstance/AgainMapping")]
     );
 }
 
@@ -343,5 +343,71 @@ fn a_runnable_in_a_task_of_another_period_or_kind_is_refused() {
     assert_eq!(
         errors,
         [format!("two runnables at position 0 of task {OS}/OsLEDTask\n  at {RTE}/YellowLEDInstance/Every10msMapping\n  and {RTE}/RedLEDInstance/Every10msMapping")]
+    );
+}
+
+#[test]
+fn names_generated_as_one_rust_item_are_refused() {
+    // A prototype `Red_LED` beside `RedLED`: both `rte.red_led()`.
+    let text = edited(
+        "<SW-COMPONENT-PROTOTYPE>\n                  <SHORT-NAME>YellowLED</SHORT-NAME>",
+        "<SW-COMPONENT-PROTOTYPE>\n                  <SHORT-NAME>Red_LED</SHORT-NAME>\n                  <TYPE-TREF DEST=\"APPLICATION-SW-COMPONENT-TYPE\">/CollisionWarning/SwComponentTypes/LEDActuator</TYPE-TREF>\n                </SW-COMPONENT-PROTOTYPE>\n                <SW-COMPONENT-PROTOTYPE>\n                  <SHORT-NAME>YellowLED</SHORT-NAME>",
+    );
+    let errors = refused(&text);
+    assert!(
+        errors.contains(&format!("two prototypes would be generated as `rte.red_led()`\n  at {PKG}/CollisionWarning/Red_LED\n  and {PKG}/CollisionWarning/RedLED")),
+        "{errors:#?}"
+    );
+    // An interface named as the RTE itself.
+    let text = COMPONENTS.replace("SonarDataInterface", "Rte");
+    let errors = refused(&text);
+    assert!(
+        errors.contains(&"interface Rte has the name of an item the generated RTE defines or uses\n  at /CollisionWarning/PortInterfaces/Rte".to_string()),
+        "{errors:#?}"
+    );
+}
+
+#[test]
+fn references_of_the_wrong_kind_or_place_and_specs_of_the_wrong_kind_are_refused() {
+    // The LED's event starting ObstacleDetection's runnable.
+    let text = edited(
+        &format!("<START-ON-EVENT-REF DEST=\"RUNNABLE-ENTITY\">{PKG}/LEDActuator/LEDActuatorBehavior/LEDActuatorRunnable</START-ON-EVENT-REF>"),
+        &format!("<START-ON-EVENT-REF DEST=\"RUNNABLE-ENTITY\">{PKG}/ObstacleDetection/ObstacleDetectionBehavior/ObstacleDetectionRunnable</START-ON-EVENT-REF>"),
+    );
+    assert!(refused(&text).contains(&format!(
+        "the event starts {PKG}/ObstacleDetection/ObstacleDetectionBehavior/ObstacleDetectionRunnable, which is not a runnable of its component's behaviour\n  at {PKG}/LEDActuator/LEDActuatorBehavior/Every10ms"
+    )));
+    // ModeManager's queued data sent with a non-queued com spec.
+    let text = edited(
+        "<QUEUED-SENDER-COM-SPEC>\n                      <DATA-ELEMENT-REF DEST=\"VARIABLE-DATA-PROTOTYPE\">/CollisionWarning/PortInterfaces/ModeRequestInterface/Request</DATA-ELEMENT-REF>\n                    </QUEUED-SENDER-COM-SPEC>",
+        "<NONQUEUED-SENDER-COM-SPEC>\n                      <DATA-ELEMENT-REF DEST=\"VARIABLE-DATA-PROTOTYPE\">/CollisionWarning/PortInterfaces/ModeRequestInterface/Request</DATA-ELEMENT-REF>\n                    </NONQUEUED-SENDER-COM-SPEC>",
+    );
+    assert_eq!(
+        refused(&text),
+        [format!("port ModeManager.ModeRequest has a non-queued com spec for the queued data of interface ModeRequestInterface\n  at {PKG}/ModeManager/ModeRequest\n  and /CollisionWarning/PortInterfaces/ModeRequestInterface")]
+    );
+    // No Rte module at all.
+    let start = COMPONENTS
+        .find("<AR-PACKAGE>\n          <SHORT-NAME>EcucValues</SHORT-NAME>")
+        .expect("the Rte's package");
+    let end =
+        start + COMPONENTS[start..].find("</AR-PACKAGE>").expect("its end") + "</AR-PACKAGE>".len();
+    let text = format!("{}{}", &COMPONENTS[..start], &COMPONENTS[end..]);
+    assert_eq!(
+        refused(&text),
+        ["the description has no Rte module: no runnable is mapped to a task\n  at swc.arxml"]
+    );
+}
+
+#[test]
+fn what_the_rte_reads_but_does_not_use_is_a_note() {
+    assert_eq!(generated(COMPONENTS).notes, Vec::<String>::new());
+    let text = edited(
+        "<SHORT-NAME>LEDActuatorRunnable</SHORT-NAME>\n                      <MINIMUM-START-INTERVAL>0</MINIMUM-START-INTERVAL>",
+        "<SHORT-NAME>LEDActuatorRunnable</SHORT-NAME>\n                      <MINIMUM-START-INTERVAL>0.005</MINIMUM-START-INTERVAL>",
+    );
+    assert_eq!(
+        generated(&text).notes,
+        [format!("{PKG}/LEDActuator/LEDActuatorBehavior/LEDActuatorRunnable: MINIMUM-START-INTERVAL `0.005` is not used by the generated RTE")]
     );
 }

@@ -321,6 +321,15 @@ fn times_are_read_exactly_as_whole_milliseconds() {
         ("NaN", None),
         ("1e", None),
         ("123456789012345678901234567890", None),
+        // A double printed with its 17 digits, zeros in odd places, -0.
+        ("0.10000000000000001", Some(100)),
+        ("0.020000000000000004", Some(20)),
+        ("0e2147483647", Some(0)),
+        ("1.", Some(1000)),
+        (".5", Some(500)),
+        ("007", Some(7000)),
+        ("-0", Some(0)),
+        ("0.0205000000000001", None),
     ] {
         assert_eq!(arxml::parse_ms(text), ms, "{text}");
     }

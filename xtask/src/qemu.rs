@@ -736,9 +736,25 @@ const TIMING_VERDICTS: [&str; 2] = [
     "watchdog: not triggered since",
 ];
 
+/// A failed live run's error ended on one of the image's [`TIMING_VERDICTS`], in the
+/// image's own log, with no kernel error the image counted (an `E_OS_LIMIT` there is a
+/// fault of the image's: a task still running when its alarm came).
+fn emulator_timing(error: &str) -> bool {
+    let Some((_, log)) = error.split_once("the image's output:") else {
+        return false;
+    };
+    let kernel_errors = log
+        .lines()
+        .filter_map(|l| l.split_once(": kernel errors "))
+        .filter_map(|(_, rest)| rest.split(',').next()?.trim().parse::<u32>().ok())
+        .any(|n| n > 0);
+    TIMING_VERDICTS.iter().any(|v| log.contains(v)) && !kernel_errors
+}
+
 /// [`live_session_once`], run once more where the first run ended on one of the image's
-/// [`TIMING_VERDICTS`] (printed whole, with the image's log): a host stall is not the
-/// image's fault, but the same verdict twice is. Every other failure fails at once.
+/// [`TIMING_VERDICTS`] with no kernel error ([`emulator_timing`]; printed whole, with the
+/// image's log): a host stall is not the image's fault, but the same verdict twice is.
+/// Every other failure fails at once.
 fn live_session(
     image: &Path,
     machine: Vec<String>,
@@ -747,7 +763,7 @@ fn live_session(
 ) -> Result<LiveSession> {
     let first = live_session_once(image, machine.clone(), leds, runs_forever);
     match first {
-        Err(e) if TIMING_VERDICTS.iter().any(|v| e.contains(v)) => {
+        Err(e) if emulator_timing(&e) => {
             println!(
                 "qemu: the live run ended on the image's timing verdict (a stalled host makes \
                  QEMU's real-time clock jump: docs/src/limits.md); its failure:\n{e}\n\
@@ -931,4 +947,33 @@ fn compare(image: &Path) -> Result {
         ])
         .env("CW_QEMU_IMAGE", image)
         .run()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::emulator_timing;
+
+    #[test]
+    fn only_the_images_timing_verdict_without_a_kernel_error_is_run_again() {
+        let failure = |log: &str| format!("live.py failed\nthe image's output:\n{log}");
+        let wdgm = "cw-mps2: WdgM: the alive supervision of OsSonarTask failed at 900 ms (0 of 1 alive indications): LEDs dark, the watchdog no longer triggered";
+        assert!(emulator_timing(&failure(&format!(
+            "{wdgm}\ncw-mps2: kernel errors 0, ISR entries refused 0; the last error: service 255, status 0"
+        ))));
+        assert!(emulator_timing(&failure(
+            "watchdog: not triggered since 800 ms; expired at 807 ms (NMI), its reset follows"
+        )));
+        // The image's own fault: an activation refused.
+        assert!(!emulator_timing(&failure(&format!(
+            "{wdgm}\ncw-mps2: kernel errors 3, ISR entries refused 0; the last error: service 0, status 4"
+        ))));
+        // A verdict in the test's output, not in the image's log, or no verdict at all.
+        assert!(!emulator_timing(&format!(
+            "{wdgm}\nthe image's output:\ncw-mps2: started"
+        )));
+        assert!(!emulator_timing(&failure(
+            "live: Distance 5 mm was never sent"
+        )));
+        assert!(!emulator_timing(wdgm));
+    }
 }
