@@ -38,10 +38,11 @@ use crate::board::{
 };
 use crate::config::{self, Kernel};
 use crate::iohwab;
-use crate::rte::Rte;
-use crate::swc::{
-    can_translate, LedActuator, LedColor, ModeManager, ObstacleDetection, UltraSonic,
+use crate::rte::{
+    tasks, BswmPorts, LedActuatorPorts, LedActuatorRunnables, ModeManagerPorts,
+    ModeManagerRunnables, Released, Rte, UltraSonicPorts, UltraSonicRunnables,
 };
+use crate::swc::{CanTranslate, LedActuator, LedColor, ModeManager, ObstacleDetection, UltraSonic};
 use core::sync::atomic::{AtomicBool, AtomicU32, Ordering};
 use cw_core::wdgm::{Failure, Status, WdgDriver, WdgM};
 
@@ -121,9 +122,9 @@ pub mod span {
         ),
         (FLEXCAN_RX, "FlexCAN driver: a receive flag to its frame"),
     ];
-    /// `GetResource` and `ReleaseResource` of `RES_RTE` in `OsLEDTask`, with the read of
-    /// the LED request between them (a few loads): the lock pair as the application
-    /// takes it (`Resource::lock`).
+    /// `GetResource` and `ReleaseResource` of `RES_RTE` in `OsLEDTask`, with the generated
+    /// task body between them (both LED runnables: a load of the LED request and a compare
+    /// each): the lock pair as the application takes it (`Resource::lock`).
     pub const LOCK_PAIR: usize = 11;
     /// The calibration's second span, inside or across [`CALIBRATION`] (the cost of a
     /// span's marks as a span around them sees it).
@@ -134,7 +135,7 @@ pub mod span {
     /// The spans named apart from [`NAMES`] (numbered after the board's).
     pub const MORE_NAMES: [(usize, &str); 1] = [(
         LOCK_PAIR,
-        "a lock pair (RES_RTE in OsLEDTask, the read inside)",
+        "a lock pair (RES_RTE in OsLEDTask, both LED runnables inside)",
     )];
     /// The spans that are ISRs (bit per span): the trace takes their time off the spans
     /// and jobs they interrupt.
@@ -313,11 +314,9 @@ impl FrameCounts {
     }
 }
 
-/// The LED pins and the LEDActuator prototypes that drive them (`RES_LEDS`).
+/// The LED pins (`RES_LEDS`).
 pub struct LedOutputs<B: Board> {
     pins: Leds<B>,
-    red: LedActuator,
-    yellow: LedActuator,
     pin_faults: u32,
 }
 
@@ -333,7 +332,34 @@ impl<B: Board> LedOutputs<B> {
 struct SonarPart<B: Board> {
     io: B::Sensor,
     swc: UltraSonic,
+    /// The sensor's sample of this job, taken before the RTE is locked (a long read).
+    sample: Measurement,
     last: Measurement,
+}
+
+/// UltraSonic as its task runs it: the job's sample to the measurement published.
+impl<B: Board> UltraSonicRunnables for SonarPart<B> {
+    fn ultra_sonic_runnable(&mut self, ports: &mut impl UltraSonicPorts) {
+        self.last = self.swc.run(self.sample);
+        ports.write_sonar_data(self.last);
+    }
+}
+
+/// One LEDActuator prototype in one `OsLEDTask` job: its level to whether its LED is lit
+/// now (dark in the safe state), for the job to write to the pin after the RTE.
+struct LedJob {
+    swc: LedActuator,
+    now_ms: u64,
+    safe: bool,
+    lit: bool,
+}
+
+impl LedActuatorRunnables for LedJob {
+    fn led_actuator_runnable(&mut self, ports: &mut impl LedActuatorPorts) {
+        let level = ports.read_led_request();
+        // WdgM's supervision expired: dark until the watchdog's reset.
+        self.lit = !self.safe && self.swc.run(level, self.now_ms);
+    }
 }
 
 /// `OsObstacleDetectionTask`'s own state.
@@ -343,6 +369,20 @@ struct ModePart<B: Board> {
     swc: ModeManager,
     /// Requests the RTE's queue had no room for.
     refused: u32,
+}
+
+/// ModeManager as its task runs it: the inputs' edges (read through IoHwAb) as mode
+/// requests to BswM.
+impl<B: Board> ModeManagerRunnables for ModePart<B> {
+    fn mode_manager_runnable(&mut self, ports: &mut impl ModeManagerPorts) {
+        let ignition = iohwab::read_input(&mut self.inputs.ignition);
+        let com_enable = iohwab::read_input(&mut self.inputs.com_enable);
+        for request in self.swc.run(ignition, com_enable).into_iter().flatten() {
+            if ports.send_mode_request(request).is_err() {
+                self.refused = self.refused.saturating_add(1);
+            }
+        }
+    }
 }
 
 /// WdgM and the watchdog it triggers (`OsBswServiceTask`'s, and `Ecu::init`'s before the
@@ -397,13 +437,12 @@ impl<P: Port<Kernel = Kernel>, B: Board> Ecu<P, B> {
             rte: Resource::new(Rte::new()),
             leds: Resource::new(LedOutputs {
                 pins: parts.leds,
-                red: LedActuator::new(LedColor::Red),
-                yellow: LedActuator::new(LedColor::Yellow),
                 pin_faults: 0,
             }),
             sonar: TaskLocal::new(SonarPart {
                 io: parts.sonar,
                 swc: UltraSonic::new(sensor),
+                sample: Measurement::Invalid,
                 last: Measurement::Invalid,
             }),
             modes: TaskLocal::new(ModePart {
@@ -465,7 +504,7 @@ impl<P: Port<Kernel = Kernel>, B: Board> Ecu<P, B> {
 
     /// The level ObstacleDetection decided last (as the LEDs read it).
     pub fn level(&mut self) -> WarningLevel {
-        self.rte.get_mut().red_led().read_led_request()
+        self.rte.get_mut().peek_obstacle_detection_led_request()
     }
 
     /// WdgM's global status and the failure that expired it, unless `OsBswServiceTask` has
@@ -786,35 +825,35 @@ impl<P: Port<Kernel = Kernel>, B: Board> Ecu<P, B> {
         });
     }
 
-    /// `OsLEDTask`: LEDActuator, prototypes RedLED and YellowLED.
+    /// `OsLEDTask`: LEDActuator, prototypes RedLED and YellowLED (the generated body runs
+    /// both, each with its context), then their pins.
     fn led_task(&self) {
-        self.port.span(span::LOCK_PAIR, true);
-        // Each prototype reads its own port (both are connected to ObstacleDetection's
-        // one buffer: the two reads are one load).
-        let levels = self.rte.lock(&self.port, |rte| {
-            (
-                rte.red_led().read_led_request(),
-                rte.yellow_led().read_led_request(),
-            )
-        });
-        self.port.span(span::LOCK_PAIR, false);
-        let Ok((red_level, yellow_level)) = levels else {
-            return;
-        };
         let now_ms = self.port.now_ms();
         let safe = self.safe_state.load(Ordering::Relaxed);
+        // The prototypes hold no state: each job makes its own.
+        let mut red = LedJob {
+            swc: LedActuator::new(LedColor::Red),
+            now_ms,
+            safe,
+            lit: false,
+        };
+        let mut yellow = LedJob {
+            swc: LedActuator::new(LedColor::Yellow),
+            now_ms,
+            safe,
+            lit: false,
+        };
+        self.port.span(span::LOCK_PAIR, true);
+        let ran = self.rte.lock(&self.port, |rte| {
+            tasks::os_led_task(rte, &mut red, &mut yellow)
+        });
+        self.port.span(span::LOCK_PAIR, false);
+        if ran.is_err() {
+            return;
+        }
         let _ = self.leds.lock(&self.port, |leds| {
-            let (red, yellow) = if safe {
-                // WdgM's supervision expired: dark until the watchdog's reset.
-                (false, false)
-            } else {
-                (
-                    leds.red.run(red_level, now_ms),
-                    leds.yellow.run(yellow_level, now_ms),
-                )
-            };
-            leds.set(LedColor::Red, red);
-            leds.set(LedColor::Yellow, yellow);
+            leds.set(LedColor::Red, red.lit);
+            leds.set(LedColor::Yellow, yellow.lit);
         });
     }
 
@@ -845,31 +884,17 @@ impl<P: Port<Kernel = Kernel>, B: Board> Ecu<P, B> {
     /// their safe state (LEDs off) and the ECU shuts down (`ShutdownOS(E_OK)`: no more
     /// ticks, tasks or interrupts).
     fn bsw_task(&self) {
-        // ModeManager: the inputs' edges become mode requests through the RTE.
-        let inputs = self.modes.with(|part| {
-            let ignition = iohwab::read_input(&mut part.inputs.ignition);
-            let com_enable = iohwab::read_input(&mut part.inputs.com_enable);
-            part.swc.run(ignition, com_enable)
-        });
+        // ModeManager (the generated body), then BswM's side: the requests it takes in its
+        // main function below.
         let mut requests = [None; 4];
-        let refused = self.rte.lock(&self.port, |rte| {
-            let refused = inputs
-                .into_iter()
-                .flatten()
-                .flatten()
-                .filter(|&r| rte.mode_manager().send_mode_request(r).is_err())
-                .count();
-            // BswM's side: the requests it takes in its main function below.
+        let _ = self.rte.lock(&self.port, |rte| {
+            let _ = self
+                .modes
+                .with(|part| tasks::os_bsw_service_task(rte, part));
             for slot in &mut requests {
                 *slot = rte.bswm().receive_mode_request().ok();
             }
-            refused
         });
-        if let Ok(n @ 1..) = refused {
-            let _ = self.modes.with(|part| {
-                part.refused = part.refused.saturating_add(n as u32);
-            });
-        }
         let shut_down = self.com.lock(&self.port, |stack| {
             for request in requests.into_iter().flatten() {
                 stack.bswm(request);
@@ -897,72 +922,66 @@ impl<P: Port<Kernel = Kernel>, B: Board> Ecu<P, B> {
                 stack.com.receive_signal(config::com::YELLOW_BELOW),
             )
         });
-        let Ok(measurement) = self
-            .rte
-            .lock(&self.port, |rte| rte.obstacle_detection().read_sonar_data())
-        else {
-            return;
-        };
-        let level = self.obstacle.with(|part| {
+        let _ = self.obstacle.with(|part| {
             if let Ok((Ok(SignalValue::Unsigned(r)), Ok(SignalValue::Unsigned(y)))) = thresholds {
                 if (r, y) != part.applied {
                     part.applied = (r, y);
                     part.swc.configure(r as u32, y as u32);
                 }
             }
-            part.swc.run(measurement)
+            self.rte.lock(&self.port, |rte| {
+                tasks::os_obstacle_detection_task(rte, &mut part.swc)
+            })
         });
-        if let Some(level) = level {
-            let _ = self.rte.lock(&self.port, |rte| {
-                rte.obstacle_detection().write_led_request(level)
-            });
-        }
     }
 
     /// `OsSonarTask`: UltraSonic; its write to SonarRecv activates `OsComTask`, which
     /// preempts it at once.
     fn sonar_task(&self) {
-        let Some(measurement) = self.sonar.with(|part| {
-            let sample = part.io.sample(part.swc.sensor());
-            part.last = part.swc.run(sample);
-            part.last
-        }) else {
-            return;
-        };
-        let notify = self.rte.lock(&self.port, |rte| {
-            rte.ultra_sonic().write_sonar_data(measurement).0
+        let released = self.sonar.with(|part| {
+            part.sample = part.io.sample(part.swc.sensor());
+            self.rte
+                .lock(&self.port, |rte| tasks::os_sonar_task(rte, part))
         });
-        if notify == Ok(true) {
+        if let Some(Ok(released)) = released {
+            self.activate(released);
+        }
+    }
+
+    /// The tasks whose data-received events a job's writes fired (the generated RTE's
+    /// mapping), activated once the job has left the RTE; the first of them preempts at
+    /// once. An error here reaches ErrorHook, which counts it.
+    fn activate(&self, released: Released) {
+        let mut any = false;
+        for task in released.tasks() {
             self.port.span(span::ACTIVATE_TO_FIRST_LINE, true);
-            // The RTE activates the task CanTranslate's data-received event is mapped to
-            // (the generated RTE's). An error here reaches ErrorHook, which counts it.
-            let _ = self
-                .port
-                .activate_task(crate::rte::tasks::CAN_TRANSLATE_SONAR_RECV);
+            let _ = self.port.activate_task(task);
+            any = true;
+        }
+        if any {
             self.dispatch();
         }
     }
 
-    /// `OsComTask`: CanTranslate. Out of line, as a task body is (`TASK(OsComTask)`): the
-    /// job's instructions are measured on this symbol on the host (callgrind), as the
-    /// image's trace measures them between the job's marks.
+    /// `OsComTask`: CanTranslate, then its signals to Com. Out of line, as a task body is
+    /// (`TASK(OsComTask)`): the job's instructions are measured on this symbol on the host
+    /// (callgrind), as the image's trace measures them between the job's marks.
     #[inline(never)]
     fn com_task(&self) {
-        let input = self.rte.lock(&self.port, |rte| {
-            let mut ports = rte.can_translate();
-            ports
-                .take_sonar_recv()
-                .ok()
-                .map(|m| (m, ports.read_led_request()))
-        });
-        let Ok(Some((measurement, level))) = input else {
+        let mut swc = CanTranslate::default();
+        let released = self
+            .rte
+            .lock(&self.port, |rte| tasks::os_com_task(rte, &mut swc));
+        let Some((distance, level)) = swc.signals else {
             return;
         };
-        let (distance, level) = can_translate(measurement, level);
         self.port.span(span::COM_SEND, true);
         let _ = self
             .com
             .lock(&self.port, |stack| stack.send(distance, level));
         self.port.span(span::COM_SEND, false);
+        if let Ok(released) = released {
+            self.activate(released);
+        }
     }
 }

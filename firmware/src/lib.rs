@@ -8,41 +8,84 @@
 //!
 //! # The RTE's contract
 //!
-//! [`rte`] is generated from the components' description (`firmware/swc.arxml`): each
-//! prototype reaches the connections through its own ports, typed by their interfaces.
+//! [`rte`] is generated from the components' description (`firmware/swc.arxml`). A
+//! component implements its type's runnables trait against its type's ports trait; the
+//! generated task bodies ([`rte::tasks`]) call each runnable with its prototype's context,
+//! which reaches that prototype's connections and nothing else.
 //!
 //! ```
 //! use cw_core::warning::{Measurement, WarningLevel};
-//! let mut rte = cw_firmware::rte::Rte::new();
-//! // UltraSonic's write reaches ObstacleDetection, and notes new data for CanTranslate,
-//! // whose data-received event then runs.
-//! let noted = rte.ultra_sonic().write_sonar_data(Measurement::Distance { distance_mm: 800 });
-//! assert!(noted.0);
-//! assert_eq!(rte.obstacle_detection().read_sonar_data(), Measurement::Distance { distance_mm: 800 });
-//! assert_eq!(rte.can_translate().take_sonar_recv(), Ok(Measurement::Distance { distance_mm: 800 }));
-//! let _ = rte.obstacle_detection().write_led_request(WarningLevel::Red);
-//! assert_eq!(rte.red_led().read_led_request(), WarningLevel::Red);
+//! use cw_firmware::rte::{self, tasks, ObstacleDetectionPorts, ObstacleDetectionRunnables};
+//! use cw_firmware::rte::{UltraSonicPorts, UltraSonicRunnables};
+//!
+//! /// A sensor that always sees 0.8 m.
+//! struct Sensor;
+//! impl UltraSonicRunnables for Sensor {
+//!     fn ultra_sonic_runnable(&mut self, ports: &mut impl UltraSonicPorts) {
+//!         ports.write_sonar_data(Measurement::Distance { distance_mm: 800 });
+//!     }
+//! }
+//!
+//! let mut rte = rte::Rte::new();
+//! // UltraSonic's write reaches ObstacleDetection, and fires CanTranslate's data-received
+//! // event: its task is to be activated.
+//! let released = tasks::os_sonar_task(&mut rte, &mut Sensor);
+//! assert!(released.tasks().eq([tasks::CAN_TRANSLATE_SONAR_RECV]));
+//! // The project's ObstacleDetection decides red for it.
+//! let mut obstacle = cw_firmware::swc::ObstacleDetection::new();
+//! let _ = tasks::os_obstacle_detection_task(&mut rte, &mut obstacle);
+//! assert_eq!(rte.peek_obstacle_detection_led_request(), WarningLevel::Red);
 //! ```
 //!
 //! A component cannot write a port it only reads (ObstacleDetection requires SonarData):
 //!
 //! ```compile_fail,E0599
-//! let mut rte = cw_firmware::rte::Rte::new();
-//! rte.obstacle_detection().write_sonar_data(cw_core::warning::Measurement::Invalid);
+//! use cw_firmware::rte::{ObstacleDetectionPorts, ObstacleDetectionRunnables};
+//! struct Detector;
+//! impl ObstacleDetectionRunnables for Detector {
+//!     fn obstacle_detection_runnable(&mut self, ports: &mut impl ObstacleDetectionPorts) {
+//!         ports.write_sonar_data(cw_core::warning::Measurement::Invalid);
+//!     }
+//! }
 //! ```
 //!
 //! nor write a value of another interface's data type into its port:
 //!
 //! ```compile_fail,E0308
-//! let mut rte = cw_firmware::rte::Rte::new();
-//! rte.obstacle_detection().write_led_request(cw_core::warning::Measurement::Invalid);
+//! use cw_firmware::rte::{ObstacleDetectionPorts, ObstacleDetectionRunnables};
+//! struct Detector;
+//! impl ObstacleDetectionRunnables for Detector {
+//!     fn obstacle_detection_runnable(&mut self, ports: &mut impl ObstacleDetectionPorts) {
+//!         ports.write_led_request(cw_core::warning::Measurement::Invalid);
+//!     }
+//! }
 //! ```
 //!
 //! nor use a port its component type does not have (an LED has no distance port):
 //!
 //! ```compile_fail,E0599
+//! use cw_firmware::rte::{LedActuatorPorts, LedActuatorRunnables};
+//! struct Led;
+//! impl LedActuatorRunnables for Led {
+//!     fn led_actuator_runnable(&mut self, ports: &mut impl LedActuatorPorts) {
+//!         let _ = ports.read_sonar_data();
+//!     }
+//! }
+//! ```
+//!
+//! nor reach another prototype's context: only the task bodies make them.
+//!
+//! ```compile_fail,E0624
 //! let mut rte = cw_firmware::rte::Rte::new();
-//! let _ = rte.red_led().read_sonar_data();
+//! let _ = rte.red_led();
+//! ```
+//!
+//! A task body takes the components of the runnables mapped to its task, of their types:
+//!
+//! ```compile_fail,E0277
+//! let mut rte = cw_firmware::rte::Rte::new();
+//! let mut detector = cw_firmware::swc::ObstacleDetection::new();
+//! let _ = cw_firmware::rte::tasks::os_sonar_task(&mut rte, &mut detector);
 //! ```
 #![cfg_attr(not(any(test, feature = "host")), no_std)]
 #![forbid(unsafe_code)]

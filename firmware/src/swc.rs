@@ -15,6 +15,10 @@ use cw_core::ecum::BswMRequest;
 use cw_core::sonar::SonarConfig;
 use cw_core::warning::{Measurement, Thresholds, WarningLevel};
 
+use crate::rte::{
+    CanTranslatePorts, CanTranslateRunnables, ObstacleDetectionPorts, ObstacleDetectionRunnables,
+};
+
 /// Consecutive bad samples after which the measurement is reported invalid (3 x 40 ms).
 pub const FAULT_AFTER_SAMPLES: u8 = 3;
 /// Half period of the fault blinking, ms (2 Hz).
@@ -113,6 +117,14 @@ impl ObstacleDetection {
     }
 }
 
+impl ObstacleDetectionRunnables for ObstacleDetection {
+    /// The newest measurement's level to the LEDs and CanTranslate.
+    fn obstacle_detection_runnable(&mut self, ports: &mut impl ObstacleDetectionPorts) {
+        let level = self.run(ports.read_sonar_data());
+        ports.write_led_request(level);
+    }
+}
+
 /// Which LED an LEDActuator prototype drives.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum LedColor {
@@ -143,6 +155,23 @@ impl LedActuator {
                     < BLINK_HALF_PERIOD_MS
             }
             _ => false,
+        }
+    }
+}
+
+/// CanTranslate, started by a new measurement: its runnable leaves the CAN signals' raw
+/// values for the job to hand to Com once it has left the RTE ([`can_translate`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct CanTranslate {
+    /// The signals the runnable made (distance, level), not yet sent.
+    pub signals: Option<(Option<u64>, u64)>,
+}
+
+impl CanTranslateRunnables for CanTranslate {
+    /// The new measurement and the newest level, as the CAN signals' values.
+    fn can_translate_runnable(&mut self, ports: &mut impl CanTranslatePorts) {
+        if let Ok(measurement) = ports.take_sonar_recv() {
+            self.signals = Some(can_translate(measurement, ports.read_led_request()));
         }
     }
 }

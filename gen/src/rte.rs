@@ -1056,8 +1056,9 @@ const KEYWORDS: [&str; 51] = [
 ];
 
 /// Names the generated module already uses: an interface or a context cannot take them.
-const RESERVED_TYPES: [&str; 7] = [
+const RESERVED_TYPES: [&str; 8] = [
     "Rte",
+    "Released",
     "LastIsBest",
     "Queued",
     "SenderReceiverInterface",
@@ -1075,7 +1076,10 @@ fn check_names(sw: &Software, out: &mut Vec<Error>) {
     let mut seen: HashMap<String, &str> = HashMap::new();
     for p in &comp.prototypes {
         let method = snake(&p.name);
-        if KEYWORDS.contains(&method.as_str()) || ["new", "default"].contains(&method.as_str()) {
+        if KEYWORDS.contains(&method.as_str())
+            || ["new", "default", "rte", "released", "ports"].contains(&method.as_str())
+            || method.starts_with("peek_")
+        {
             out.push(Error::new(
                 format!("prototype {} would be generated as `rte.{method}()`, a name Rust or the RTE already has", p.name),
                 &[&p.path],
@@ -1088,13 +1092,53 @@ fn check_names(sw: &Software, out: &mut Vec<Error>) {
             ));
         }
     }
-    let contexts: Vec<String> = comp
+    // Types: a ports trait and a runnables trait each, a context per prototype.
+    let mut traits: HashMap<String, &str> = HashMap::new();
+    for c in &sw.components {
+        if let Some(first) = traits.insert(ports_trait(c), &c.path) {
+            out.push(Error::new(
+                format!(
+                    "two component types would be generated as one trait `{}`",
+                    ports_trait(c)
+                ),
+                &[&c.path, first],
+            ));
+        }
+        let mut runnables: HashMap<String, &str> = HashMap::new();
+        for (r, path) in &c.runnables {
+            let method = snake(r);
+            if KEYWORDS.contains(&method.as_str()) {
+                out.push(Error::new(
+                    format!(
+                        "runnable {} of {} would be generated as the keyword `{method}`",
+                        r, c.name
+                    ),
+                    &[path],
+                ));
+            }
+            if let Some(first) = runnables.insert(method.clone(), path) {
+                out.push(Error::new(
+                    format!(
+                        "two runnables of {} would be generated as one method `{method}`",
+                        c.name
+                    ),
+                    &[path, first],
+                ));
+            }
+        }
+    }
+    let generated: Vec<String> = comp
         .prototypes
         .iter()
-        .map(|p| format!("{}Ports", camel(&snake(&p.name))))
+        .map(context)
+        .chain(
+            sw.components
+                .iter()
+                .flat_map(|c| [ports_trait(c), runnables_trait(c)]),
+        )
         .collect();
     for i in &sw.interfaces {
-        if RESERVED_TYPES.contains(&i.name.as_str()) || contexts.contains(&i.name) {
+        if RESERVED_TYPES.contains(&i.name.as_str()) || generated.contains(&i.name) {
             out.push(Error::new(
                 format!(
                     "interface {} has the name of an item the generated RTE defines or uses",
@@ -1141,6 +1185,32 @@ fn check_names(sw: &Software, out: &mut Vec<Error>) {
                     "two data-received events' tasks would be generated as one constant `{name}`"
                 ),
                 &[path, first],
+            ));
+        }
+    }
+    if bufs.iter().filter(|b| b.notify).count() > 32 {
+        out.push(Error::new(
+            "more than 32 data-received events: a job's fired events are one 32-bit word"
+                .to_string(),
+            &[&comp.path],
+        ));
+    }
+    // The task bodies: a function each.
+    let mut bodies: HashMap<String, &str> = HashMap::new();
+    for m in &sw.mappings {
+        let name = snake(m.task.rsplit('/').next().unwrap_or(&m.task));
+        if let Some(first) = bodies.insert(name.clone(), &m.task) {
+            if first != m.task {
+                out.push(Error::new(
+                    format!("two tasks' bodies would be generated as one function `{name}`"),
+                    &[&m.task, first],
+                ));
+            }
+        }
+        if KEYWORDS.contains(&name.as_str()) {
+            out.push(Error::new(
+                format!("a task's body would be generated as the keyword `{name}`"),
+                &[&m.task],
             ));
         }
     }
@@ -1595,6 +1665,7 @@ fn emit_tasks(sw: &Software, ecu: &crate::model::Ecu, s: &mut String) -> Result<
     }
     let mut body = String::new();
     let mut released = Vec::new();
+    let mut activated_by = Vec::new();
     for b in sw.buffers_with_events() {
         let Some((receiver, port)) = &b.receiver else {
             continue;
@@ -1641,6 +1712,7 @@ fn emit_tasks(sw: &Software, ecu: &crate::model::Ecu, s: &mut String) -> Result<
             crate::rust::constant(&format!("{receiver}{port}")),
             crate::rust::constant(&activated.name)
         );
+        activated_by.push(crate::rust::constant(&format!("{receiver}{port}")));
         released.push((
             crate::rust::constant(&activated.name),
             crate::rust::constant(&writer.name),
@@ -1648,19 +1720,35 @@ fn emit_tasks(sw: &Software, ecu: &crate::model::Ecu, s: &mut String) -> Result<
             b.sender.clone(),
         ));
     }
+    let (bodies, mut uses) = emit_bodies(sw, ecu)?;
+    if !released.is_empty() {
+        uses.push("crate::generated::os".to_string());
+    }
+    uses.push("cw_core::os::TaskId".to_string());
+    let _ = writeln!(s, "pub mod tasks {{");
+    let (parent, others): (Vec<String>, Vec<String>) =
+        uses.into_iter().partition(|u| u.starts_with("super::"));
+    if !parent.is_empty() {
+        let names: Vec<&str> = parent
+            .iter()
+            .filter_map(|u| u.strip_prefix("super::"))
+            .collect();
+        let _ = writeln!(s, "    use super::{{{}}};", names.join(", "));
+    }
+    for u in &others {
+        let _ = writeln!(s, "    use {u};");
+    }
     let _ = writeln!(
         s,
-        "pub mod tasks {{\n{}    use cw_core::os::TaskId;\n\n{body}",
-        if released.is_empty() {
-            ""
-        } else {
-            "    use crate::generated::os;\n"
-        }
+        "\n{body}    /// The tasks the data-received events activate, in the order of \
+         [`Released`]'s bits.\n    pub const ACTIVATED: [TaskId; {}] = [{}];\n",
+        activated_by.len(),
+        activated_by.join(", ")
     );
     let _ = writeln!(
         s,
         "    /// Each task a write activates, and the task whose runnable writes (activated, \
-         writer): {}.\n    pub const RELEASED_BY: [(TaskId, TaskId); {}] = [{}];\n}}\n",
+         writer): {}.\n    pub const RELEASED_BY: [(TaskId, TaskId); {}] = [{}];\n{bodies}}}\n",
         released
             .iter()
             .map(|(_, _, w, sender)| format!("{sender}'s runnable in `{w}`"))
@@ -1674,6 +1762,93 @@ fn emit_tasks(sw: &Software, ecu: &crate::model::Ecu, s: &mut String) -> Result<
             .join(", ")
     );
     Ok(())
+}
+
+/// A task body per task that runs runnables: each runnable, in the order of its position
+/// in the task, called on its prototype's component with that prototype's context; the
+/// data-received events the job's writes fired returned. And what the bodies use.
+fn emit_bodies(sw: &Software, ecu: &crate::model::Ecu) -> Result<(String, Vec<String>), Error> {
+    let bufs = buffers(sw);
+    let mut out = String::new();
+    let mut uses: Vec<String> = Vec::new();
+    for task in &ecu.os.tasks {
+        let mut runs: Vec<&Mapping> = sw.mappings.iter().filter(|m| m.task == task.path).collect();
+        if runs.is_empty() {
+            continue;
+        }
+        runs.sort_by_key(|m| m.position);
+        let mut params: Vec<(String, String)> = Vec::new();
+        let mut calls = String::new();
+        let mut listed = Vec::new();
+        let mut any_fires = false;
+        for m in runs {
+            let proto =
+                find(&sw.composition.prototypes, &m.prototype, |p| &p.name).ok_or_else(|| {
+                    Error::new(
+                        format!("prototype {} does not exist", m.prototype),
+                        &[&m.path],
+                    )
+                })?;
+            let c = find(&sw.components, &proto.component, |c| &c.name).ok_or_else(|| {
+                Error::new(
+                    format!("component type {} does not exist", proto.component),
+                    &[&proto.path],
+                )
+            })?;
+            let e = c.events.iter().find(|e| e.path == m.event).ok_or_else(|| {
+                Error::new(format!("event {} is not {}'s", m.event, c.name), &[&m.path])
+            })?;
+            let param = snake(&proto.name);
+            let bound = runnables_trait(c);
+            if !params.iter().any(|(p, _)| p == &param) {
+                params.push((param.clone(), bound.clone()));
+            }
+            if !uses.contains(&format!("super::{bound}")) {
+                uses.push(format!("super::{bound}"));
+            }
+            listed.push(format!(
+                "{}.{} (position {})",
+                proto.name, e.runnable, m.position
+            ));
+            let method = snake(&e.runnable);
+            if fires(sw, &bufs, proto) {
+                any_fires = true;
+                let _ = writeln!(
+                    calls,
+                    "        let mut ports = rte.{param}();\n        {param}.{method}(&mut ports);\n        released.0 |= ports.released.0;"
+                );
+            } else {
+                let _ = writeln!(calls, "        {param}.{method}(&mut rte.{param}());");
+            }
+        }
+        let (start, end) = if any_fires {
+            (
+                "        let mut released = Released::NONE;\n",
+                "        released\n",
+            )
+        } else {
+            ("", "        Released::NONE\n")
+        };
+        let _ = writeln!(
+            out,
+            "\n    /// `{}` ({}): {}, each with its prototype's context; the data-received events \
+             its writes fired.\n    pub fn {}(\n        rte: &mut Rte,\n{}    ) -> Released {{\n{start}{calls}{end}    }}",
+            task.name,
+            task.path,
+            listed.join(", then "),
+            snake(&task.name),
+            params
+                .iter()
+                .map(|(p, b)| format!("        {p}: &mut impl {b},\n"))
+                .collect::<String>()
+        );
+    }
+    if !out.is_empty() {
+        uses.push("super::Released".to_string());
+        uses.push("super::Rte".to_string());
+    }
+    uses.sort();
+    Ok((out, uses))
 }
 
 impl Software {
@@ -1700,26 +1875,25 @@ pub fn emit(
          components, generated by `cargo xtask generate` from `{source}` (ARXML, AUTOSAR 4). \
          Do not edit: change the description and generate again; the check command fails \
          when this file and the description disagree.\n//!\n//! Each connection is a typed \
-         port from `cw_core::rte`; the task bodies in [`crate::ecu`] call the runnables with \
-         exactly these ports, so a missing or mistyped connection does not compile. Each item \
-         names the ARXML path it came from; the tasks are the OS's of the ECU's description.\n//!\n//! Description digest: {digest}\n"
+         buffer from `cw_core::rte`. A component implements its type's runnables trait \
+         against its type's ports trait; the task bodies in [`tasks`] call each runnable with \
+         its prototype's context, which reaches exactly that prototype's connections, so a \
+         component that uses a port it does not have, in the wrong direction or with the wrong \
+         data does not compile. Each item names the ARXML path it came from; the tasks are the \
+         OS's of the ECU's description.\n//!\n//! Description digest: {digest}\n"
     );
     // What the generated items use, and nothing else (an unused import is a warning).
     let bufs = buffers(sw);
-    let ports = || {
-        sw.composition
-            .prototypes
-            .iter()
-            .filter_map(|p| find(&sw.components, &p.component, |c| &c.name))
-            .flat_map(|c| c.ports.iter())
-    };
-    let queued_or_taken = ports()
-        .any(|p| find(&sw.interfaces, &p.interface, |i| &i.name).is_some_and(|i| i.queued))
-        || bufs.iter().any(|b| b.notify);
-    let mut uses = vec!["SenderReceiverInterface"];
-    if ports().any(|p| p.provided) {
-        uses.push("DataReceived");
+    // A port's method returns `RteError` unless it writes or reads last-is-best data.
+    let mut queued_or_taken = false;
+    for c in &sw.components {
+        for p in &c.ports {
+            if let Ok((kind, _, _)) = access(sw, c, p) {
+                queued_or_taken |= !matches!(kind, Access::Write | Access::Read);
+            }
+        }
     }
+    let mut uses = vec!["SenderReceiverInterface"];
     if bufs.iter().any(|b| b.queue.is_none()) {
         uses.push("LastIsBest");
     }
@@ -1799,7 +1973,7 @@ pub fn emit(
         s,
         "        }}\n    }}\n}}\n\nimpl Default for Rte {{\n    fn default() -> Self {{\n        Self::new()\n    }}\n}}\n"
     );
-    emit_ports(sw, &mut s)?;
+    emit_components(sw, &mut s)?;
     emit_tasks(sw, ecu, &mut s)?;
     Ok(s)
 }
@@ -1817,65 +1991,154 @@ fn camel(snake_name: &str) -> String {
         .collect()
 }
 
-/// Each prototype's typed context: a method per port, reading, taking, writing, sending or
-/// receiving the buffers its connectors use, and nothing else, so that a component that
-/// uses a port it does not have, or in the wrong direction, or with the wrong data type,
-/// does not compile.
-fn emit_ports(sw: &Software, s: &mut String) -> Result<(), Error> {
-    let comp = &sw.composition;
-    let bufs = buffers(sw);
-    let mut accessors = String::new();
-    for proto in &comp.prototypes {
-        let c = find(&sw.components, &proto.component, |c| &c.name).ok_or_else(|| {
+/// The generated names of a component type's traits and a prototype's context.
+fn ports_trait(c: &ComponentType) -> String {
+    format!("{}Ports", camel(&snake(&c.name)))
+}
+
+fn runnables_trait(c: &ComponentType) -> String {
+    format!("{}Runnables", camel(&snake(&c.name)))
+}
+
+fn context(p: &Prototype) -> String {
+    format!("{}Context", camel(&snake(&p.name)))
+}
+
+/// How a runnable reaches a port: the port's direction, its interface's policy and, for a
+/// required port, whether a data-received event of the component reads it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Access {
+    Write,
+    Send,
+    Receive,
+    Take,
+    Read,
+}
+
+/// The port's access, its method's name and the Rust type of its data.
+fn access(
+    sw: &Software,
+    c: &ComponentType,
+    port: &Port,
+) -> Result<(Access, String, String), Error> {
+    let i = find(&sw.interfaces, &port.interface, |i| &i.name).ok_or_else(|| {
+        Error::new(
+            format!("interface {} does not exist", port.interface),
+            &[&port.path],
+        )
+    })?;
+    let data = find(&sw.types, &i.data_type, |t| &t.name)
+        .map(|t| t.rust.clone())
+        .ok_or_else(|| {
             Error::new(
-                format!("component type {} does not exist", proto.component),
-                &[&proto.path],
+                format!("data type {} does not exist", i.data_type),
+                &[&i.path],
             )
         })?;
-        let ty = format!("{}Ports", camel(&snake(&proto.name)));
-        let _ = writeln!(
-            accessors,
-            "    /// The ports of `{}` ({}), of component type `{}`.\n    pub fn {}(&mut self) -> {ty}<'_> {{\n        {ty} {{ rte: self }}\n    }}\n",
-            proto.name,
-            proto.path,
-            c.name,
-            snake(&proto.name)
-        );
+    let event = c
+        .events
+        .iter()
+        .any(|e| matches!(&e.kind, EventKind::DataReceived { port: p } if p == &port.name));
+    let (kind, verb) = match (port.provided, i.queued, event) {
+        (true, false, _) => (Access::Write, "write"),
+        (true, true, _) => (Access::Send, "send"),
+        (false, true, _) => (Access::Receive, "receive"),
+        (false, false, true) => (Access::Take, "take"),
+        (false, false, false) => (Access::Read, "read"),
+    };
+    Ok((kind, format!("{verb}_{}", snake(&port.name)), data))
+}
+
+/// The buffers a prototype's port writes into (provided) or reads (required).
+fn connected<'a>(bufs: &'a [Buffer], proto: &Prototype, port: &Port) -> Vec<&'a Buffer> {
+    let end = format!("{}.{}", proto.name, port.name);
+    bufs.iter()
+        .filter(|b| {
+            b.carries.iter().any(|(what, _)| {
+                let (from, to) = what.split_once(" -> ").unwrap_or((what, ""));
+                if port.provided {
+                    from == end
+                } else {
+                    to == end
+                }
+            })
+        })
+        .collect()
+}
+
+/// Whether a write of the prototype can fire a data-received event: its context then
+/// notes the events it fired.
+fn fires(sw: &Software, bufs: &[Buffer], proto: &Prototype) -> bool {
+    find(&sw.components, &proto.component, |c| &c.name).is_some_and(|c| {
+        c.ports
+            .iter()
+            .filter(|p| p.provided)
+            .any(|p| connected(bufs, proto, p).iter().any(|b| b.notify))
+    })
+}
+
+/// Whether the prototype's events run in a task: its context is then made by the generated
+/// task bodies alone.
+fn mapped(sw: &Software, proto: &Prototype) -> bool {
+    sw.mappings.iter().any(|m| m.prototype == proto.name)
+}
+
+/// The component types' contracts and the prototypes' contexts:
+/// - per component type, a trait of its ports (`LedActuatorPorts`), a method per port in
+///   its direction, typed by its interface's data, and a trait of its runnables
+///   (`LedActuatorRunnables`), a method each, taking the ports;
+/// - per prototype, its context (`RedLedContext`), which implements its type's ports on
+///   the buffers its connectors use and nothing else.
+///
+/// A component written against its traits that uses a port its type does not have, in the
+/// wrong direction or with another type of data does not compile.
+fn emit_components(sw: &Software, s: &mut String) -> Result<(), Error> {
+    let comp = &sw.composition;
+    let bufs = buffers(sw);
+    let events = sw.buffers_with_events();
+    let _ = writeln!(
+        s,
+        "/// The data-received events a job's writes fired, a bit each in the order of \
+         [`tasks::ACTIVATED`]: the tasks to activate once the job has left the RTE.\n\
+         #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]\npub struct Released(u32);\n\n\
+         impl Released {{\n    /// No event fired.\n    pub const NONE: Self = Self(0);\n\n    \
+         /// The tasks to activate, one for each event that fired.\n    pub fn tasks(self) -> \
+         impl Iterator<Item = cw_core::os::TaskId> {{\n        tasks::ACTIVATED\n            \
+         .into_iter()\n            .enumerate()\n            .filter(move |&(i, _)| {{\n                \
+         u32::try_from(i)\n                    .ok()\n                    .and_then(|i| self.0.checked_shr(i))\n                    \
+         .is_some_and(|bit| bit & 1 == 1)\n            }})\n            .map(|(_, task)| task)\n    }}\n}}\n"
+    );
+    for c in &sw.components {
         let _ = writeln!(
             s,
-            "/// The ports of `{}` ({}), of component type `{}` ({}): what its runnables may \
-             read and write, typed by the interfaces' data.\npub struct {ty}<'a> {{\n    rte: &'a mut Rte,\n}}\n\nimpl {ty}<'_> {{",
-            proto.name, proto.path, c.name, c.path
+            "/// The ports of component type `{}` ({}), as its runnables reach them whichever \
+             prototype they run as: each prototype's context implements it on its own connections.\npub trait {} {{",
+            c.name,
+            c.path,
+            ports_trait(c)
         );
         for port in &c.ports {
-            let i = find(&sw.interfaces, &port.interface, |i| &i.name).ok_or_else(|| {
-                Error::new(
-                    format!("interface {} does not exist", port.interface),
-                    &[&port.path],
-                )
-            })?;
-            let data = find(&sw.types, &i.data_type, |t| &t.name)
-                .map(|t| t.rust.clone())
-                .ok_or_else(|| {
-                    Error::new(
-                        format!("data type {} does not exist", i.data_type),
-                        &[&i.path],
-                    )
-                })?;
-            let connection = |b: &Buffer| {
-                b.carries.iter().any(|(what, _)| {
-                    let (from, to) = what.split_once(" -> ").unwrap_or((what, ""));
-                    if port.provided {
-                        from == format!("{}.{}", proto.name, port.name)
-                    } else {
-                        to == format!("{}.{}", proto.name, port.name)
-                    }
-                })
+            let (kind, method, data) = access(sw, c, port)?;
+            let what = match kind {
+                Access::Write => "writes the value to every receiver connected.",
+                Access::Send => "sends the value into every receiver's queue; refused when a queue is full (a queue after it then does not get it).",
+                Access::Receive => "the oldest value in the queue, or `RteError::NoData`.",
+                Access::Take => "the value if it is new since the last take (its data-received event), else `RteError::NoData`.",
+                Access::Read => "the newest value its sender wrote (its init value before).",
             };
-            let used: Vec<&Buffer> = bufs.iter().filter(|b| connection(b)).collect();
-            let port_name = snake(&port.name);
-            let doc = format!(
-                "    /// `{}` ({}, {}): ",
+            let sig = match kind {
+                Access::Write => format!("fn {method}(&mut self, value: {data})"),
+                Access::Send => {
+                    format!("fn {method}(&mut self, value: {data}) -> Result<(), RteError>")
+                }
+                Access::Receive | Access::Take => {
+                    format!("fn {method}(&mut self) -> Result<{data}, RteError>")
+                }
+                Access::Read => format!("fn {method}(&self) -> {data}"),
+            };
+            let _ = writeln!(
+                s,
+                "    /// `{}` ({}, {}): {what}\n    {sig};\n",
                 port.name,
                 if port.provided {
                     "provided"
@@ -1884,87 +2147,194 @@ fn emit_ports(sw: &Software, s: &mut String) -> Result<(), Error> {
                 },
                 port.path
             );
-            match (port.provided, i.queued) {
-                (true, false) => {
-                    let fields: Vec<&str> = used.iter().map(|b| b.field.as_str()).collect();
-                    let _ = writeln!(
-                        s,
-                        "{doc}writes `{}`; whether a data-received event's buffer noted it (its task is then to be activated).\n    pub fn write_{port_name}(&mut self, value: {data}) -> DataReceived {{",
-                        fields.join("`, `")
-                    );
-                    // A buffer no data-received event reads notes nothing: its answer is
-                    // not asked for.
-                    let mut noted = Vec::new();
+        }
+        let _ = writeln!(s, "}}\n");
+        if c.runnables.is_empty() {
+            continue;
+        }
+        let _ = writeln!(
+            s,
+            "/// The runnables of component type `{}` ({}): the type that implements it is the \
+             component. The task bodies in [`tasks`] call each runnable with its prototype's \
+             context, in the task its event is mapped to.\npub trait {} {{",
+            c.name,
+            c.path,
+            runnables_trait(c)
+        );
+        for (r, path) in &c.runnables {
+            let started: Vec<String> = c
+                .events
+                .iter()
+                .filter(|e| &e.runnable == r)
+                .map(|e| match &e.kind {
+                    EventKind::Timing { period_ms } => format!("every {period_ms} ms ({})", e.path),
+                    EventKind::DataReceived { port } => {
+                        format!("on data received on {port} ({})", e.path)
+                    }
+                })
+                .collect();
+            let _ = writeln!(
+                s,
+                "    /// `{r}` ({path}): {}.\n    fn {}(&mut self, ports: &mut impl {});\n",
+                started.join(", "),
+                snake(r),
+                ports_trait(c)
+            );
+        }
+        let _ = writeln!(s, "}}\n");
+    }
+    let mut accessors = String::new();
+    for proto in &comp.prototypes {
+        let c = find(&sw.components, &proto.component, |c| &c.name).ok_or_else(|| {
+            Error::new(
+                format!("component type {} does not exist", proto.component),
+                &[&proto.path],
+            )
+        })?;
+        let ty = context(proto);
+        let fires = fires(sw, &bufs, proto);
+        let (visibility, by) = if mapped(sw, proto) {
+            ("", "the task bodies in [`tasks`] alone")
+        } else {
+            ("pub ", "the basic software")
+        };
+        let _ = writeln!(
+            accessors,
+            "    /// The context of `{}` ({}), of component type `{}`, for {by}.\n    {visibility}fn {}(&mut self) -> {ty}<'_> {{\n        {ty} {{ rte: self{} }}\n    }}\n",
+            proto.name,
+            proto.path,
+            c.name,
+            snake(&proto.name),
+            if fires { ", released: Released::NONE" } else { "" }
+        );
+        let _ = writeln!(
+            s,
+            "/// The context of `{}` ({}), of component type `{}` ({}): its ports on its \
+             connections.\npub struct {ty}<'a> {{\n    rte: &'a mut Rte,{}\n}}\n\nimpl {} for {ty}<'_> {{",
+            proto.name,
+            proto.path,
+            c.name,
+            c.path,
+            if fires {
+                "\n    /// The data-received events its writes fired.\n    released: Released,"
+            } else {
+                ""
+            },
+            ports_trait(c)
+        );
+        for port in &c.ports {
+            let (kind, method, data) = access(sw, c, port)?;
+            let used = connected(&bufs, proto, port);
+            let fields: Vec<&str> = used.iter().map(|b| b.field.as_str()).collect();
+            let verb = match kind {
+                Access::Write => "Writes",
+                Access::Send => "Sends into",
+                Access::Receive => "Receives from",
+                Access::Take => "Takes from",
+                Access::Read => "Reads",
+            };
+            let _ = writeln!(s, "    /// {verb} `{}`.", fields.join("`, `"));
+            match kind {
+                Access::Write => {
+                    let _ = writeln!(s, "    fn {method}(&mut self, value: {data}) {{");
                     for b in &used {
-                        if b.notify {
-                            noted.push(format!("self.rte.{}.write(value).0", b.field));
-                        } else {
-                            let _ =
-                                writeln!(s, "        let _ = self.rte.{}.write(value);", b.field);
+                        match events.iter().position(|e| e.field == b.field) {
+                            Some(k) if b.notify => {
+                                let _ = writeln!(
+                                    s,
+                                    "        if self.rte.{}.write(value).0 {{\n            self.released.0 |= {:#x};\n        }}",
+                                    b.field,
+                                    1u64 << k
+                                );
+                            }
+                            _ => {
+                                let _ = writeln!(
+                                    s,
+                                    "        let _ = self.rte.{}.write(value);",
+                                    b.field
+                                );
+                            }
                         }
                     }
                     if used.is_empty() {
                         let _ = writeln!(s, "        let _ = value;");
                     }
-                    if noted.is_empty() {
-                        noted.push("false".to_string());
-                    }
-                    let _ = writeln!(s, "        DataReceived({})\n    }}\n", noted.join(" | "));
+                    let _ = writeln!(s, "    }}\n");
                 }
-                (true, true) => {
-                    let fields: Vec<&str> = used.iter().map(|b| b.field.as_str()).collect();
+                Access::Send => {
                     let _ = writeln!(
                         s,
-                        "{doc}sends into `{}`; refused when a queue is full (a queue after it \
-                         then does not get the value).\n    pub fn send_{port_name}(&mut self, value: {data}) -> Result<DataReceived, RteError> {{",
-                        fields.join("`, `")
+                        "    fn {method}(&mut self, value: {data}) -> Result<(), RteError> {{"
                     );
-                    match fields.split_last() {
-                        Some((last, before)) => {
-                            for f in before {
-                                let _ = writeln!(s, "        self.rte.{f}.send(value)?;");
-                            }
-                            let _ = writeln!(s, "        self.rte.{last}.send(value)\n    }}\n");
-                        }
-                        None => {
-                            let _ = writeln!(
-                                s,
-                                "        let _ = value;\n        Ok(DataReceived(false))\n    }}\n"
-                            );
-                        }
+                    for f in &fields {
+                        let _ = writeln!(s, "        let _ = self.rte.{f}.send(value)?;");
                     }
+                    if used.is_empty() {
+                        let _ = writeln!(s, "        let _ = value;");
+                    }
+                    let _ = writeln!(s, "        Ok(())\n    }}\n");
                 }
-                (false, queued) => {
+                Access::Receive | Access::Take | Access::Read => {
                     let [b] = used.as_slice() else {
-                        continue;
+                        return Err(Error::new(
+                            format!(
+                                "required port {}.{} is connected to {} buffers: one is generated",
+                                proto.name,
+                                port.name,
+                                used.len()
+                            ),
+                            &[&port.path, &proto.path],
+                        ));
                     };
-                    if queued {
-                        let _ = writeln!(
-                            s,
-                            "{doc}the oldest value in `{}`, or `RteError::NoData`.\n    pub fn receive_{port_name}(&mut self) -> Result<{data}, RteError> {{\n        self.rte.{}.receive()\n    }}\n",
-                            b.field, b.field
-                        );
-                    } else if b.notify {
-                        let _ = writeln!(
-                            s,
-                            "{doc}the value in `{}` if it is new since the last take (its data-received event), else `RteError::NoData`.\n    pub fn take_{port_name}(&mut self) -> Result<{data}, RteError> {{\n        self.rte.{}.take()\n    }}\n",
-                            b.field, b.field
-                        );
-                    } else {
-                        let _ = writeln!(
-                            s,
-                            "{doc}the newest value in `{}`.\n    pub fn read_{port_name}(&self) -> {data} {{\n        self.rte.{}.read()\n    }}\n",
-                            b.field, b.field
-                        );
-                    }
+                    let (sig, call) = match kind {
+                        Access::Read => (format!("(&self) -> {data}"), "read"),
+                        Access::Take => {
+                            (format!("(&mut self) -> Result<{data}, RteError>"), "take")
+                        }
+                        _ => (
+                            format!("(&mut self) -> Result<{data}, RteError>"),
+                            "receive",
+                        ),
+                    };
+                    let _ = writeln!(
+                        s,
+                        "    fn {method}{sig} {{\n        self.rte.{}.{call}()\n    }}\n",
+                        b.field
+                    );
                 }
             }
         }
         let _ = writeln!(s, "}}\n");
     }
+    let mut peeks = String::new();
+    for b in bufs.iter().filter(|b| b.queue.is_none()) {
+        let data = find(&sw.interfaces, &b.interface, |i| &i.name)
+            .and_then(|i| find(&sw.types, &i.data_type, |t| &t.name))
+            .map(|t| t.rust.clone())
+            .ok_or_else(|| {
+                Error::new(
+                    format!("interface {} has no data type", b.interface),
+                    &[&comp.path],
+                )
+            })?;
+        let _ = writeln!(
+            peeks,
+            "    /// The value `{}` holds now, not taken ({}): to measure and test; a component \
+             reaches it through its ports.\n    pub fn peek_{}(&self) -> {data} {{\n        self.{}.read()\n    }}\n",
+            b.field,
+            b.carries
+                .iter()
+                .map(|(what, _)| what.as_str())
+                .collect::<Vec<_>>()
+                .join(", "),
+            b.field,
+            b.field
+        );
+    }
     let _ = writeln!(
         s,
-        "/// Each prototype's ports (a context borrows the connections for as long as it is used).\nimpl Rte {{\n{accessors}}}\n"
+        "/// Each prototype's context (it borrows the connections for as long as it is used), \
+         and each last-is-best buffer's value.\nimpl Rte {{\n{accessors}{peeks}}}\n"
     );
     Ok(())
 }

@@ -67,22 +67,31 @@ fn the_components_read_check_and_generate_the_rte_the_ecu_uses() {
     assert!(out.rust.contains("type Data = cw_core::ecum::BswMRequest;"));
     // Each prototype's context has its ports, in their directions, and no other.
     for method in [
-        "impl UltraSonicPorts<'_> {\n    /// `SonarData` (provided",
-        "pub fn write_sonar_data(&mut self, value: cw_core::warning::Measurement) -> DataReceived {\n        let _ = self.rte.ultra_sonic_sonar_data.write(value);\n        DataReceived(self.rte.can_translate_sonar_recv.write(value).0)",
-        "pub fn take_sonar_recv(&mut self) -> Result<cw_core::warning::Measurement, RteError>",
-        "pub fn send_mode_request(&mut self, value: cw_core::ecum::BswMRequest) -> Result<DataReceived, RteError>",
-        "pub fn receive_mode_request(&mut self) -> Result<cw_core::ecum::BswMRequest, RteError>",
-        "pub fn red_led(&mut self) -> RedLedPorts<'_>",
+        "impl UltraSonicPorts for UltraSonicContext<'_> {\n    /// Writes `ultra_sonic_sonar_data`, `can_translate_sonar_recv`.",
+        "fn write_sonar_data(&mut self, value: cw_core::warning::Measurement) {\n        let _ = self.rte.ultra_sonic_sonar_data.write(value);\n        if self.rte.can_translate_sonar_recv.write(value).0 {\n            self.released.0 |= 0x1;\n        }",
+        "fn take_sonar_recv(&mut self) -> Result<cw_core::warning::Measurement, RteError>",
+        "fn send_mode_request(&mut self, value: cw_core::ecum::BswMRequest) -> Result<(), RteError>",
+        "fn receive_mode_request(&mut self) -> Result<cw_core::ecum::BswMRequest, RteError>",
+        // Only the task bodies make an application prototype's context; the BSW's is public.
+        "\n    fn red_led(&mut self) -> RedLedContext<'_>",
+        "\n    pub fn bswm(&mut self) -> BswmContext<'_>",
+        // A component type's runnables, taking its type's ports.
+        "pub trait LedActuatorRunnables {",
+        "fn led_actuator_runnable(&mut self, ports: &mut impl LedActuatorPorts);",
+        // The task bodies: each runnable in its position, on its prototype's component.
+        "pub fn os_led_task(\n        rte: &mut Rte,\n        red_led: &mut impl LedActuatorRunnables,\n        yellow_led: &mut impl LedActuatorRunnables,\n    ) -> Released {\n        red_led.led_actuator_runnable(&mut rte.red_led());\n        yellow_led.led_actuator_runnable(&mut rte.yellow_led());\n        Released::NONE\n    }",
+        "let mut ports = rte.ultra_sonic();\n        ultra_sonic.ultra_sonic_runnable(&mut ports);\n        released.0 |= ports.released.0;",
+        "pub const ACTIVATED: [TaskId; 1] = [CAN_TRANSLATE_SONAR_RECV];",
     ] {
         assert!(out.rust.contains(method), "{method}");
     }
     let red = out
         .rust
-        .find("impl RedLedPorts<'_> {")
+        .find("impl LedActuatorPorts for RedLedContext<'_> {")
         .expect("RedLED's ports");
     let red = &out.rust[red..red + out.rust[red..].find("\n}\n").expect("their end")];
-    assert_eq!(red.matches("pub fn ").count(), 1, "{red}");
-    assert!(red.contains("pub fn read_led_request(&self) -> cw_core::warning::WarningLevel"));
+    assert_eq!(red.matches("fn ").count(), 1, "{red}");
+    assert!(red.contains("fn read_led_request(&self) -> cw_core::warning::WarningLevel"));
 }
 
 #[test]
@@ -363,6 +372,30 @@ fn names_generated_as_one_rust_item_are_refused() {
     let errors = refused(&text);
     assert!(
         errors.contains(&"interface Rte has the name of an item the generated RTE defines or uses\n  at /CollisionWarning/PortInterfaces/Rte".to_string()),
+        "{errors:#?}"
+    );
+    // An interface named as a component type's generated trait.
+    let text = COMPONENTS.replace("SonarDataInterface", "LedActuatorRunnables");
+    let errors = refused(&text);
+    assert!(
+        errors.contains(&"interface LedActuatorRunnables has the name of an item the generated RTE defines or uses\n  at /CollisionWarning/PortInterfaces/LedActuatorRunnables".to_string()),
+        "{errors:#?}"
+    );
+    // A prototype named as a task body's parameter or local.
+    for name in ["Rte", "Ports", "Released"] {
+        let text = COMPONENTS.replace("YellowLED", name);
+        let errors = refused(&text);
+        let method = name.to_lowercase();
+        assert!(
+            errors.contains(&format!("prototype {name} would be generated as `rte.{method}()`, a name Rust or the RTE already has\n  at {PKG}/CollisionWarning/{name}")),
+            "{errors:#?}"
+        );
+    }
+    // Two component types as one trait.
+    let text = COMPONENTS.replace("ModeManager", "LED_Actuator");
+    let errors = refused(&text);
+    assert!(
+        errors.contains(&format!("two component types would be generated as one trait `LedActuatorPorts`\n  at {PKG}/LED_Actuator\n  and {PKG}/LEDActuator")),
         "{errors:#?}"
     );
 }
