@@ -848,13 +848,14 @@ impl<P: Port<Kernel = Kernel>, B: Board> Ecu<P, B> {
             tasks::os_led_task(rte, &mut red, &mut yellow)
         });
         self.port.span(span::LOCK_PAIR, false);
-        if ran.is_err() {
+        let Ok(released) = ran else {
             return;
-        }
+        };
         let _ = self.leds.lock(&self.port, |leds| {
             leds.set(LedColor::Red, red.lit);
             leds.set(LedColor::Yellow, yellow.lit);
         });
+        self.activate(released);
     }
 
     /// WdgM's main function, in `OsBswServiceTask`: the supervised tasks' alive
@@ -887,14 +888,18 @@ impl<P: Port<Kernel = Kernel>, B: Board> Ecu<P, B> {
         // ModeManager (the generated body), then BswM's side: the requests it takes in its
         // main function below.
         let mut requests = [None; 4];
-        let _ = self.rte.lock(&self.port, |rte| {
-            let _ = self
+        let released = self.rte.lock(&self.port, |rte| {
+            let released = self
                 .modes
                 .with(|part| tasks::os_bsw_service_task(rte, part));
             for slot in &mut requests {
                 *slot = rte.bswm().receive_mode_request().ok();
             }
+            released
         });
+        if let Ok(Some(released)) = released {
+            self.activate(released);
+        }
         let shut_down = self.com.lock(&self.port, |stack| {
             for request in requests.into_iter().flatten() {
                 stack.bswm(request);
@@ -922,7 +927,7 @@ impl<P: Port<Kernel = Kernel>, B: Board> Ecu<P, B> {
                 stack.com.receive_signal(config::com::YELLOW_BELOW),
             )
         });
-        let _ = self.obstacle.with(|part| {
+        let released = self.obstacle.with(|part| {
             if let Ok((Ok(SignalValue::Unsigned(r)), Ok(SignalValue::Unsigned(y)))) = thresholds {
                 if (r, y) != part.applied {
                     part.applied = (r, y);
@@ -933,6 +938,9 @@ impl<P: Port<Kernel = Kernel>, B: Board> Ecu<P, B> {
                 tasks::os_obstacle_detection_task(rte, &mut part.swc)
             })
         });
+        if let Some(Ok(released)) = released {
+            self.activate(released);
+        }
     }
 
     /// `OsSonarTask`: UltraSonic; its write to SonarRecv activates `OsComTask`, which
@@ -951,16 +959,23 @@ impl<P: Port<Kernel = Kernel>, B: Board> Ecu<P, B> {
     /// The tasks whose data-received events a job's writes fired (the generated RTE's
     /// mapping), activated once the job has left the RTE; the first of them preempts at
     /// once. An error here reaches ErrorHook, which counts it.
+    #[inline(always)]
     fn activate(&self, released: Released) {
-        let mut any = false;
-        for task in released.tasks() {
-            self.port.span(span::ACTIVATE_TO_FIRST_LINE, true);
+        // A body that can fire no event returns this constant: no code for it.
+        if released != Released::NONE {
+            self.activate_tasks(released);
+        }
+    }
+
+    /// [`Self::activate`]'s work: the tasks activated (the generated code tests each
+    /// task's bit and activates its constant task), the first preempting at once.
+    fn activate_tasks(&self, released: Released) {
+        // The span ends at the first activated task's first line.
+        self.port.span(span::ACTIVATE_TO_FIRST_LINE, true);
+        released.activate(|task| {
             let _ = self.port.activate_task(task);
-            any = true;
-        }
-        if any {
-            self.dispatch();
-        }
+        });
+        self.dispatch();
     }
 
     /// `OsComTask`: CanTranslate, then its signals to Com. Out of line, as a task body is
@@ -972,14 +987,13 @@ impl<P: Port<Kernel = Kernel>, B: Board> Ecu<P, B> {
         let released = self
             .rte
             .lock(&self.port, |rte| tasks::os_com_task(rte, &mut swc));
-        let Some((distance, level)) = swc.signals else {
-            return;
-        };
-        self.port.span(span::COM_SEND, true);
-        let _ = self
-            .com
-            .lock(&self.port, |stack| stack.send(distance, level));
-        self.port.span(span::COM_SEND, false);
+        if let Some((distance, level)) = swc.signals {
+            self.port.span(span::COM_SEND, true);
+            let _ = self
+                .com
+                .lock(&self.port, |stack| stack.send(distance, level));
+            self.port.span(span::COM_SEND, false);
+        }
         if let Ok(released) = released {
             self.activate(released);
         }

@@ -67,26 +67,29 @@ impl Default for Rte {
     }
 }
 
-/// The data-received events a job's writes fired, a bit each in the order of [`tasks::ACTIVATED`]: the tasks to activate once the job has left the RTE.
+/// The tasks whose data-received events a job's writes fired, a bit each in the order of [`tasks::ACTIVATED`]: to activate once the job has left the RTE.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[must_use = "the tasks of the data-received events a job fired must be activated"]
 pub struct Released(u32);
 
 impl Released {
     /// No event fired.
     pub const NONE: Self = Self(0);
 
-    /// The tasks to activate, one for each event that fired.
+    /// The tasks to activate, each once.
     pub fn tasks(self) -> impl Iterator<Item = cw_core::os::TaskId> {
         tasks::ACTIVATED
             .into_iter()
             .enumerate()
-            .filter(move |&(i, _)| {
-                u32::try_from(i)
-                    .ok()
-                    .and_then(|i| self.0.checked_shr(i))
-                    .is_some_and(|bit| bit & 1 == 1)
-            })
+            .filter(move |&(i, _)| (self.0 >> (i & 31)) & 1 == 1)
             .map(|(_, task)| task)
+    }
+
+    /// Calls `activate` with each task to activate, once, in the order of [`tasks::ACTIVATED`] (a test of a constant bit and a call with a constant task each).
+    pub fn activate(self, mut activate: impl FnMut(cw_core::os::TaskId)) {
+        if self.0 & 0x1 != 0 {
+            activate(crate::generated::os::OS_COM_TASK);
+        }
     }
 }
 
@@ -338,13 +341,14 @@ pub mod tasks {
     /// `CanTranslate.SonarRecv`'s data-received event runs in `OsComTask` (/CollisionWarning/EcucValues/Os/OsComTask): a write into the buffer `can_translate_sonar_recv` activates it.
     pub const CAN_TRANSLATE_SONAR_RECV: TaskId = os::OS_COM_TASK;
 
-    /// The tasks the data-received events activate, in the order of [`Released`]'s bits.
-    pub const ACTIVATED: [TaskId; 1] = [CAN_TRANSLATE_SONAR_RECV];
+    /// The tasks the data-received events activate, each once, in the order of [`Released`]'s bits.
+    pub const ACTIVATED: [TaskId; 1] = [os::OS_COM_TASK];
 
     /// Each task a write activates, and the task whose runnable writes (activated, writer): UltraSonic's runnable in `OsSonarTask`.
     pub const RELEASED_BY: [(TaskId, TaskId); 1] = [(os::OS_COM_TASK, os::OS_SONAR_TASK)];
 
     /// `OsLEDTask` (/CollisionWarning/EcucValues/Os/OsLEDTask): RedLED.LEDActuatorRunnable (position 0), then YellowLED.LEDActuatorRunnable (position 1), each with its prototype's context; the data-received events its writes fired.
+    #[must_use = "the tasks of the data-received events a job fired must be activated"]
     pub fn os_led_task(
         rte: &mut Rte,
         red_led: &mut impl LedActuatorRunnables,
@@ -356,6 +360,7 @@ pub mod tasks {
     }
 
     /// `OsBswServiceTask` (/CollisionWarning/EcucValues/Os/OsBswServiceTask): ModeManager.ModeManagerRunnable (position 0), each with its prototype's context; the data-received events its writes fired.
+    #[must_use = "the tasks of the data-received events a job fired must be activated"]
     pub fn os_bsw_service_task(
         rte: &mut Rte,
         mode_manager: &mut impl ModeManagerRunnables,
@@ -365,6 +370,7 @@ pub mod tasks {
     }
 
     /// `OsObstacleDetectionTask` (/CollisionWarning/EcucValues/Os/OsObstacleDetectionTask): ObstacleDetection.ObstacleDetectionRunnable (position 0), each with its prototype's context; the data-received events its writes fired.
+    #[must_use = "the tasks of the data-received events a job fired must be activated"]
     pub fn os_obstacle_detection_task(
         rte: &mut Rte,
         obstacle_detection: &mut impl ObstacleDetectionRunnables,
@@ -374,12 +380,14 @@ pub mod tasks {
     }
 
     /// `OsComTask` (/CollisionWarning/EcucValues/Os/OsComTask): CanTranslate.CanTranslateRunnable (position 0), each with its prototype's context; the data-received events its writes fired.
+    #[must_use = "the tasks of the data-received events a job fired must be activated"]
     pub fn os_com_task(rte: &mut Rte, can_translate: &mut impl CanTranslateRunnables) -> Released {
         can_translate.can_translate_runnable(&mut rte.can_translate());
         Released::NONE
     }
 
     /// `OsSonarTask` (/CollisionWarning/EcucValues/Os/OsSonarTask): UltraSonic.UltraSonicRunnable (position 0), each with its prototype's context; the data-received events its writes fired.
+    #[must_use = "the tasks of the data-received events a job fired must be activated"]
     pub fn os_sonar_task(rte: &mut Rte, ultra_sonic: &mut impl UltraSonicRunnables) -> Released {
         let mut released = Released::NONE;
         let mut ports = rte.ultra_sonic();

@@ -321,6 +321,21 @@ mod targets {
             });
     }
 
+    /// Any bus (frames and signals of any id, layout, scaling, range, named values, sender,
+    /// receivers and comments) written as a system description (ARXML) and as a DBC reads
+    /// back the same; any text read as either is a bus or refused, never a panic
+    /// (`cw_gen::spec::a_bus_reads_back_as_written`,
+    /// `cw_gen::spec::a_text_is_a_bus_or_is_refused`).
+    #[test]
+    fn bus_description() {
+        bolero::check!()
+            .with_type::<(Vec<cw_gen::spec::FrameSeed>, String)>()
+            .for_each(|(frames, text)| {
+                assert!(cw_gen::spec::a_bus_reads_back_as_written(frames));
+                assert!(cw_gen::spec::a_text_is_a_bus_or_is_refused(text));
+            });
+    }
+
     /// Any frame, standard or extended, of any length and payload: its stuff bits counted
     /// eight bits at a time through the tables are those its bits one by one get
     /// (`cw_core::can::timing::spec::stuffing_agrees`, the CRC-15 included).

@@ -6,7 +6,10 @@
 //! - [`model`]: the description as plain values, with their ARXML paths;
 //! - [`arxml`]: reading and writing it with `autosar-data`;
 //! - [`validate`]: the checks before generation, each error naming every path involved;
-//! - [`rust`]: the generated Rust.
+//! - [`rust`]: the generated Rust;
+//! - [`rte`]: the software components and their RTE;
+//! - [`system`]: the system description's communication (the bus's frames and signals),
+//!   from and to a DBC.
 //!
 //! `cargo xtask generate` runs the four steps on `firmware/ecu.arxml` and writes
 //! `firmware/src/generated.rs`; `cargo xtask generate --check` (in the check command)
@@ -30,12 +33,19 @@ pub mod model;
 pub mod rte;
 pub mod rust;
 pub mod spec;
+pub mod system;
 pub mod validate;
 
 pub use digest::digest;
 
 /// The description's file, from the workspace's root.
 pub const DESCRIPTION: &str = "firmware/ecu.arxml";
+/// The bus's DBC, from the workspace's root.
+pub const DBC: &str = "firmware/ecu.dbc";
+/// The system description generated from [`DBC`], from the workspace's root.
+pub const SYSTEM: &str = "firmware/system.arxml";
+/// The top package of the ECU's descriptions.
+pub const PACKAGE: &str = "CollisionWarning";
 /// The generated file, from the workspace's root.
 pub const GENERATED: &str = "firmware/src/generated.rs";
 /// The software components' description, from the workspace's root.

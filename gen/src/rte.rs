@@ -198,7 +198,7 @@ pub struct Composition {
 
 /// `e`'s path; for an element without a short name (a connector's end, an event's data
 /// reference), its nearest named parent's path and the element's name.
-fn path_of(e: &Element) -> String {
+pub(crate) fn path_of(e: &Element) -> String {
     e.path().unwrap_or_else(
         |_| match e.named_parent().ok().flatten().and_then(|p| p.path().ok()) {
             Some(parent) => format!("{parent} ({})", e.element_name()),
@@ -211,7 +211,7 @@ fn name(e: &Element) -> String {
     e.item_name().unwrap_or_default()
 }
 
-fn text(e: &Element, n: ElementName) -> Option<String> {
+pub(crate) fn text(e: &Element, n: ElementName) -> Option<String> {
     e.get_sub_element(n)
         .and_then(|s| s.character_data())
         .map(|c| c.to_string())
@@ -231,7 +231,7 @@ fn doc(e: &Element) -> String {
 }
 
 /// The element a reference sub-element `n` of `e` points to, or an error naming `e`.
-fn target(e: &Element, n: ElementName, out: &mut Vec<Error>) -> Option<Element> {
+pub(crate) fn target(e: &Element, n: ElementName, out: &mut Vec<Error>) -> Option<Element> {
     let at = path_of(e);
     let Some(r) = e.get_sub_element(n) else {
         out.push(Error::new(format!("no {n}"), &[&at]));
@@ -1056,15 +1056,24 @@ const KEYWORDS: [&str; 51] = [
 ];
 
 /// Names the generated module already uses: an interface or a context cannot take them.
-const RESERVED_TYPES: [&str; 8] = [
+const RESERVED_TYPES: [&str; 16] = [
     "Rte",
     "Released",
     "LastIsBest",
     "Queued",
     "SenderReceiverInterface",
-    "DataReceived",
     "RteError",
     "TaskId",
+    "tasks",
+    // The prelude's items the generated code uses.
+    "Ok",
+    "Err",
+    "Result",
+    "Option",
+    "Some",
+    "None",
+    "Iterator",
+    "Default",
 ];
 
 /// Every name the generated Rust gives an item is one Rust item: two prototypes, two ports
@@ -1088,6 +1097,19 @@ fn check_names(sw: &Software, out: &mut Vec<Error>) {
         if let Some(first) = seen.insert(method.clone(), &p.path) {
             out.push(Error::new(
                 format!("two prototypes would be generated as `rte.{method}()`"),
+                &[&p.path, first],
+            ));
+        }
+    }
+    // Contexts: one struct each.
+    let mut contexts: HashMap<String, &str> = HashMap::new();
+    for p in &comp.prototypes {
+        if let Some(first) = contexts.insert(context(p), &p.path) {
+            out.push(Error::new(
+                format!(
+                    "two prototypes would be generated as one context `{}`",
+                    context(p)
+                ),
                 &[&p.path, first],
             ));
         }
@@ -1196,21 +1218,22 @@ fn check_names(sw: &Software, out: &mut Vec<Error>) {
         ));
     }
     // The task bodies: a function each.
+    let mut tasks: Vec<&str> = sw.mappings.iter().map(|m| m.task.as_str()).collect();
+    tasks.sort_unstable();
+    tasks.dedup();
     let mut bodies: HashMap<String, &str> = HashMap::new();
-    for m in &sw.mappings {
-        let name = snake(m.task.rsplit('/').next().unwrap_or(&m.task));
-        if let Some(first) = bodies.insert(name.clone(), &m.task) {
-            if first != m.task {
-                out.push(Error::new(
-                    format!("two tasks' bodies would be generated as one function `{name}`"),
-                    &[&m.task, first],
-                ));
-            }
+    for task in tasks {
+        let name = snake(task.rsplit('/').next().unwrap_or(task));
+        if let Some(first) = bodies.insert(name.clone(), task) {
+            out.push(Error::new(
+                format!("two tasks' bodies would be generated as one function `{name}`"),
+                &[task, first],
+            ));
         }
         if KEYWORDS.contains(&name.as_str()) {
             out.push(Error::new(
                 format!("a task's body would be generated as the keyword `{name}`"),
-                &[&m.task],
+                &[task],
             ));
         }
     }
@@ -1363,8 +1386,18 @@ fn check_component(sw: &Software, c: &ComponentType, out: &mut Vec<Error>) {
             ));
         }
     }
+    let mut received: HashMap<&str, &str> = HashMap::new();
     for e in &c.events {
         if let EventKind::DataReceived { port } = &e.kind {
+            if let Some(first) = received.insert(port, &e.path) {
+                out.push(Error::new(
+                    format!(
+                        "two data-received events on {}.{port}: one buffer notes new data, for one event",
+                        c.name
+                    ),
+                    &[&e.path, first],
+                ));
+            }
             let required = c.ports.iter().find(|p| &p.name == port && !p.provided);
             let queued = required
                 .and_then(|p| find(&sw.interfaces, &p.interface, |i| &i.name))
@@ -1665,23 +1698,15 @@ fn emit_tasks(sw: &Software, ecu: &crate::model::Ecu, s: &mut String) -> Result<
     }
     let mut body = String::new();
     let mut released = Vec::new();
-    let mut activated_by = Vec::new();
-    for b in sw.buffers_with_events() {
-        let Some((receiver, port)) = &b.receiver else {
-            continue;
-        };
-        let activated = task_of(
-            sw,
-            ecu,
-            receiver,
-            |e| matches!(&e.kind, EventKind::DataReceived { port: p } if p == port),
-        )
-        .ok_or_else(|| {
-            Error::new(
-                format!("{receiver}.{port}'s data-received event is mapped to no task"),
-                &[&sw.rte_path],
-            )
-        })?;
+    let (events, activated, _) = activations(sw, ecu)?;
+    for Activation {
+        buffer: b,
+        receiver,
+        port,
+        task,
+    } in &events
+    {
+        let activated_task = *task;
         // The sender's task: the one task its prototype's runnables are mapped to.
         let mut writers: Vec<&crate::model::Task> = Vec::new();
         for m in sw.mappings.iter().filter(|m| m.prototype == b.sender) {
@@ -1697,7 +1722,7 @@ fn emit_tasks(sw: &Software, ecu: &crate::model::Ecu, s: &mut String) -> Result<
                     "{}'s runnables run in {} tasks: which one's write activates {} cannot be told (one task can be generated)",
                     b.sender,
                     writers.len(),
-                    activated.name
+                    activated_task.name
                 ),
                 &[&sw.rte_path],
             ));
@@ -1706,15 +1731,14 @@ fn emit_tasks(sw: &Software, ecu: &crate::model::Ecu, s: &mut String) -> Result<
             body,
             "    /// `{receiver}.{port}`'s data-received event runs in `{}` ({}): a write into \
              the buffer `{}` activates it.\n    pub const {}: TaskId = os::{};\n",
-            activated.name,
-            activated.path,
+            activated_task.name,
+            activated_task.path,
             b.field,
             crate::rust::constant(&format!("{receiver}{port}")),
-            crate::rust::constant(&activated.name)
+            crate::rust::constant(&activated_task.name)
         );
-        activated_by.push(crate::rust::constant(&format!("{receiver}{port}")));
         released.push((
-            crate::rust::constant(&activated.name),
+            crate::rust::constant(&activated_task.name),
             crate::rust::constant(&writer.name),
             writer.name.clone(),
             b.sender.clone(),
@@ -1740,10 +1764,14 @@ fn emit_tasks(sw: &Software, ecu: &crate::model::Ecu, s: &mut String) -> Result<
     }
     let _ = writeln!(
         s,
-        "\n{body}    /// The tasks the data-received events activate, in the order of \
+        "\n{body}    /// The tasks the data-received events activate, each once, in the order of \
          [`Released`]'s bits.\n    pub const ACTIVATED: [TaskId; {}] = [{}];\n",
-        activated_by.len(),
-        activated_by.join(", ")
+        activated.len(),
+        activated
+            .iter()
+            .map(|t| format!("os::{}", crate::rust::constant(&t.name)))
+            .collect::<Vec<_>>()
+            .join(", ")
     );
     let _ = writeln!(
         s,
@@ -1762,6 +1790,66 @@ fn emit_tasks(sw: &Software, ecu: &crate::model::Ecu, s: &mut String) -> Result<
             .join(", ")
     );
     Ok(())
+}
+
+/// A data-received event's buffer and the task its event runs in.
+struct Activation<'e> {
+    buffer: Buffer,
+    receiver: String,
+    port: String,
+    task: &'e crate::model::Task,
+}
+
+/// Each data-received event's buffer with its task, in the order of the buffers; the tasks
+/// they activate, each once, in that order; and each buffer's bit in `Released` (its task's
+/// place there).
+#[allow(clippy::type_complexity)]
+fn activations<'e>(
+    sw: &Software,
+    ecu: &'e crate::model::Ecu,
+) -> Result<
+    (
+        Vec<Activation<'e>>,
+        Vec<&'e crate::model::Task>,
+        HashMap<String, usize>,
+    ),
+    Error,
+> {
+    let mut events = Vec::new();
+    let mut tasks: Vec<&crate::model::Task> = Vec::new();
+    let mut bits = HashMap::new();
+    for b in sw.buffers_with_events() {
+        let Some((receiver, port)) = b.receiver.clone() else {
+            continue;
+        };
+        let task = task_of(
+            sw,
+            ecu,
+            &receiver,
+            |e| matches!(&e.kind, EventKind::DataReceived { port: p } if *p == port),
+        )
+        .ok_or_else(|| {
+            Error::new(
+                format!("{receiver}.{port}'s data-received event is mapped to no task"),
+                &[&sw.rte_path],
+            )
+        })?;
+        let bit = match tasks.iter().position(|t| t.path == task.path) {
+            Some(i) => i,
+            None => {
+                tasks.push(task);
+                tasks.len() - 1
+            }
+        };
+        bits.insert(b.field.clone(), bit);
+        events.push(Activation {
+            buffer: b,
+            receiver,
+            port,
+            task,
+        });
+    }
+    Ok((events, tasks, bits))
 }
 
 /// A task body per task that runs runnables: each runnable, in the order of its position
@@ -1832,7 +1920,7 @@ fn emit_bodies(sw: &Software, ecu: &crate::model::Ecu) -> Result<(String, Vec<St
         let _ = writeln!(
             out,
             "\n    /// `{}` ({}): {}, each with its prototype's context; the data-received events \
-             its writes fired.\n    pub fn {}(\n        rte: &mut Rte,\n{}    ) -> Released {{\n{start}{calls}{end}    }}",
+             its writes fired.\n    #[must_use = \"the tasks of the data-received events a job fired must be activated\"]\n    pub fn {}(\n        rte: &mut Rte,\n{}    ) -> Released {{\n{start}{calls}{end}    }}",
             task.name,
             task.path,
             listed.join(", then "),
@@ -1973,7 +2061,8 @@ pub fn emit(
         s,
         "        }}\n    }}\n}}\n\nimpl Default for Rte {{\n    fn default() -> Self {{\n        Self::new()\n    }}\n}}\n"
     );
-    emit_components(sw, &mut s)?;
+    let (_, activated, bits) = activations(sw, ecu)?;
+    emit_components(sw, &activated, &bits, &mut s)?;
     emit_tasks(sw, ecu, &mut s)?;
     Ok(s)
 }
@@ -2092,21 +2181,42 @@ fn mapped(sw: &Software, proto: &Prototype) -> bool {
 ///
 /// A component written against its traits that uses a port its type does not have, in the
 /// wrong direction or with another type of data does not compile.
-fn emit_components(sw: &Software, s: &mut String) -> Result<(), Error> {
+fn emit_components(
+    sw: &Software,
+    activated: &[&crate::model::Task],
+    bits: &HashMap<String, usize>,
+    s: &mut String,
+) -> Result<(), Error> {
     let comp = &sw.composition;
     let bufs = buffers(sw);
-    let events = sw.buffers_with_events();
+    let mut calls = String::new();
+    for (k, task) in activated.iter().enumerate() {
+        let _ = writeln!(
+            calls,
+            "        if self.0 & {:#x} != 0 {{\n            activate(crate::generated::os::{});\n        }}",
+            1u64 << k,
+            crate::rust::constant(&task.name)
+        );
+    }
+    if activated.is_empty() {
+        calls.push_str("        let _ = &mut activate;\n");
+    }
     let _ = writeln!(
         s,
-        "/// The data-received events a job's writes fired, a bit each in the order of \
-         [`tasks::ACTIVATED`]: the tasks to activate once the job has left the RTE.\n\
-         #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]\npub struct Released(u32);\n\n\
+        "/// The tasks whose data-received events a job's writes fired, a bit each in the \
+         order of [`tasks::ACTIVATED`]: to activate once the job has left the RTE.\n\
+         #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]\n\
+         #[must_use = \"the tasks of the data-received events a job fired must be activated\"]\n\
+         pub struct Released(u32);\n\n\
          impl Released {{\n    /// No event fired.\n    pub const NONE: Self = Self(0);\n\n    \
-         /// The tasks to activate, one for each event that fired.\n    pub fn tasks(self) -> \
+         /// The tasks to activate, each once.\n    pub fn tasks(self) -> \
          impl Iterator<Item = cw_core::os::TaskId> {{\n        tasks::ACTIVATED\n            \
-         .into_iter()\n            .enumerate()\n            .filter(move |&(i, _)| {{\n                \
-         u32::try_from(i)\n                    .ok()\n                    .and_then(|i| self.0.checked_shr(i))\n                    \
-         .is_some_and(|bit| bit & 1 == 1)\n            }})\n            .map(|(_, task)| task)\n    }}\n}}\n"
+         .into_iter()\n            .enumerate()\n            .filter(move |&(i, _)| (self.0 >> (i & 31)) & 1 == 1)\n            \
+         .map(|(_, task)| task)\n    }}\n\n    \
+         /// Calls `activate` with each task to activate, once, in the order of \
+         [`tasks::ACTIVATED`] (a test of a constant bit and a call with a constant task \
+         each).\n    pub fn activate(self, mut activate: impl FnMut(cw_core::os::TaskId)) {{\n{}    }}\n}}\n",
+        calls
     );
     for c in &sw.components {
         let _ = writeln!(
@@ -2193,6 +2303,10 @@ fn emit_components(sw: &Software, s: &mut String) -> Result<(), Error> {
         })?;
         let ty = context(proto);
         let fires = fires(sw, &bufs, proto);
+        let reaches = c
+            .ports
+            .iter()
+            .any(|p| !connected(&bufs, proto, p).is_empty());
         let (visibility, by) = if mapped(sw, proto) {
             ("", "the task bodies in [`tasks`] alone")
         } else {
@@ -2210,11 +2324,16 @@ fn emit_components(sw: &Software, s: &mut String) -> Result<(), Error> {
         let _ = writeln!(
             s,
             "/// The context of `{}` ({}), of component type `{}` ({}): its ports on its \
-             connections.\npub struct {ty}<'a> {{\n    rte: &'a mut Rte,{}\n}}\n\nimpl {} for {ty}<'_> {{",
+             connections.\npub struct {ty}<'a> {{\n{}    rte: &'a mut Rte,{}\n}}\n\nimpl {} for {ty}<'_> {{",
             proto.name,
             proto.path,
             c.name,
             c.path,
+            if reaches {
+                ""
+            } else {
+                "    /// No port of it reaches a connection.\n    #[allow(dead_code)]\n"
+            },
             if fires {
                 "\n    /// The data-received events its writes fired.\n    released: Released,"
             } else {
@@ -2238,13 +2357,13 @@ fn emit_components(sw: &Software, s: &mut String) -> Result<(), Error> {
                 Access::Write => {
                     let _ = writeln!(s, "    fn {method}(&mut self, value: {data}) {{");
                     for b in &used {
-                        match events.iter().position(|e| e.field == b.field) {
+                        match bits.get(&b.field) {
                             Some(k) if b.notify => {
                                 let _ = writeln!(
                                     s,
                                     "        if self.rte.{}.write(value).0 {{\n            self.released.0 |= {:#x};\n        }}",
                                     b.field,
-                                    1u64 << k
+                                    1u64 << *k
                                 );
                             }
                             _ => {

@@ -86,3 +86,122 @@ pub const COMPONENT_TEXTS: [&str; 7] = [
     "TARGET-P-PORT-REF",
     "SW-IMPL-POLICY",
 ];
+
+/// Any text, as a DBC and as a system description's ARXML: read, or refused with at least
+/// one error, never a panic.
+pub fn a_text_is_a_bus_or_is_refused(text: &str) -> bool {
+    let dbc = match crate::system::from_dbc(text, "fuzz.dbc") {
+        Ok(_) => true,
+        Err(e) => !e.is_empty(),
+    };
+    let arxml = match crate::system::read(text.as_bytes(), "fuzz.arxml") {
+        Ok(_) => true,
+        Err(e) => !e.is_empty(),
+    };
+    dbc && arxml
+}
+
+/// A frame of [`a_bus_reads_back_as_written`]'s: its id, length (modulo 9), whether the id
+/// is extended, its sender (modulo the nodes and none) and its signals.
+pub type FrameSeed = (u16, u8, bool, u8, Vec<SignalSeed>);
+/// A signal: start bit, length (modulo 64, plus 1), Motorola, signed, and one byte each
+/// choosing its factor and offset, range, unit, named values, receivers and comment.
+pub type SignalSeed = (u8, u8, bool, bool, u8, u8);
+
+/// The bus `frames` describe (frames of an id already taken are left out).
+pub fn bus_of(frames: &[FrameSeed]) -> crate::system::System {
+    use crate::system::{Frame, Node, Signal, System};
+    const NODES: [&str; 3] = ["Ecu", "Pc", "Gateway"];
+    const FACTORS: [(f64, f64); 6] = [
+        (1.0, 0.0),
+        (0.5, -40.0),
+        (0.1, 0.0),
+        (0.001, 1e6),
+        (-1.0, 0.5),
+        (2.0, 0.25),
+    ];
+    const UNITS: [&str; 4] = ["", "mm", "km/h", "%"];
+    const COMMENTS: [&str; 3] = ["", "One sentence.", "Two words, and a comma; then more."];
+    let pick = |list: &[&str], i: u8| {
+        list.get(usize::from(i) % list.len())
+            .copied()
+            .unwrap_or_default()
+            .to_string()
+    };
+    let mut system = System {
+        // A DBC does not name its bus: `from_dbc` calls it `CAN`.
+        bus: "CAN".to_string(),
+        nodes: NODES
+            .iter()
+            .zip(COMMENTS)
+            .map(|(n, c)| Node {
+                name: (*n).to_string(),
+                comment: c.to_string(),
+            })
+            .collect(),
+        frames: Vec::new(),
+    };
+    for (i, (id, length, extended, sender, signals)) in frames.iter().enumerate() {
+        let id = u32::from(*id) & if *extended { 0x1FFF_FFFF } else { 0x7FF };
+        if system
+            .frames
+            .iter()
+            .any(|f| f.id == id && f.extended == *extended)
+        {
+            continue;
+        }
+        let sender = usize::from(*sender) % (NODES.len() + 1);
+        let mut frame = Frame {
+            name: format!("Frame{i}"),
+            id,
+            extended: *extended,
+            length: length % 9,
+            sender: NODES.get(sender).map(|n| (*n).to_string()),
+            comment: pick(&COMMENTS, *length),
+            signals: Vec::new(),
+        };
+        for (j, (start, len, big_endian, signed, scale, texts)) in signals.iter().enumerate() {
+            let (factor, offset) = FACTORS
+                .get(usize::from(*scale) % FACTORS.len())
+                .copied()
+                .unwrap_or((1.0, 0.0));
+            let values = (0..texts % 4)
+                .map(|v| (i64::from(v) - 1, format!("Value{v}")))
+                .collect();
+            frame.signals.push(Signal {
+                name: format!("Signal{j}"),
+                start_bit: u16::from(*start),
+                length: u16::from(len % 64) + 1,
+                big_endian: *big_endian,
+                signed: *signed,
+                factor,
+                offset,
+                range: (scale % 3 != 0).then_some((offset, offset + factor * 100.0)),
+                unit: pick(&UNITS, *texts),
+                values,
+                receivers: NODES
+                    .iter()
+                    .enumerate()
+                    .filter(|(k, _)| texts >> (2 + k) & 1 == 1)
+                    .map(|(_, n)| (*n).to_string())
+                    .collect(),
+                comment: pick(&COMMENTS, texts / 4),
+            });
+        }
+        system.frames.push(frame);
+    }
+    system
+}
+
+/// A bus written as ARXML reads back the same, and written as a DBC reads back the same.
+pub fn a_bus_reads_back_as_written(frames: &[FrameSeed]) -> bool {
+    let bus = bus_of(frames);
+    let Ok(arxml) = crate::system::write(&bus, "Fuzz") else {
+        return false;
+    };
+    let Ok(read) = crate::system::read(arxml.as_bytes(), "fuzz.arxml") else {
+        return false;
+    };
+    let dbc = crate::system::from_dbc(&crate::system::to_dbc(&bus), "fuzz.dbc");
+    read.system == bus && matches!(dbc, Ok(b) if b == bus)
+}

@@ -81,7 +81,7 @@ fn the_components_read_check_and_generate_the_rte_the_ecu_uses() {
         // The task bodies: each runnable in its position, on its prototype's component.
         "pub fn os_led_task(\n        rte: &mut Rte,\n        red_led: &mut impl LedActuatorRunnables,\n        yellow_led: &mut impl LedActuatorRunnables,\n    ) -> Released {\n        red_led.led_actuator_runnable(&mut rte.red_led());\n        yellow_led.led_actuator_runnable(&mut rte.yellow_led());\n        Released::NONE\n    }",
         "let mut ports = rte.ultra_sonic();\n        ultra_sonic.ultra_sonic_runnable(&mut ports);\n        released.0 |= ports.released.0;",
-        "pub const ACTIVATED: [TaskId; 1] = [CAN_TRANSLATE_SONAR_RECV];",
+        "pub const ACTIVATED: [TaskId; 1] = [os::OS_COM_TASK];",
     ] {
         assert!(out.rust.contains(method), "{method}");
     }
@@ -442,5 +442,76 @@ fn what_the_rte_reads_but_does_not_use_is_a_note() {
     assert_eq!(
         generated(&text).notes,
         [format!("{PKG}/LEDActuator/LEDActuatorBehavior/LEDActuatorRunnable: MINIMUM-START-INTERVAL `0.005` is not used by the generated RTE")]
+    );
+}
+
+#[test]
+fn names_the_traits_contexts_and_task_bodies_would_share_are_refused() {
+    // A runnable named as a keyword.
+    let text = COMPONENTS.replace("LEDActuatorRunnable", "Loop");
+    let errors = refused(&text);
+    assert!(
+        errors.contains(&format!("runnable Loop of LEDActuator would be generated as the keyword `loop`\n  at {PKG}/LEDActuator/LEDActuatorBehavior/Loop")),
+        "{errors:#?}"
+    );
+    // A prototype named as a measurement accessor.
+    let text = COMPONENTS.replace("YellowLED", "PeekLevel");
+    let errors = refused(&text);
+    assert!(
+        errors.contains(&format!("prototype PeekLevel would be generated as `rte.peek_level()`, a name Rust or the RTE already has\n  at {PKG}/CollisionWarning/PeekLevel")),
+        "{errors:#?}"
+    );
+    // Interfaces named as an item of the prelude the module uses, or as a context.
+    for name in ["Ok", "Released", "RedLedContext", "tasks"] {
+        let text = COMPONENTS.replace("SonarDataInterface", name);
+        let errors = refused(&text);
+        assert!(
+            errors.contains(&format!("interface {name} has the name of an item the generated RTE defines or uses\n  at /CollisionWarning/PortInterfaces/{name}")),
+            "{errors:#?}"
+        );
+    }
+    // Two prototypes with two accessors but one context: `red_led()` and `red__led()`,
+    // both `RedLedContext`.
+    let text = edited(
+        "<SW-COMPONENT-PROTOTYPE>\n                  <SHORT-NAME>YellowLED</SHORT-NAME>",
+        "<SW-COMPONENT-PROTOTYPE>\n                  <SHORT-NAME>Red__LED</SHORT-NAME>\n                  <TYPE-TREF DEST=\"APPLICATION-SW-COMPONENT-TYPE\">/CollisionWarning/SwComponentTypes/LEDActuator</TYPE-TREF>\n                </SW-COMPONENT-PROTOTYPE>\n                <SW-COMPONENT-PROTOTYPE>\n                  <SHORT-NAME>YellowLED</SHORT-NAME>",
+    );
+    let errors = refused(&text);
+    assert!(
+        errors.contains(&format!("two prototypes would be generated as one context `RedLedContext`\n  at {PKG}/CollisionWarning/Red__LED\n  and {PKG}/CollisionWarning/RedLED")),
+        "{errors:#?}"
+    );
+    // Two tasks whose bodies would be one function (`OsLEDTask` and `OsLedTask`).
+    let text = in_mapping(
+        "YellowLED",
+        &format!("{OS}/OsLEDTask<"),
+        &format!("{OS}/OsLedTask<"),
+    );
+    let errors = refused(&text);
+    assert!(
+        errors.contains(&format!("two tasks' bodies would be generated as one function `os_led_task`\n  at {OS}/OsLedTask\n  and {OS}/OsLEDTask")),
+        "{errors:#?}"
+    );
+}
+
+#[test]
+fn two_data_received_events_on_one_port_are_refused() {
+    let event = COMPONENTS
+        .find("<DATA-RECEIVED-EVENT>")
+        .expect("the data-received event");
+    let end = event
+        + COMPONENTS[event..]
+            .find("</DATA-RECEIVED-EVENT>")
+            .expect("its end")
+        + "</DATA-RECEIVED-EVENT>".len();
+    let again = COMPONENTS[event..end].replace(
+        "<SHORT-NAME>OnSonarRecv</SHORT-NAME>",
+        "<SHORT-NAME>OnSonarRecvAgain</SHORT-NAME>",
+    );
+    let text = format!("{}\n{again}{}", &COMPONENTS[..end], &COMPONENTS[end..]);
+    let errors = refused(&text);
+    assert!(
+        errors.contains(&format!("two data-received events on CanTranslate.SonarRecv: one buffer notes new data, for one event\n  at {PKG}/CanTranslate/CanTranslateBehavior/OnSonarRecvAgain\n  and {PKG}/CanTranslate/CanTranslateBehavior/OnSonarRecv")),
+        "{errors:#?}"
     );
 }

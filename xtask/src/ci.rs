@@ -29,10 +29,11 @@ pub const FUZZ_TARGETS: &[&str] = &[
     "targets::frame_stuffing",
     "targets::os_timeline",
     "targets::arxml_description",
+    "targets::bus_description",
 ];
 
 /// How long the `fuzz` stage runs each target (cargo-bolero `-T`).
-const FUZZ_TIME: &str = "7s";
+const FUZZ_TIME: &str = "6s";
 
 /// Random iterations per bolero harness under Miri (bolero reads `BOLERO_RANDOM_ITERATIONS`
 /// in `bolero-engine`'s `rng::Options`; when it is set the 1 s default time limit is lifted,
@@ -418,6 +419,47 @@ fn interop() -> Result {
         let dbc = crate::process::root().join("firmware").join("ecu.dbc");
         crate::setup::run_python_tool("interop_check.py", &[&dbc, &log, &trace])?;
     }
+    // canmatrix's export of the DBC as AUTOSAR ARXML, read by the generator's reader:
+    // the same bus.
+    let dbc = crate::process::root().join(cw_gen::DBC);
+    let exported = out.join("ecu-canmatrix.arxml");
+    Cmd::new(crate::setup::venv_dir().join("bin").join("canconvert"))
+        .arg(&dbc)
+        .arg(&exported)
+        .run()?;
+    crate::system::compare(&dbc, &exported)?;
+    // And the other way: canmatrix imports the generated system description as a DBC.
+    // It reads no DATA-CONSTR (it gives each signal its type's range), so the ranges are
+    // not compared; everything else is.
+    let imported = out.join("system-canmatrix.dbc");
+    Cmd::new(crate::setup::venv_dir().join("bin").join("canconvert"))
+        .arg(crate::process::root().join(cw_gen::SYSTEM))
+        .arg(&imported)
+        .run()?;
+    // canmatrix names its output after the cluster: `system-canmatrix_CAN.dbc`.
+    let imported = out.join("system-canmatrix_CAN.dbc");
+    let without_ranges = |mut bus: cw_gen::system::System| {
+        for s in bus.frames.iter_mut().flat_map(|f| f.signals.iter_mut()) {
+            s.range = None;
+        }
+        bus
+    };
+    let ours = without_ranges(crate::system::dbc_system(&dbc)?);
+    let theirs = without_ranges(crate::system::dbc_system(&imported)?);
+    let (differences, _) = cw_gen::system::differences(&ours, &theirs);
+    if !differences.is_empty() {
+        return Err(format!(
+            "canmatrix's DBC of {} differs from {}:\n{}",
+            cw_gen::SYSTEM,
+            cw_gen::DBC,
+            differences.join("\n")
+        ));
+    }
+    println!(
+        "interop: canmatrix imports {} as {}'s bus (the ranges, which it does not read, not compared)",
+        cw_gen::SYSTEM,
+        cw_gen::DBC
+    );
     // python-can's log writers against cw-can's readers.
     crate::log_formats::run(&crate::log_formats::Options::default())
 }

@@ -2,7 +2,8 @@
 //! checked and turned into Rust the firmware compiles, laid out by `rustfmt`:
 //! `firmware/ecu.arxml` (the basic software's ECUC values) into its configuration tables
 //! (`firmware/src/generated.rs`), `firmware/swc.arxml` (the software components and their
-//! composition) into its RTE (`firmware/src/rte.rs`). With `--check` (the check command's
+//! composition) into its RTE (`firmware/src/rte.rs`), and the bus's DBC (`firmware/ecu.dbc`)
+//! into its system description (`firmware/system.arxml`). With `--check` (the check command's
 //! `clippy` stage), nothing is written: the command fails when a committed file is not
 //! what its description generates.
 
@@ -72,8 +73,88 @@ fn generated(pair: &Pair, bytes: &[u8], ecu: &[u8]) -> Result<String> {
     std::fs::read_to_string(&file).map_err(|e| format!("reading {}: {e}", file.display()))
 }
 
+/// The system description from the bus's DBC (`firmware/system.arxml` from
+/// `firmware/ecu.dbc`): written, or checked (`--check`). Both ways: the description reads
+/// back as the DBC's bus, and the DBC written from it does too.
+fn system(check: bool) -> Result {
+    use cw_gen::system;
+    let dbc = crate::system::dbc_system(&root().join(cw_gen::DBC))?;
+    let text = system::write(&dbc, cw_gen::PACKAGE).map_err(|e| {
+        format!(
+            "{}: the system description cannot be written: {e}",
+            cw_gen::DBC
+        )
+    })?;
+    let back = system::read(text.as_bytes(), cw_gen::SYSTEM).map_err(|e| {
+        format!(
+            "{}: what {} generates does not read back:\n{}",
+            cw_gen::SYSTEM,
+            cw_gen::DBC,
+            crate::system::listed(&e)
+        )
+    })?;
+    let (differences, _) = system::differences(&dbc, &back.system);
+    if back.system != dbc || !differences.is_empty() {
+        return Err(format!(
+            "{} does not read back as {}: {}",
+            cw_gen::SYSTEM,
+            cw_gen::DBC,
+            differences.join("; ")
+        ));
+    }
+    let again = system::from_dbc(&system::to_dbc(&back.system), "the DBC written from it")
+        .map_err(|e| crate::system::listed(&e))?;
+    if again != dbc {
+        let (differences, _) = system::differences(&dbc, &again);
+        return Err(format!(
+            "the DBC written from {} is not {}: {}",
+            cw_gen::SYSTEM,
+            cw_gen::DBC,
+            differences.join("; ")
+        ));
+    }
+    settle(
+        check,
+        cw_gen::SYSTEM,
+        cw_gen::DBC,
+        &text,
+        "; each reads back as the other's bus",
+    )
+}
+
+/// Writes `text` into `generated` (from the workspace's root), generated from
+/// `description`, where it differs; or, with `check`, fails where it differs. `more` ends
+/// the line of a check that passed.
+fn settle(check: bool, generated: &str, description: &str, text: &str, more: &str) -> Result {
+    let target = root().join(generated);
+    let committed = std::fs::read_to_string(&target).unwrap_or_default();
+    if check {
+        if committed != text {
+            return Err(format!(
+                "{generated} is not what {description} generates: run `cargo xtask generate` and commit both"
+            ));
+        }
+        println!("generate: {generated} is what {description} generates{more}");
+    } else {
+        if committed != text {
+            std::fs::write(&target, text)
+                .map_err(|e| format!("writing {}: {e}", target.display()))?;
+        }
+        println!(
+            "generate: {generated} from {description} ({})",
+            if committed == text {
+                "unchanged"
+            } else {
+                "written"
+            }
+        );
+    }
+    Ok(())
+}
+
 /// Generates, or checks what is committed.
 pub fn run(options: &Options) -> Result {
+    system(options.check)?;
     let ecu_path = root().join(cw_gen::DESCRIPTION);
     let ecu =
         std::fs::read(&ecu_path).map_err(|e| format!("reading {}: {e}", ecu_path.display()))?;
@@ -82,35 +163,7 @@ pub fn run(options: &Options) -> Result {
         let bytes =
             std::fs::read(&source).map_err(|e| format!("reading {}: {e}", source.display()))?;
         let text = generated(pair, &bytes, &ecu)?;
-        let target = root().join(pair.generated);
-        let committed = std::fs::read_to_string(&target).unwrap_or_default();
-        if options.check {
-            if committed != text {
-                return Err(format!(
-                    "{} is not what {} generates: run `cargo xtask generate` and commit both",
-                    pair.generated, pair.description
-                ));
-            }
-            println!(
-                "generate: {} is what {} generates",
-                pair.generated, pair.description
-            );
-        } else {
-            if committed != text {
-                std::fs::write(&target, &text)
-                    .map_err(|e| format!("writing {}: {e}", target.display()))?;
-            }
-            println!(
-                "generate: {} from {} ({})",
-                pair.generated,
-                pair.description,
-                if committed == text {
-                    "unchanged"
-                } else {
-                    "written"
-                }
-            );
-        }
+        settle(options.check, pair.generated, pair.description, &text, "")?;
     }
     Ok(())
 }

@@ -19,6 +19,9 @@
 //!   verified kernels, every survivor killed or listed as equivalent in `docs/src/mutants.md`;
 //! - `cargo xtask generate [--check]`: the firmware's configuration tables generated from
 //!   the ECU's ARXML description (the paper's step 3), or checked against it;
+//! - `cargo xtask system --from-dbc DBC | --to-dbc ARXML | --compare DBC ARXML [--out FILE]`:
+//!   a bus's system description (ARXML) from its DBC, the DBC from the description, or the
+//!   two compared;
 //! - `cargo xtask qemu [--scenario FILE].. [--compare] [--live] [--events] [--profile]
 //!   [--flash] [--serial tcp:PORT]`:
 //!   the ECU's Cortex-M4 image on QEMU's mps2-an386, the emulator-in-the-loop tests against
@@ -68,6 +71,7 @@ mod qemu;
 mod rng;
 mod s32k144;
 mod setup;
+mod system;
 mod view;
 
 use std::process::ExitCode;
@@ -122,6 +126,9 @@ enum Command {
     /// Generate the firmware's configuration tables (firmware/src/generated.rs) from the
     /// ECU's description (firmware/ecu.arxml); --check fails where they disagree
     Generate(generate::Options),
+    /// A bus's system description (ARXML) from its DBC, the DBC from the description, or the
+    /// two compared (firmware/system.arxml is generated from firmware/ecu.dbc by `generate`)
+    System(system::Options),
     /// The paper's evaluation on this ECU: the periodicity of its tasks (the paper's
     /// Table 1) on the Cortex-M4 image, written as a report with its samples and plots
     Eval(eval::Options),
@@ -170,6 +177,7 @@ fn run(command: Command) -> Result {
     match command {
         Command::Ci(options) => ci::run(&options),
         Command::Generate(options) => generate::run(&options),
+        Command::System(options) => system::run(&options),
         Command::Setup => ci::run(&ci::Options::only(&["setup"])),
         Command::Differential(options) => differential::run(&options),
         Command::DbcDifferential(options) => dbc_differential::run(&options),

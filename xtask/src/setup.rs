@@ -398,14 +398,14 @@ fn python_venv() -> Result {
     if up_to_date {
         // The stamp says pip installed exactly these pins; make sure they still import.
         let check = Cmd::new(&python)
-            .args(["-c", "import cantools, can, serial, websocket; print('cantools', cantools.__version__, '/ python-can', can.__version__, '/ pyserial', serial.__version__, '/ websocket-client', websocket.__version__)"])
+            .args(["-c", "import cantools, can, serial, websocket, canmatrix, lxml; print('cantools', cantools.__version__, '/ python-can', can.__version__, '/ pyserial', serial.__version__, '/ websocket-client', websocket.__version__, '/ canmatrix', canmatrix.__version__)"])
             .capture()?;
         if check.success {
             println!("ok: .venv has {}", check.stdout.trim());
             return Ok(());
         }
         println!(
-            "the .venv does not import cantools/can any more; reinstalling:\n{}",
+            "the .venv does not import its tools any more; reinstalling:\n{}",
             check.stderr
         );
     }
@@ -430,7 +430,7 @@ fn python_venv() -> Result {
         .arg(&requirements_path)
         .run()?;
     Cmd::new(&python)
-        .args(["-c", "import cantools, can, serial, websocket; print('cantools', cantools.__version__, '/ python-can', can.__version__, '/ pyserial', serial.__version__, '/ websocket-client', websocket.__version__)"])
+        .args(["-c", "import cantools, can, serial, websocket, canmatrix, lxml; print('cantools', cantools.__version__, '/ python-can', can.__version__, '/ pyserial', serial.__version__, '/ websocket-client', websocket.__version__, '/ canmatrix', canmatrix.__version__)"])
         .run()?;
     std::fs::write(&stamp, requirements).map_err(|e| format!("writing {}: {e}", stamp.display()))
 }
