@@ -121,7 +121,12 @@ pub fn bus_of(frames: &[FrameSeed]) -> crate::system::System {
         (2.0, 0.25),
     ];
     const UNITS: [&str; 4] = ["", "mm", "km/h", "%"];
-    const COMMENTS: [&str; 3] = ["", "One sentence.", "Two words, and a comma; then more."];
+    const COMMENTS: [&str; 4] = [
+        "",
+        "One sentence.",
+        "Two words, and a comma; then more.",
+        "A \"quoted\" word and a back\\slash.",
+    ];
     let pick = |list: &[&str], i: u8| {
         list.get(usize::from(i) % list.len())
             .copied()
@@ -142,7 +147,12 @@ pub fn bus_of(frames: &[FrameSeed]) -> crate::system::System {
         frames: Vec::new(),
     };
     for (i, (id, length, extended, sender, signals)) in frames.iter().enumerate() {
-        let id = u32::from(*id) & if *extended { 0x1FFF_FFFF } else { 0x7FF };
+        // Spread over all 29 bits of an extended identifier.
+        let id = if *extended {
+            u32::from(*id).wrapping_mul(0x2003) & 0x1FFF_FFFF
+        } else {
+            u32::from(*id) & 0x7FF
+        };
         if system
             .frames
             .iter()
@@ -155,7 +165,11 @@ pub fn bus_of(frames: &[FrameSeed]) -> crate::system::System {
             name: format!("Frame{i}"),
             id,
             extended: *extended,
-            length: length % 9,
+            // Classic CAN's lengths, and CAN FD's 12 and 64.
+            length: [0, 1, 2, 3, 4, 5, 6, 7, 8, 12, 64]
+                .get(usize::from(*length) % 11)
+                .copied()
+                .unwrap_or(8),
             sender: NODES.get(sender).map(|n| (*n).to_string()),
             comment: pick(&COMMENTS, *length),
             signals: Vec::new(),
@@ -168,7 +182,7 @@ pub fn bus_of(frames: &[FrameSeed]) -> crate::system::System {
             let values = (0..texts % 4)
                 .map(|v| (i64::from(v) - 1, format!("Value{v}")))
                 .collect();
-            frame.signals.push(Signal {
+            let signal = Signal {
                 name: format!("Signal{j}"),
                 start_bit: u16::from(*start),
                 length: u16::from(len % 64) + 1,
@@ -186,7 +200,12 @@ pub fn bus_of(frames: &[FrameSeed]) -> crate::system::System {
                     .map(|(_, n)| (*n).to_string())
                     .collect(),
                 comment: pick(&COMMENTS, texts / 4),
-            });
+            };
+            // Only a signal that fits in the frame beside the others: a bus has no other.
+            frame.signals.push(signal);
+            if !crate::system::layout_errors(&frame, "").is_empty() {
+                frame.signals.pop();
+            }
         }
         system.frames.push(frame);
     }
@@ -203,5 +222,5 @@ pub fn a_bus_reads_back_as_written(frames: &[FrameSeed]) -> bool {
         return false;
     };
     let dbc = crate::system::from_dbc(&crate::system::to_dbc(&bus), "fuzz.dbc");
-    read.system == bus && matches!(dbc, Ok(b) if b == bus)
+    read.system == bus && matches!(dbc, Ok(r) if r.system == bus)
 }

@@ -115,13 +115,17 @@ pub struct Read {
 const NO_NODE: &str = "Vector__XXX";
 
 /// A DBC's text (`source` names it in errors) as a system: every message, signal, node,
-/// comment and value table.
+/// comment and value table. What a system description has no place for (attributes,
+/// signal groups, environment variables, global value tables, the pseudo-message of
+/// signals no message carries) is a note.
 ///
 /// # Errors
 /// The DBC does not parse, or holds what a system description of this project cannot
-/// carry (a multiplexed or float signal, a message with several transmitters), each
-/// named with its message and signal.
-pub fn from_dbc(text: &str, source: &str) -> Result<System, Vec<Error>> {
+/// carry or what no bus has (a multiplexed or float signal, a message with two
+/// transmitters, an identifier out of its range or used twice, a length no CAN frame has,
+/// a signal outside its frame or over another, a node `BU_` does not list), each named
+/// with its message and signal.
+pub fn from_dbc(text: &str, source: &str) -> Result<Read, Vec<Error>> {
     let dbc = can_dbc::Dbc::try_from(text).map_err(|e| {
         vec![Error::new(
             format!("the DBC does not parse: {e:?}"),
@@ -129,6 +133,43 @@ pub fn from_dbc(text: &str, source: &str) -> Result<System, Vec<Error>> {
         )]
     })?;
     let mut out = Vec::new();
+    let mut notes = Vec::new();
+    // The identifiers as written: the parser keeps 16 bits of a standard one and 29 of an
+    // extended one.
+    let mut written: HashMap<&str, u64> = HashMap::new();
+    for line in text.lines() {
+        let mut words = line.split_whitespace();
+        if words.next() == Some("BO_") {
+            if let (Some(id), Some(name)) =
+                (words.next().and_then(|i| i.parse().ok()), words.next())
+            {
+                written.insert(name.trim_end_matches(':'), id);
+            }
+        }
+    }
+    let attributes = dbc.attribute_definitions.len()
+        + dbc.attribute_values_database.len()
+        + dbc.attribute_values_node.len()
+        + dbc.attribute_values_message.len()
+        + dbc.attribute_values_signal.len();
+    for (what, count) in [
+        (
+            "attribute definitions and values (BA_DEF_, BA_)",
+            attributes,
+        ),
+        ("signal groups (SIG_GROUP_)", dbc.signal_groups.len()),
+        (
+            "environment variables (EV_)",
+            dbc.environment_variables.len(),
+        ),
+        ("global value tables (VAL_TABLE_)", dbc.value_tables.len()),
+    ] {
+        if count > 0 {
+            notes.push(format!(
+                "{source}: {count} {what}: the system description has no place for them"
+            ));
+        }
+    }
     let id_of = |id: can_dbc::MessageId| match id {
         can_dbc::MessageId::Standard(id) => (u32::from(id), false),
         can_dbc::MessageId::Extended(id) => (id, true),
@@ -152,8 +193,9 @@ pub fn from_dbc(text: &str, source: &str) -> Result<System, Vec<Error>> {
             can_dbc::Comment::EnvVar { .. } | can_dbc::Comment::Plain { .. } => {}
         }
     }
-    let comment =
-        |key: (Option<(u32, bool)>, String)| comments.get(&key).cloned().unwrap_or_default();
+    let comment = |key: (Option<(u32, bool)>, String)| {
+        comments.get(&key).map(|c| unescaped(c)).unwrap_or_default()
+    };
     let mut system = System {
         bus: "CAN".to_string(),
         nodes: dbc
@@ -166,6 +208,7 @@ pub fn from_dbc(text: &str, source: &str) -> Result<System, Vec<Error>> {
             .collect(),
         frames: Vec::new(),
     };
+    let known = |node: &str| node == NO_NODE || dbc.nodes.iter().any(|n| n.0 == node);
     for t in &dbc.message_transmitters {
         if t.transmitter.len() > 1 {
             out.push(Error::new(
@@ -178,7 +221,9 @@ pub fn from_dbc(text: &str, source: &str) -> Result<System, Vec<Error>> {
             ));
         }
     }
-    for t in &dbc.signal_extended_value_type_list {
+    for t in dbc.signal_extended_value_type_list.iter().filter(|t| {
+        t.signal_extended_value_type != can_dbc::SignalExtendedValueType::SignedOrUnsignedInteger
+    }) {
         out.push(Error::new(
             format!(
                 "signal {} is a float: only integer signals are mapped",
@@ -193,20 +238,97 @@ pub fn from_dbc(text: &str, source: &str) -> Result<System, Vec<Error>> {
     }
     for m in &dbc.messages {
         let (id, extended) = id_of(m.id);
-        let at = format!("{source}: BO_ {} {}", m.id.raw(), m.name);
-        let Ok(length) = u8::try_from(m.size) else {
+        let raw = written
+            .get(m.name.as_str())
+            .copied()
+            .unwrap_or_else(|| u64::from(m.id.raw()));
+        let at = format!("{source}: BO_ {raw} {}", m.name);
+        if raw == INDEPENDENT_SIGNALS {
+            notes.push(format!(
+                "{at}: the pseudo-message of signals no message carries is not a frame"
+            ));
+            continue;
+        }
+        let standard = raw & 1 << 31 == 0;
+        if (standard && raw > 0x7FF) || (!standard && raw & !(1 << 31) > 0x1FFF_FFFF) {
             out.push(Error::new(
-                format!("message {} is {} bytes long", m.name, m.size),
+                format!(
+                    "message {}'s identifier {raw} is out of a{} identifier's range",
+                    m.name,
+                    if standard {
+                        " standard (11-bit)"
+                    } else {
+                        "n extended (29-bit)"
+                    }
+                ),
+                &[&at],
+            ));
+            continue;
+        }
+        let Some(length) = u8::try_from(m.size)
+            .ok()
+            .filter(|l| DLC_LENGTHS.contains(l))
+        else {
+            out.push(Error::new(
+                format!(
+                    "message {} is {} bytes long: no CAN frame has that length",
+                    m.name, m.size
+                ),
                 &[&at],
             ));
             continue;
         };
+        if let Some(first) = system
+            .frames
+            .iter()
+            .find(|f| (f.id, f.extended) == (id, extended))
+        {
+            out.push(Error::new(
+                format!(
+                    "messages {} and {} have one identifier, {raw}",
+                    first.name, m.name
+                ),
+                &[&at],
+            ));
+            continue;
+        }
+        // A transmitter given in BO_TX_BU_ alone is the sender.
+        let listed = dbc
+            .message_transmitters
+            .iter()
+            .find(|t| t.message_id == m.id)
+            .and_then(|t| t.transmitter.first())
+            .cloned();
+        let sender = match (m.transmitter.clone().filter(|t| t != NO_NODE), listed) {
+            (Some(a), Some(b)) if a != b => {
+                out.push(Error::new(
+                    format!(
+                        "message {} is sent by {a} and, in BO_TX_BU_, by {b}: a frame has one sender here",
+                        m.name
+                    ),
+                    &[&at],
+                ));
+                continue;
+            }
+            (a, b) => a.or(b),
+        };
+        for node in sender
+            .iter()
+            .chain(m.signals.iter().flat_map(|s| s.receivers.iter()))
+        {
+            if !known(node) {
+                out.push(Error::new(
+                    format!("node {node} of message {} is not one of BU_'s", m.name),
+                    &[&at],
+                ));
+            }
+        }
         let mut frame = Frame {
             name: m.name.clone(),
             id,
             extended,
             length,
-            sender: m.transmitter.clone().filter(|t| t != NO_NODE),
+            sender,
             comment: comment((Some((id, extended)), String::new())),
             signals: Vec::new(),
         };
@@ -256,7 +378,7 @@ pub fn from_dbc(text: &str, source: &str) -> Result<System, Vec<Error>> {
                     } if *message_id == m.id && name == &s.name => Some(
                         value_descriptions
                             .iter()
-                            .map(|d| (d.id, d.description.clone()))
+                            .map(|d| (d.id, unescaped(&d.description)))
                             .collect(),
                     ),
                     _ => None,
@@ -272,7 +394,7 @@ pub fn from_dbc(text: &str, source: &str) -> Result<System, Vec<Error>> {
                 offset: s.offset,
                 // `[0|0]` is a DBC's "no range".
                 range: Some((number(s.min), number(s.max))).filter(|&r| r != (0.0, 0.0)),
-                unit: s.unit.clone(),
+                unit: unescaped(&s.unit),
                 values,
                 receivers: s
                     .receivers
@@ -283,13 +405,71 @@ pub fn from_dbc(text: &str, source: &str) -> Result<System, Vec<Error>> {
                 comment: comment((Some((id, extended)), s.name.clone())),
             });
         }
+        out.extend(layout_errors(&frame, &at));
         system.frames.push(frame);
     }
     if out.is_empty() {
-        Ok(system)
+        Ok(Read { system, notes })
     } else {
         Err(out)
     }
+}
+
+/// The identifier of a DBC's pseudo-message for the signals no message carries
+/// (`VECTOR__INDEPENDENT_SIG_MSG`).
+const INDEPENDENT_SIGNALS: u64 = 0xC000_0000;
+
+/// The lengths a CAN frame has: 0 to 8 bytes, and CAN FD's 12 to 64.
+const DLC_LENGTHS: [u8; 16] = [0, 1, 2, 3, 4, 5, 6, 7, 8, 12, 16, 20, 24, 32, 48, 64];
+
+/// A DBC string as it is meant: `\"` is a quote, `\\` a backslash.
+fn unescaped(s: &str) -> String {
+    s.replace("\\\"", "\"").replace("\\\\", "\\")
+}
+
+/// Each signal of `frame` outside it, and each pair sharing a bit, as an error at `at`.
+pub fn layout_errors(frame: &Frame, at: &str) -> Vec<Error> {
+    use crate::model::Endianness;
+    let mut out = Vec::new();
+    let mut taken: Vec<(u64, &str)> = Vec::new();
+    for s in &frame.signals {
+        let order = if s.big_endian {
+            Endianness::Big
+        } else {
+            Endianness::Little
+        };
+        let Some(bits) = crate::validate::signal_bits(
+            u64::from(s.start_bit),
+            u64::from(s.length),
+            order,
+            u64::from(frame.length),
+        ) else {
+            out.push(Error::new(
+                format!(
+                    "signal {}.{} (start bit {}, {} bits, {}) does not fit in its {}-byte frame",
+                    frame.name,
+                    s.name,
+                    s.start_bit,
+                    s.length,
+                    order_name(s.big_endian),
+                    frame.length
+                ),
+                &[at],
+            ));
+            continue;
+        };
+        if let Some((_, other)) = taken.iter().find(|(b, _)| bits.contains(b)) {
+            out.push(Error::new(
+                format!(
+                    "signals {}.{other} and {}.{} share bits",
+                    frame.name, frame.name, s.name
+                ),
+                &[at],
+            ));
+        }
+        taken.extend(bits.into_iter().map(|b| (b, s.name.as_str())));
+    }
+    out
 }
 
 /// A quoted DBC string.
@@ -476,12 +656,36 @@ fn compu(
 ) -> (f64, f64, Option<(f64, f64)>, Vec<(i64, String)>) {
     let (mut factor, mut offset, mut raw_range) = (1.0, 0.0, None);
     let mut values = Vec::new();
+    let mut linear_scales = 0;
+    // canmatrix writes no category for a table of named values.
+    let category = text(m, ElementName::Category);
+    if !matches!(
+        category.as_deref(),
+        None | Some(
+            "IDENTICAL" | "LINEAR" | "SCALE_LINEAR" | "TEXTTABLE" | "SCALE_LINEAR_AND_TEXTTABLE"
+        )
+    ) {
+        out.push(Error::new(
+            format!(
+                "COMPU-METHOD category {}: a signal's scaling is linear, a table of named values, or both",
+                category.unwrap_or_default()
+            ),
+            &[&path_of(m)],
+        ));
+    }
     let scales = m
         .get_sub_element(ElementName::CompuInternalToPhys)
         .and_then(|c| c.get_sub_element(ElementName::CompuScales));
     for scale in scales.iter().flat_map(Element::sub_elements) {
         let at = path_of(m);
         if let Some(coeffs) = scale.get_sub_element(ElementName::CompuRationalCoeffs) {
+            linear_scales += 1;
+            if linear_scales == 2 {
+                out.push(Error::new(
+                    "two linear scales: a signal's scaling is one",
+                    &[&at],
+                ));
+            }
             let vs = |n: ElementName| -> Vec<f64> {
                 coeffs
                     .get_sub_element(n)
@@ -505,6 +709,9 @@ fn compu(
             let high = number(&scale, ElementName::UpperLimit, out);
             if let (Some(l), Some(h)) = (low, high) {
                 raw_range = Some((l, h));
+                notes.push(format!(
+                    "{at}: the linear scale's limits are read as raw values, as AUTOSAR gives them (canmatrix writes physical ones: the two agree where the factor is 1 and the offset 0)"
+                ));
             }
         } else if let Some(vt) = scale
             .get_sub_element(ElementName::CompuConst)
@@ -740,9 +947,12 @@ fn read_frame(
     }
     let frame = reference(t, ElementName::FrameRef, out)?;
     let length = integer(&frame, ElementName::FrameLength, out)?;
-    let Some(length) = u8::try_from(length).ok().filter(|&l| l <= 64) else {
+    let Some(length) = u8::try_from(length)
+        .ok()
+        .filter(|l| DLC_LENGTHS.contains(l))
+    else {
         out.push(Error::new(
-            format!("a frame of {length} bytes"),
+            format!("a frame of {length} bytes: no CAN frame has that length"),
             &[&path_of(&frame)],
         ));
         return None;
@@ -811,6 +1021,7 @@ fn read_frame(
             f.signals.push(s);
         }
     }
+    out.extend(layout_errors(&f, &at));
     Some(f)
 }
 
@@ -1340,8 +1551,8 @@ pub fn differences(dbc: &System, arxml: &System) -> (Vec<String>, Vec<String>) {
             differ("the length", a.length.to_string(), b.length.to_string());
             differ(
                 "the byte order",
-                order(a.big_endian).to_string(),
-                order(b.big_endian).to_string(),
+                order_name(a.big_endian).to_string(),
+                order_name(b.big_endian).to_string(),
             );
             differ(
                 "the signedness",
@@ -1390,7 +1601,7 @@ pub fn differences(dbc: &System, arxml: &System) -> (Vec<String>, Vec<String>) {
     (out, unchecked)
 }
 
-fn order(big_endian: bool) -> &'static str {
+fn order_name(big_endian: bool) -> &'static str {
     if big_endian {
         "Motorola"
     } else {

@@ -11,7 +11,9 @@ const SYSTEM: &str = include_str!("../../firmware/system.arxml");
 const CANMATRIX: &str = include_str!("data/ecu-canmatrix-1.3.3.arxml");
 
 fn bus() -> system::System {
-    system::from_dbc(DBC, "ecu.dbc").expect("the DBC is a bus")
+    system::from_dbc(DBC, "ecu.dbc")
+        .expect("the DBC is a bus")
+        .system
 }
 
 fn errors(e: Vec<cw_gen::validate::Error>) -> Vec<String> {
@@ -59,7 +61,9 @@ fn the_committed_system_description_is_the_dbcs_bus_both_ways() {
     // The DBC written from it is the same bus.
     let back = system::to_dbc(&read.system);
     assert_eq!(
-        system::from_dbc(&back, "back.dbc").expect("it parses"),
+        system::from_dbc(&back, "back.dbc")
+            .expect("it parses")
+            .system,
         bus()
     );
 }
@@ -185,4 +189,73 @@ fn any_text_is_a_bus_or_is_refused() {
     bolero::check!()
         .with_type::<String>()
         .for_each(|text| assert!(spec::a_text_is_a_bus_or_is_refused(text)));
+}
+
+#[test]
+fn what_no_bus_has_is_refused_naming_the_message() {
+    let refused = |from: &str, to: &str| -> Vec<String> {
+        assert_eq!(DBC.matches(from).count(), 1, "{from}");
+        match system::from_dbc(&DBC.replacen(from, to, 1), "ecu.dbc") {
+            Ok(_) => Vec::new(),
+            Err(e) => errors(e),
+        }
+    };
+    let cases = [
+        // An identifier beyond 11 bits without the extended bit.
+        (
+            "BO_ 512 ThresholdConfig: 4 PC",
+            "BO_ 4096 ThresholdConfig: 4 PC",
+            "message ThresholdConfig's identifier 4096 is out of a standard (11-bit) identifier's range\n  at ecu.dbc: BO_ 4096 ThresholdConfig",
+        ),
+        // Two messages of one identifier.
+        (
+            "BO_ 512 ThresholdConfig: 4 PC",
+            "BO_ 256 ThresholdConfig: 4 PC",
+            "messages DistanceFrame and ThresholdConfig have one identifier, 256\n  at ecu.dbc: BO_ 256 ThresholdConfig",
+        ),
+        // A length no CAN frame has.
+        (
+            "BO_ 512 ThresholdConfig: 4 PC",
+            "BO_ 512 ThresholdConfig: 9 PC",
+            "message ThresholdConfig is 9 bytes long: no CAN frame has that length\n  at ecu.dbc: BO_ 512 ThresholdConfig",
+        ),
+        // A signal beyond its frame.
+        (
+            "BO_ 256 DistanceFrame: 8 ECU",
+            "BO_ 256 DistanceFrame: 4 ECU",
+            "signal DistanceFrame.WarningLevel (start bit 32, 8 bits, Intel) does not fit in its 4-byte frame\n  at ecu.dbc: BO_ 256 DistanceFrame",
+        ),
+        // Two signals over one bit.
+        (
+            " SG_ WarningLevel : 32|8@1+",
+            " SG_ WarningLevel : 24|8@1+",
+            "signals DistanceFrame.Distance and DistanceFrame.WarningLevel share bits\n  at ecu.dbc: BO_ 256 DistanceFrame",
+        ),
+        // A receiver that is no node of the bus.
+        (
+            "[0|3] \"\" PC",
+            "[0|3] \"\" Dash",
+            "node Dash of message DistanceFrame is not one of BU_'s\n  at ecu.dbc: BO_ 256 DistanceFrame",
+        ),
+    ];
+    for (from, to, error) in cases {
+        let errors = refused(from, to);
+        assert_eq!(errors, [error.to_string()], "{to}");
+    }
+}
+
+#[test]
+fn what_a_system_description_has_no_place_for_is_a_note() {
+    let dbc = format!(
+        "{DBC}\nBO_ 3221225472 VECTOR__INDEPENDENT_SIG_MSG: 0 Vector__XXX\n SG_ Spare : 0|8@1+ (1,0) [0|0] \"\" Vector__XXX\n\nBA_DEF_ BO_ \"GenMsgCycleTime\" INT 0 65535;\nBA_ \"GenMsgCycleTime\" BO_ 256 40;\n"
+    );
+    let read = system::from_dbc(&dbc, "ecu.dbc").expect("it reads");
+    assert_eq!(read.system, bus());
+    assert_eq!(
+        read.notes,
+        [
+            "ecu.dbc: 2 attribute definitions and values (BA_DEF_, BA_): the system description has no place for them",
+            "ecu.dbc: BO_ 3221225472 VECTOR__INDEPENDENT_SIG_MSG: the pseudo-message of signals no message carries is not a frame",
+        ]
+    );
 }

@@ -103,7 +103,8 @@ fn system(check: bool) -> Result {
         ));
     }
     let again = system::from_dbc(&system::to_dbc(&back.system), "the DBC written from it")
-        .map_err(|e| crate::system::listed(&e))?;
+        .map_err(|e| crate::system::listed(&e))?
+        .system;
     if again != dbc {
         let (differences, _) = system::differences(&dbc, &again);
         return Err(format!(

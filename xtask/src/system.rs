@@ -4,7 +4,8 @@
 //! - `--from-dbc BUS.dbc [--out BUS.arxml]`: the DBC's nodes, frames and signals as an
 //!   AUTOSAR system description (`cw_gen::system::write`);
 //! - `--to-dbc BUS.arxml [--out BUS.dbc]`: a system description (this project's, or one
-//!   canmatrix exported) as a DBC; what the ARXML holds that a DBC cannot is named;
+//!   canmatrix exported) as a DBC; what it reads and has no place for is a note (on the
+//!   standard error: the DBC may be on the standard output);
 //! - `--compare BUS.dbc BUS.arxml`: every difference between the two, naming frame and
 //!   signal; it fails on any.
 //!
@@ -43,25 +44,27 @@ pub fn listed(errors: &[cw_gen::validate::Error]) -> String {
 
 fn read_text(path: &Path) -> Result<String> {
     let bytes = std::fs::read(path).map_err(|e| format!("reading {}: {e}", path.display()))?;
-    // A DBC may be Windows-1252 (CANdb++): bytes above ASCII are taken one character each.
-    Ok(match String::from_utf8(bytes) {
-        Ok(s) => s,
-        Err(e) => e.into_bytes().into_iter().map(char::from).collect(),
-    })
+    // UTF-8, else Windows-1252 (as CANdb++ writes), as `cw-can` reads a DBC.
+    Ok(cw_can::dbc::text_of(&bytes))
 }
 
-/// The DBC at `path` as a system.
+/// The DBC at `path` as a system, its notes printed (on the standard error: the standard
+/// output may be a file's text).
 pub fn dbc_system(path: &Path) -> Result<cw_gen::system::System> {
     let name = path.display().to_string();
-    cw_gen::system::from_dbc(&read_text(path)?, &name).map_err(|e| {
+    let read = cw_gen::system::from_dbc(&read_text(path)?, &name).map_err(|e| {
         format!(
             "{name}: the DBC cannot be described as a system:\n{}",
             listed(&e)
         )
-    })
+    })?;
+    for note in &read.notes {
+        eprintln!("system: note: {note}");
+    }
+    Ok(read.system)
 }
 
-/// The system description at `path`, its notes printed.
+/// The system description at `path`, its notes printed (on the standard error).
 pub fn arxml_system(path: &Path) -> Result<cw_gen::system::System> {
     let name = path.display().to_string();
     let bytes = std::fs::read(path).map_err(|e| format!("reading {name}: {e}"))?;
@@ -72,7 +75,7 @@ pub fn arxml_system(path: &Path) -> Result<cw_gen::system::System> {
         )
     })?;
     for note in &read.notes {
-        println!("system: note: {note}");
+        eprintln!("system: note: {note}");
     }
     Ok(read.system)
 }
