@@ -323,9 +323,11 @@ mod targets {
 
     /// Any bus (frames and signals of any id, layout, scaling, range, named values, sender,
     /// receivers and comments) written as a system description (ARXML) and as a DBC reads
-    /// back the same; any text read as either is a bus or refused, never a panic
-    /// (`cw_gen::spec::a_bus_reads_back_as_written`,
-    /// `cw_gen::spec::a_text_is_a_bus_or_is_refused`).
+    /// back the same; any text read as either is a bus or refused, never a panic; frames
+    /// between other nodes leave the ECU's communication as it was, and one the ECU sends
+    /// without a CanIf PDU is refused (`cw_gen::spec::a_bus_reads_back_as_written`,
+    /// `cw_gen::spec::a_text_is_a_bus_or_is_refused`,
+    /// `cw_gen::spec::frames_of_other_nodes_leave_the_ecu_alone`).
     #[test]
     fn bus_description() {
         bolero::check!()
@@ -333,6 +335,9 @@ mod targets {
             .for_each(|(frames, text)| {
                 assert!(cw_gen::spec::a_bus_reads_back_as_written(frames));
                 assert!(cw_gen::spec::a_text_is_a_bus_or_is_refused(text));
+                assert!(cw_gen::spec::frames_of_other_nodes_leave_the_ecu_alone(
+                    frames
+                ));
             });
     }
 

@@ -9,7 +9,9 @@
 //! - [`rust`]: the generated Rust;
 //! - [`rte`]: the software components and their RTE;
 //! - [`system`]: the system description's communication (the bus's frames and signals),
-//!   from and to a DBC.
+//!   from and to a DBC;
+//! - [`extract`]: the ECU's communication (CanIf, PduR, Com) held to what the system
+//!   description asks of it.
 //!
 //! `cargo xtask generate` runs the four steps on `firmware/ecu.arxml` and writes
 //! `firmware/src/generated.rs`; `cargo xtask generate --check` (in the check command)
@@ -29,6 +31,7 @@
 
 pub mod arxml;
 mod digest;
+pub mod extract;
 pub mod model;
 pub mod rte;
 pub mod rust;
@@ -44,6 +47,8 @@ pub const DESCRIPTION: &str = "firmware/ecu.arxml";
 pub const DBC: &str = "firmware/ecu.dbc";
 /// The system description generated from [`DBC`], from the workspace's root.
 pub const SYSTEM: &str = "firmware/system.arxml";
+/// The node of the bus ([`SYSTEM`], [`DBC`]) whose ECU [`DESCRIPTION`] configures.
+pub const NODE: &str = "ECU";
 /// The top package of the ECU's descriptions.
 pub const PACKAGE: &str = "CollisionWarning";
 /// The generated file, from the workspace's root.
@@ -129,4 +134,22 @@ pub fn generate(bytes: &[u8], source: &str) -> Result<Generated, Refused> {
         rust,
         notes: read.notes,
     })
+}
+
+/// Holds the communication of the ECUC values in `ecu` (the file `ecu_source`) to what
+/// the system description in `system` (the file `system_source`) asks of the bus's node
+/// `node`: the paper's ECU extract, checked before generation.
+///
+/// # Errors
+/// Either file cannot be read, or they disagree ([`extract::check`]), at once.
+pub fn check_communication(
+    ecu: &[u8],
+    ecu_source: &str,
+    system: &[u8],
+    system_source: &str,
+    node: &str,
+) -> Result<extract::Agreed, Refused> {
+    let bus = system::read(system, system_source).map_err(Refused)?;
+    let ecu = arxml::read(ecu, ecu_source).map_err(Refused)?.ecu;
+    extract::check(&bus, system_source, node, &ecu).map_err(Refused)
 }

@@ -3,6 +3,8 @@
 
 /// The ECU's description, as committed.
 pub const ECU: &str = include_str!("../../firmware/ecu.arxml");
+/// The bus's DBC, as committed.
+pub const DBC: &str = include_str!("../../firmware/ecu.dbc");
 /// The software components' description, as committed.
 pub const COMPONENTS: &str = include_str!("../../firmware/swc.arxml");
 
@@ -223,4 +225,52 @@ pub fn a_bus_reads_back_as_written(frames: &[FrameSeed]) -> bool {
     };
     let dbc = crate::system::from_dbc(&crate::system::to_dbc(&bus), "fuzz.dbc");
     read.system == bus && matches!(dbc, Ok(r) if r.system == bus)
+}
+
+/// The repository's bus with `frames` (a [`bus_of`], between other nodes than the ECU's)
+/// added where their identifiers are free: the ECU's communication still agrees with it,
+/// frame for frame as with the repository's bus; and with any one of them sent by the
+/// ECU instead, it is refused, the frame named.
+pub fn frames_of_other_nodes_leave_the_ecu_alone(frames: &[FrameSeed]) -> bool {
+    // Read once: the fuzz target runs this on every input.
+    static REPOSITORY: std::sync::OnceLock<Option<(crate::system::Read, crate::model::Ecu)>> =
+        std::sync::OnceLock::new();
+    let repository = REPOSITORY.get_or_init(|| {
+        let bus = crate::system::from_dbc(DBC, "ecu.dbc").ok()?;
+        let ecu = crate::arxml::read(ECU.as_bytes(), "ecu.arxml").ok()?;
+        Some((bus, ecu.ecu))
+    });
+    let Some((bus, ecu)) = repository else {
+        return false;
+    };
+    let mut bus = bus.clone();
+    let Ok(alone) = crate::extract::check(&bus, "ecu.dbc", crate::NODE, ecu) else {
+        return false;
+    };
+    let mut added = Vec::new();
+    for mut frame in bus_of(frames).frames {
+        let taken = bus
+            .system
+            .frames
+            .iter()
+            .any(|f| (f.id, f.extended) == (frame.id, frame.extended));
+        if !taken {
+            frame.name = format!("Other{}", added.len());
+            added.push(frame.name.clone());
+            bus.system.frames.push(frame);
+        }
+    }
+    if crate::extract::check(&bus, "ecu.dbc", crate::NODE, ecu) != Ok(alone) {
+        return false;
+    }
+    added.iter().all(|name| {
+        let mut ours = bus.clone();
+        for f in ours.system.frames.iter_mut().filter(|f| f.name == *name) {
+            f.sender = Some(crate::NODE.to_string());
+        }
+        matches!(
+            crate::extract::check(&ours, "ecu.dbc", crate::NODE, ecu),
+            Err(e) if e.iter().any(|e| e.what.contains(&format!("frame {name} ")))
+        )
+    })
 }

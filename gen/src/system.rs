@@ -102,13 +102,52 @@ pub struct Signal {
     pub comment: String,
 }
 
-/// A system description read: the bus, and one sentence per element read but not used.
+/// A system description read: the bus, one sentence per element read but not used, and
+/// where each frame and signal was read.
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct Read {
     /// The bus.
     pub system: System,
     /// What was read and has no place in the model, with its path.
     pub notes: Vec<String>,
+    /// Where each frame and signal was read.
+    pub places: Places,
+}
+
+/// Where the frames and signals of a bus were read: an ARXML path (the frame's
+/// `CAN-FRAME-TRIGGERING`, the signal's `I-SIGNAL-TO-I-PDU-MAPPING`) or a DBC's line
+/// (`ecu.dbc: BO_ 256 DistanceFrame, SG_ Distance`), for errors that name them.
+#[derive(Debug, Clone, PartialEq, Eq, Default)]
+pub struct Places {
+    frames: HashMap<String, String>,
+    signals: HashMap<(String, String), String>,
+}
+
+impl Places {
+    /// The frame `frame`'s place (its name, where it was not read).
+    pub fn frame(&self, frame: &str) -> String {
+        self.frames
+            .get(frame)
+            .cloned()
+            .unwrap_or_else(|| format!("frame {frame}"))
+    }
+
+    /// The place of the signal `signal` of the frame `frame`.
+    pub fn signal(&self, frame: &str, signal: &str) -> String {
+        self.signals
+            .get(&(frame.to_string(), signal.to_string()))
+            .cloned()
+            .unwrap_or_else(|| format!("signal {signal} of frame {frame}"))
+    }
+
+    fn add_frame(&mut self, frame: &str, at: &str) {
+        self.frames.insert(frame.to_string(), at.to_string());
+    }
+
+    fn add_signal(&mut self, frame: &str, signal: &str, at: &str) {
+        self.signals
+            .insert((frame.to_string(), signal.to_string()), at.to_string());
+    }
 }
 
 /// The DBC's name for "no node".
@@ -134,6 +173,7 @@ pub fn from_dbc(text: &str, source: &str) -> Result<Read, Vec<Error>> {
     })?;
     let mut out = Vec::new();
     let mut notes = Vec::new();
+    let mut places = Places::default();
     // The identifiers as written: the parser keeps 16 bits of a standard one and 29 of an
     // extended one.
     let mut written: HashMap<&str, u64> = HashMap::new();
@@ -332,8 +372,10 @@ pub fn from_dbc(text: &str, source: &str) -> Result<Read, Vec<Error>> {
             comment: comment((Some((id, extended)), String::new())),
             signals: Vec::new(),
         };
+        places.add_frame(&m.name, &at);
         for s in &m.signals {
             let at = format!("{at}, SG_ {}", s.name);
+            places.add_signal(&m.name, &s.name, &at);
             if s.multiplexer_indicator != can_dbc::MultiplexIndicator::Plain {
                 out.push(Error::new(
                     format!(
@@ -409,7 +451,11 @@ pub fn from_dbc(text: &str, source: &str) -> Result<Read, Vec<Error>> {
         system.frames.push(frame);
     }
     if out.is_empty() {
-        Ok(Read { system, notes })
+        Ok(Read {
+            system,
+            notes,
+            places,
+        })
     } else {
         Err(out)
     }
@@ -757,6 +803,7 @@ pub fn read(bytes: &[u8], file_name: &str) -> Result<Read, Vec<Error>> {
     let bytes = known_schema(bytes, file_name, &mut notes);
     let model = crate::arxml::load(&bytes, file_name)?;
     let mut out = Vec::new();
+    let mut places = Places::default();
     let mut clusters = Vec::new();
     let mut nodes = Vec::new();
     for (_, e) in model.elements_dfs() {
@@ -819,13 +866,18 @@ pub fn read(bytes: &[u8], file_name: &str) -> Result<Read, Vec<Error>> {
             .iter()
             .flat_map(Element::sub_elements)
         {
-            if let Some(f) = read_frame(&t, &signal_triggerings, &mut out, &mut notes) {
+            if let Some(f) = read_frame(&t, &signal_triggerings, &mut out, &mut notes, &mut places)
+            {
                 system.frames.push(f);
             }
         }
     }
     if out.is_empty() {
-        Ok(Read { system, notes })
+        Ok(Read {
+            system,
+            notes,
+            places,
+        })
     } else {
         Err(out)
     }
@@ -911,6 +963,7 @@ fn read_frame(
     signal_triggerings: &[Element],
     out: &mut Vec<Error>,
     notes: &mut Vec<String>,
+    places: &mut Places,
 ) -> Option<Frame> {
     let at = path_of(t);
     let id = integer(t, ElementName::Identifier, out)?;
@@ -1018,10 +1071,12 @@ fn read_frame(
         .flat_map(Element::sub_elements)
     {
         if let Some(s) = read_signal(&m, signal_triggerings, out, notes) {
+            places.add_signal(&f.name, &s.name, &path_of(&m));
             f.signals.push(s);
         }
     }
     out.extend(layout_errors(&f, &at));
+    places.add_frame(&f.name, &at);
     Some(f)
 }
 

@@ -75,7 +75,7 @@ const BUDGET_S: &[(&str, u32)] = &[
     ("setup", 400),
     ("fmt", 5),
     ("clippy", 90),
-    ("test", 280),
+    ("test", 305),
     ("cross", 73),
     ("miri", 487),
     ("model", 48),
@@ -88,7 +88,7 @@ const BUDGET_S: &[(&str, u32)] = &[
     ("interop", 15),
     ("view", 6),
     ("docs", 166),
-    ("fuzz", 392),
+    ("fuzz", 367),
     ("bench", 50),
 ];
 

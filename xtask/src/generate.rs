@@ -3,7 +3,8 @@
 //! `firmware/ecu.arxml` (the basic software's ECUC values) into its configuration tables
 //! (`firmware/src/generated.rs`), `firmware/swc.arxml` (the software components and their
 //! composition) into its RTE (`firmware/src/rte.rs`), and the bus's DBC (`firmware/ecu.dbc`)
-//! into its system description (`firmware/system.arxml`). With `--check` (the check command's
+//! into its system description (`firmware/system.arxml`), to which the ECU description's
+//! communication (CanIf, PduR, Com) is held before anything is generated. With `--check` (the check command's
 //! `clippy` stage), nothing is written: the command fails when a committed file is not
 //! what its description generates.
 
@@ -76,7 +77,7 @@ fn generated(pair: &Pair, bytes: &[u8], ecu: &[u8]) -> Result<String> {
 /// The system description from the bus's DBC (`firmware/system.arxml` from
 /// `firmware/ecu.dbc`): written, or checked (`--check`). Both ways: the description reads
 /// back as the DBC's bus, and the DBC written from it does too.
-fn system(check: bool) -> Result {
+fn system(check: bool) -> Result<String> {
     use cw_gen::system;
     let dbc = crate::system::dbc_system(&root().join(cw_gen::DBC))?;
     let text = system::write(&dbc, cw_gen::PACKAGE).map_err(|e| {
@@ -120,7 +121,38 @@ fn system(check: bool) -> Result {
         cw_gen::DBC,
         &text,
         "; each reads back as the other's bus",
+    )?;
+    Ok(text)
+}
+
+/// The ECU description's communication held to what the system description asks of the
+/// ECU's node (`cw_gen::NODE`): its frames, PDUs and signals.
+fn communication(ecu: &[u8], system: &str) -> Result {
+    let agreed = cw_gen::check_communication(
+        ecu,
+        cw_gen::DESCRIPTION,
+        system.as_bytes(),
+        cw_gen::SYSTEM,
+        cw_gen::NODE,
     )
+    .map_err(|e| {
+        format!(
+            "{}'s communication is not what {} gives node {}:\n{e}",
+            cw_gen::DESCRIPTION,
+            cw_gen::SYSTEM,
+            cw_gen::NODE
+        )
+    })?;
+    println!(
+        "generate: {}'s communication is what {} gives node {} (frames sent {}, received {}; Com signals {})",
+        cw_gen::DESCRIPTION,
+        cw_gen::SYSTEM,
+        cw_gen::NODE,
+        agreed.sent,
+        agreed.received,
+        agreed.signals
+    );
+    Ok(())
 }
 
 /// Writes `text` into `generated` (from the workspace's root), generated from
@@ -155,10 +187,11 @@ fn settle(check: bool, generated: &str, description: &str, text: &str, more: &st
 
 /// Generates, or checks what is committed.
 pub fn run(options: &Options) -> Result {
-    system(options.check)?;
+    let system = system(options.check)?;
     let ecu_path = root().join(cw_gen::DESCRIPTION);
     let ecu =
         std::fs::read(&ecu_path).map_err(|e| format!("reading {}: {e}", ecu_path.display()))?;
+    communication(&ecu, &system)?;
     for pair in &PAIRS {
         let source = root().join(pair.description);
         let bytes =
