@@ -4,7 +4,7 @@
 //!
 //! Each item names the ARXML path it came from.
 //!
-//! Description digest: 05db8df9db4a2f4f
+//! Description digest: 055a2d64ff8ac05f
 
 /// `Os` (/CollisionWarning/EcucValues/Os).
 pub mod os {

@@ -3,7 +3,7 @@
 //! Each connection is a typed buffer from `cw_core::rte`. A component implements its type's runnables trait against its type's ports trait; the task bodies in [`tasks`] call each runnable with its prototype's context, which reaches exactly that prototype's connections, so a component that uses a port it does not have, in the wrong direction or with the wrong data does not compile. Each item names the ARXML path it came from; the tasks are the OS's of the ECU's description.
 //!
 //! Description digest: 47ad40f79f960aa3
-//! ECU description digest: 05db8df9db4a2f4f
+//! ECU description digest: 055a2d64ff8ac05f
 
 use cw_core::rte::{LastIsBest, Queued, RteError, SenderReceiverInterface};
 

@@ -16,7 +16,7 @@ use autosar_data::{AttributeName, AutosarModel, AutosarVersion, Element, Element
 
 use crate::model::{
     Alarm, AlarmAction, CanController, CanIf, Com, Counter, Direction, Ecu, Endianness, Event,
-    Hooks, IPdu, Isr, LPdu, Named, Os, Pdu, Route, Signal, Status, Task, Transfer, TxIPdu,
+    Hooks, IPdu, Isr, LPdu, Named, Os, Pdu, Route, Signal, Status, Task, Timing, Transfer, TxIPdu,
     TxModeMode,
 };
 use crate::validate::Error;
@@ -310,6 +310,18 @@ pub fn parse_int(text: &str) -> Option<u64> {
 /// whole milliseconds, up to `u32::MAX`; read exactly from its decimal digits, so a time
 /// that is not a whole number of milliseconds (`0.0205`) is `None` at any size.
 pub fn parse_exact_ms(text: &str) -> Option<u64> {
+    exact_units(text, 3)
+}
+
+/// A time in seconds as whole microseconds, up to `u32::MAX`, as [`parse_exact_ms`] reads
+/// milliseconds.
+pub fn parse_exact_us(text: &str) -> Option<u64> {
+    exact_units(text, 6)
+}
+
+/// A time in seconds as a whole number of `10^-power` s, up to `u32::MAX`, read exactly
+/// from its decimal digits.
+fn exact_units(text: &str, power: i32) -> Option<u64> {
     let text = text.trim();
     let text = text.strip_prefix('+').unwrap_or(text);
     let (mantissa, exponent) = match text.find(['e', 'E']) {
@@ -329,7 +341,7 @@ pub fn parse_exact_ms(text: &str) -> Option<u64> {
     let digits = format!("{whole}{fraction}");
     let digits = digits.trim_start_matches('0');
     let fraction_len = i32::try_from(fraction.len()).ok()?;
-    let mut shift = exponent.checked_add(3)?.checked_sub(fraction_len)?;
+    let mut shift = exponent.checked_add(power)?.checked_sub(fraction_len)?;
     let mut digits = digits.to_string();
     while shift < 0 && digits.ends_with('0') {
         digits.pop();
@@ -383,16 +395,28 @@ impl<'a> Take<'a> {
         self.c.params.get(i).map(|p| p.value.as_str())
     }
 
-    fn int(&mut self, def: &str, out: &mut Vec<Error>) -> Option<u64> {
+    /// The value of parameter `def` read by `parse`; where it does not read, an error
+    /// saying it is not `what`.
+    fn parsed(
+        &mut self,
+        def: &str,
+        parse: fn(&str) -> Option<u64>,
+        what: &str,
+        out: &mut Vec<Error>,
+    ) -> Option<u64> {
         let v = self.param(def)?;
-        let parsed = parse_int(v);
+        let parsed = parse(v);
         if parsed.is_none() {
             out.push(Error::new(
-                format!("{def} = `{v}` is not an integer"),
+                format!("{def} = `{v}` is not {what}"),
                 &[&self.c.path],
             ));
         }
         parsed
+    }
+
+    fn int(&mut self, def: &str, out: &mut Vec<Error>) -> Option<u64> {
+        self.parsed(def, parse_int, "an integer", out)
     }
 
     fn required_int(&mut self, def: &str, out: &mut Vec<Error>) -> u64 {
@@ -426,15 +450,42 @@ impl<'a> Take<'a> {
     }
 
     fn ms(&mut self, def: &str, out: &mut Vec<Error>) -> Option<u64> {
-        let v = self.param(def)?;
-        let parsed = parse_ms(v);
-        if parsed.is_none() {
-            out.push(Error::new(
-                format!("{def} = `{v}` is not a whole number of milliseconds (in seconds)"),
-                &[&self.c.path],
+        let what = "a whole number of milliseconds (in seconds)";
+        self.parsed(def, parse_ms, what, out)
+    }
+
+    fn us(&mut self, def: &str, out: &mut Vec<Error>) -> Option<u64> {
+        let what = "a whole number of microseconds (in seconds)";
+        self.parsed(def, parse_exact_us, what, out)
+    }
+
+    /// The `OsTaskTimingProtection` or `OsIsrTimingProtection` (`kind` `Task` or `Isr`)
+    /// of this task or ISR: its execution budget and time frame; its lock budgets are
+    /// notes.
+    fn timing(
+        &mut self,
+        kind: &str,
+        out: &mut Vec<Error>,
+        notes: &mut Vec<String>,
+    ) -> Option<Timing> {
+        let c = self.single(&format!("Os{kind}TimingProtection"), out)?;
+        let mut t = Take::new(c);
+        let timing = Timing {
+            path: c.path.clone(),
+            budget_us: t.us(&format!("Os{kind}ExecutionBudget"), out),
+            time_frame_us: t.us(&format!("Os{kind}TimeFrame"), out),
+        };
+        for lock in ["AllInterruptLockBudget", "OsInterruptLockBudget"] {
+            t.unused(&format!("Os{kind}{lock}"), notes);
+        }
+        for sub in t.subs(&format!("Os{kind}ResourceLock")) {
+            notes.push(format!(
+                "{}: a resource's lock budget is not used by this ECU",
+                sub.path
             ));
         }
-        parsed
+        t.finish(out, notes);
+        Some(timing)
     }
 
     fn boolean(&mut self, def: &str, out: &mut Vec<Error>) -> Option<bool> {
@@ -788,6 +839,7 @@ fn map_os(
             autostart: autostart.is_some(),
             resources: t.refs("OsTaskResourceRef", "OsResource", out),
             events: t.refs("OsTaskEventRef", "OsEvent", out),
+            timing: t.timing("Task", out, notes),
         });
     }
     for t in top_level(top, "OsEvent") {
@@ -883,7 +935,7 @@ fn map_os(
             )
             .unwrap_or(2);
         let resources = t.refs("OsIsrResourceRef", "OsResource", out);
-        t.unused("OsIsrTimingProtection", notes);
+        let timing = t.timing("Isr", out, notes);
         // The interrupt priority is the port's, in OSEK's order (a higher number is more
         // urgent), as MICROSAR and TOPPERS name it, or as Arctic Core does.
         let has = |t: &Take<'_>, def: &str| t.c.params.iter().any(|p| p.def == def);
@@ -911,6 +963,7 @@ fn map_os(
             category,
             priority,
             resources,
+            timing,
         });
     }
 }
@@ -1525,6 +1578,36 @@ impl Writer<'_> {
         Ok(c)
     }
 
+    /// A task's or ISR's (`kind`) timing protection, under `c` of definition `d`.
+    fn timing(c: &Element, d: &str, kind: &str, timing: Option<&Timing>) -> Result<(), WriteError> {
+        let Some(timing) = timing else {
+            return Ok(());
+        };
+        let def = format!("{d}/Os{kind}TimingProtection");
+        // The container's own short name, as it was read.
+        let name = timing
+            .path
+            .rsplit('/')
+            .next()
+            .filter(|n| !n.is_empty())
+            .map_or_else(|| format!("Os{kind}TimingProtection"), str::to_string);
+        let t = Self::container(c, &name, &def, true)?;
+        for (param, us) in [
+            ("ExecutionBudget", timing.budget_us),
+            ("TimeFrame", timing.time_frame_us),
+        ] {
+            if let Some(us) = us {
+                Self::param(
+                    &t,
+                    &format!("{def}/Os{kind}{param}"),
+                    Kind::Float,
+                    &format!("{}", us as f64 / 1e6),
+                )?;
+            }
+        }
+        Ok(())
+    }
+
     fn param(c: &Element, def: &str, kind: Kind, value: &str) -> Result<(), WriteError> {
         let list = c.get_or_create_sub_element(ElementName::ParameterValues)?;
         let (element, dest) = match kind {
@@ -1676,6 +1759,7 @@ impl Writer<'_> {
                     &app_mode,
                 )?;
             }
+            Self::timing(&c, &d, "Task", t.timing.as_ref())?;
             tasks.push((t.name.clone(), c));
         }
         let mut counters = Vec::new();
@@ -1806,6 +1890,7 @@ impl Writer<'_> {
                 let target = find(&resources, r).ok_or_else(|| missing("resource", r, &i.path))?;
                 Self::reference(&c, &format!("{d}/OsIsrResourceRef"), &target)?;
             }
+            Self::timing(&c, &d, "Isr", i.timing.as_ref())?;
         }
         let osos = Self::container(&m, "OsOS", &format!("{def}/OsOS"), false)?;
         Self::param(

@@ -10,6 +10,7 @@
 //! - [`rte`]: the software components and their RTE;
 //! - [`system`]: the system description's communication (the bus's frames and signals),
 //!   from and to a DBC;
+//! - [`timing`]: the task set's response-time analysis from the tasks' and ISRs' budgets;
 //! - [`extract`]: the ECU's communication (CanIf, PduR, Com) held to what the system
 //!   description asks of it.
 //!
@@ -37,6 +38,7 @@ pub mod rte;
 pub mod rust;
 pub mod spec;
 pub mod system;
+pub mod timing;
 pub mod validate;
 
 pub use digest::digest;
@@ -84,6 +86,8 @@ pub struct Generated {
     pub rust: String,
     /// One sentence per item read but not used, with its path.
     pub notes: Vec<String>,
+    /// What the checks before generation found, one line each (the task set's analysis).
+    pub report: Vec<String>,
 }
 
 /// Reads, checks and generates the RTE: the paper's step 3 for the software components in
@@ -105,6 +109,23 @@ pub fn generate_rte(
     if !errors.is_empty() {
         return Err(Refused(errors));
     }
+    // The task set, with the tasks the RTE's events release, analysed before generation.
+    let released = rte::released_by(&sw, &ecu).map_err(|e| Refused(vec![e]))?;
+    let mut report = Vec::new();
+    match timing::analyse(&ecu, &released).map_err(Refused)? {
+        timing::Analysis::NoBudgets => report.push(format!(
+            "no task or ISR of {ecu_source} has a timing protection (OsTaskTimingProtection, OsIsrTimingProtection): the task set is not analysed"
+        )),
+        timing::Analysis::Schedulable { items, left_out } => {
+            report.push(format!(
+                "the task set of {ecu_source} meets every deadline with its budgets (response-time analysis, µs):"
+            ));
+            report.extend(items.iter().map(timing::Item::line));
+            report.extend(left_out.iter().map(|isr| {
+                format!("  ISR {isr} has no OsIsrTimingProtection: it is not in the analysis")
+            }));
+        }
+    }
     // Both descriptions' digests: the firmware's build script checks the file against each.
     let digests = format!(
         "{}\n//! ECU description digest: {}",
@@ -115,6 +136,7 @@ pub fn generate_rte(
     Ok(Generated {
         rust,
         notes: sw.notes,
+        report,
     })
 }
 
@@ -133,6 +155,7 @@ pub fn generate(bytes: &[u8], source: &str) -> Result<Generated, Refused> {
     Ok(Generated {
         rust,
         notes: read.notes,
+        report: Vec::new(),
     })
 }
 

@@ -102,6 +102,22 @@ pub struct Task {
     pub resources: Vec<String>,
     /// `OsTaskEventRef`s, by name: a task with events is extended.
     pub events: Vec<String>,
+    /// `OsTaskTimingProtection`.
+    pub timing: Option<Timing>,
+}
+
+/// `OsTaskTimingProtection` or `OsIsrTimingProtection`: what the task set's response-time
+/// analysis takes from the description ([`crate::timing`]). The kernel does not enforce
+/// it (it has no timing protection); the evaluation holds the image's measured jobs to it.
+#[derive(Debug, Clone, PartialEq, Eq, Default)]
+pub struct Timing {
+    /// The container's ARXML path.
+    pub path: Path,
+    /// `OsTaskExecutionBudget` / `OsIsrExecutionBudget`: the longest one job or one run
+    /// of the ISR takes alone, µs.
+    pub budget_us: Option<u64>,
+    /// `OsTaskTimeFrame` / `OsIsrTimeFrame`: the shortest time between two releases, µs.
+    pub time_frame_us: Option<u64>,
 }
 
 /// `OsEvent`.
@@ -167,6 +183,8 @@ pub struct Isr {
     pub priority: u64,
     /// `OsIsrResourceRef`s, by name.
     pub resources: Vec<String>,
+    /// `OsIsrTimingProtection`.
+    pub timing: Option<Timing>,
 }
 
 /// `EcucPduCollection/Pdu`.

@@ -1707,26 +1707,7 @@ fn emit_tasks(sw: &Software, ecu: &crate::model::Ecu, s: &mut String) -> Result<
     } in &events
     {
         let activated_task = *task;
-        // The sender's task: the one task its prototype's runnables are mapped to.
-        let mut writers: Vec<&crate::model::Task> = Vec::new();
-        for m in sw.mappings.iter().filter(|m| m.prototype == b.sender) {
-            if let Some(t) = ecu.os.tasks.iter().find(|t| t.path == m.task) {
-                if !writers.iter().any(|w| w.path == t.path) {
-                    writers.push(t);
-                }
-            }
-        }
-        let [writer] = writers.as_slice() else {
-            return Err(Error::new(
-                format!(
-                    "{}'s runnables run in {} tasks: which one's write activates {} cannot be told (one task can be generated)",
-                    b.sender,
-                    writers.len(),
-                    activated_task.name
-                ),
-                &[&sw.rte_path],
-            ));
-        };
+        let writer = writer_of(sw, ecu, &b.sender, activated_task)?;
         let _ = writeln!(
             body,
             "    /// `{receiver}.{port}`'s data-received event runs in `{}` ({}): a write into \
@@ -1790,6 +1771,53 @@ fn emit_tasks(sw: &Software, ecu: &crate::model::Ecu, s: &mut String) -> Result<
             .join(", ")
     );
     Ok(())
+}
+
+/// The task whose job's write activates `activated`: the one task the runnables of the
+/// sender's prototype `sender` are mapped to.
+fn writer_of<'e>(
+    sw: &Software,
+    ecu: &'e crate::model::Ecu,
+    sender: &str,
+    activated: &crate::model::Task,
+) -> Result<&'e crate::model::Task, Error> {
+    let mut writers: Vec<&crate::model::Task> = Vec::new();
+    for m in sw.mappings.iter().filter(|m| m.prototype == sender) {
+        if let Some(t) = ecu.os.tasks.iter().find(|t| t.path == m.task) {
+            if !writers.iter().any(|w| w.path == t.path) {
+                writers.push(t);
+            }
+        }
+    }
+    match writers.as_slice() {
+        [writer] => Ok(writer),
+        _ => Err(Error::new(
+            format!(
+                "{sender}'s runnables run in {} tasks: which one's write activates {} cannot be told (one task can be generated)",
+                writers.len(),
+                activated.name
+            ),
+            &[&sw.rte_path],
+        )),
+    }
+}
+
+/// Each task a data-received event activates and the task whose job's write does, by
+/// name (the generated `RELEASED_BY`), for the task set's analysis.
+///
+/// # Errors
+/// An event mapped to no task, or a sender whose runnables run in more than one task.
+pub fn released_by(sw: &Software, ecu: &crate::model::Ecu) -> Result<Vec<(String, String)>, Error> {
+    let (events, _, _) = activations(sw, ecu)?;
+    events
+        .iter()
+        .map(|a| {
+            Ok((
+                a.task.name.clone(),
+                writer_of(sw, ecu, &a.buffer.sender, a.task)?.name.clone(),
+            ))
+        })
+        .collect()
 }
 
 /// A data-received event's buffer and the task its event runs in.

@@ -1,5 +1,5 @@
-//! Named properties of the generator, run by its tests and by the fuzz target
-//! `arxml_description` (`cw-fuzz`).
+//! Named properties of the generator, run by its tests and by the fuzz targets
+//! `arxml_description` and `bus_description` (`cw-fuzz`).
 
 /// The ECU's description, as committed.
 pub const ECU: &str = include_str!("../../firmware/ecu.arxml");
@@ -273,4 +273,57 @@ pub fn frames_of_other_nodes_leave_the_ecu_alone(frames: &[FrameSeed]) -> bool {
             Err(e) if e.iter().any(|e| e.what.contains(&format!("frame {name} ")))
         )
     })
+}
+
+/// The ECU's task set with the budgets `budgets` (µs, one per task and ISR with a timing
+/// protection, in the description's order; 0 taken as 1, a missing one as the
+/// description's): analysed, it meets every deadline or is refused naming an item; and
+/// where it meets them, any one budget halved still does, no response longer (the
+/// analysis is sustainable: a job that runs shorter never makes the set miss).
+pub fn budgets_are_sustainable(budgets: &[u16]) -> bool {
+    /// The ECU's description and the RTE's releases, read once.
+    type Repository = Option<(crate::model::Ecu, Vec<(String, String)>)>;
+    static REPOSITORY: std::sync::OnceLock<Repository> = std::sync::OnceLock::new();
+    let repository = REPOSITORY.get_or_init(|| {
+        let ecu = crate::arxml::read(ECU.as_bytes(), "ecu.arxml").ok()?.ecu;
+        let sw = crate::rte::read(COMPONENTS.as_bytes(), "swc.arxml").ok()?;
+        let released = crate::rte::released_by(&sw, &ecu).ok()?;
+        Some((ecu, released))
+    });
+    let Some((ecu, released)) = repository else {
+        return false;
+    };
+    let with = |budgets: &[u64]| {
+        let mut ecu = ecu.clone();
+        let tasks = ecu.os.tasks.iter_mut().filter_map(|t| t.timing.as_mut());
+        let isrs = ecu.os.isrs.iter_mut().filter_map(|i| i.timing.as_mut());
+        for (timing, &b) in tasks.chain(isrs).zip(budgets) {
+            timing.budget_us = Some(b.max(1));
+        }
+        crate::timing::analyse(&ecu, released)
+    };
+    let budgets: Vec<u64> = budgets.iter().map(|&b| u64::from(b)).collect();
+    let responses = |analysis: &crate::timing::Analysis| match analysis {
+        crate::timing::Analysis::Schedulable { items, .. } => items
+            .iter()
+            .map(|i| i.response.time().unwrap_or(u64::MAX))
+            .collect::<Vec<_>>(),
+        crate::timing::Analysis::NoBudgets => Vec::new(),
+    };
+    match with(&budgets) {
+        Err(e) => !e.is_empty() && e.iter().all(|e| !e.paths.is_empty()),
+        Ok(analysis) => {
+            let before = responses(&analysis);
+            (0..budgets.len()).all(|k| {
+                let mut halved = budgets.clone();
+                if let Some(b) = halved.get_mut(k) {
+                    *b /= 2;
+                }
+                match with(&halved) {
+                    Ok(after) => responses(&after).iter().zip(&before).all(|(a, b)| a <= b),
+                    Err(_) => false,
+                }
+            })
+        }
+    }
 }

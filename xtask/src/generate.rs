@@ -60,6 +60,9 @@ fn generated(pair: &Pair, bytes: &[u8], ecu: &[u8]) -> Result<String> {
     for note in &out.notes {
         println!("generate: note: {note}");
     }
+    for line in &out.report {
+        println!("generate: {line}");
+    }
     let dir = target_dir().join("xtask-generate");
     std::fs::create_dir_all(&dir).map_err(|e| format!("creating {}: {e}", dir.display()))?;
     let name = std::path::Path::new(pair.generated)

@@ -163,6 +163,13 @@ pub fn run(options: &Options) -> Result {
         run.counts_per_ms,
         schedule::isr_marks(&run.log)?,
     )?;
+    let description = crate::process::root().join(cw_gen::DESCRIPTION);
+    let bytes = std::fs::read(&description)
+        .map_err(|e| format!("reading {}: {e}", description.display()))?;
+    let ecu = cw_gen::arxml::read(&bytes, cw_gen::DESCRIPTION)
+        .map_err(|e| format!("{}", cw_gen::Refused(e)))?
+        .ecu;
+    schedule.budgets(&ecu, cw_gen::DESCRIPTION)?;
     let started = Instant::now();
     let costs = timed::Costs::measure(&run, &schedule, schedule::isr_marks(&run.log)?)?;
     let timed = timed::run(&scenario, duration_ms, &out, &schedule, &costs)?;

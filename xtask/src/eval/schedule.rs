@@ -42,6 +42,9 @@ pub(super) struct Analysed {
     pub response: Response,
     /// The longest measured response and the jobs measured (tasks only).
     pub measured: Option<(u64, usize)>,
+    /// Its execution budget in the ECU's description (`OsTaskExecutionBudget`,
+    /// `OsIsrExecutionBudget`), µs: the generator's analysis took it.
+    pub budget_us: Option<u64>,
 }
 
 /// The analysis.
@@ -90,6 +93,7 @@ pub(super) fn parse(log: &str) -> Result<Schedule> {
                     net,
                     response: Response::NoPeriod,
                     measured: None,
+                    budget_us: None,
                 });
             }
             _ => return Err(bad()),
@@ -256,6 +260,42 @@ pub(super) fn by_alarms_due(
 }
 
 impl Schedule {
+    /// Each item's execution budget from the ECU's description (`ecu`, read from
+    /// `source`), where the generator's analysis took it.
+    ///
+    /// # Errors
+    /// An item of the image's task set without one: the description's analysis left it out.
+    pub(super) fn budgets(&mut self, ecu: &cw_gen::model::Ecu, source: &str) -> Result {
+        for item in &mut self.items {
+            let timing = ecu
+                .os
+                .tasks
+                .iter()
+                .find(|t| t.name == item.name)
+                .and_then(|t| t.timing.as_ref())
+                .or_else(|| {
+                    ecu.os
+                        .isrs
+                        .iter()
+                        .find(|i| i.name == item.name)
+                        .and_then(|i| i.timing.as_ref())
+                });
+            item.budget_us = timing.and_then(|t| t.budget_us);
+            if item.budget_us.is_none() {
+                return Err(format!(
+                    "eval: {} has no execution budget in {source}: the description's analysis of the task set leaves out an item the image runs",
+                    item.name
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    /// `us` in the image's instructions (rounded down: a budget is an upper bound).
+    pub(super) fn instructions(&self, us: u64) -> u64 {
+        us.saturating_mul(self.per_ms) / 1000
+    }
+
     /// The slots of the tasks an alarm releases.
     pub(super) fn tick_released(&self) -> Vec<u8> {
         self.items
@@ -394,9 +434,22 @@ impl Schedule {
 }
 
 /// The analysis's own checks: every item analysed and meeting its deadline, every task
-/// measured, and no measured response above the analysed one. An error names the item.
+/// measured, no measured response above the analysed one, and no item's execution above
+/// its budget in the ECU's description. An error names the item.
 pub(super) fn check(s: &Schedule) -> Result {
     for item in &s.items {
+        if let Some(budget) = item.budget_us {
+            let allowed = s.instructions(budget);
+            if item.load.wcet > allowed {
+                return Err(format!(
+                    "eval: {}'s execution on the image, {} instructions ({} ms), is above its budget in {}, {budget} µs ({allowed} instructions): the description's analysis of the task set does not hold",
+                    item.name,
+                    item.load.wcet,
+                    ms(item.load.wcet, s.per_ms),
+                    cw_gen::DESCRIPTION
+                ));
+            }
+        }
         let response = match item.response {
             Response::NoPeriod => {
                 return Err(format!(
@@ -470,7 +523,10 @@ pub(super) fn markdown(s: &Schedule, md: &mut String) {
          (its jobs' and ISRs' net instructions, as the production image runs them) are in \
          the \"net\" column. A measured response runs from the release (the tick the \
          alarm fell due on: the last multiple of its period, or the activator's release) to \
-         the job's last line. Figures in \
+         the job's last line. The \"budget\" column is each item's execution budget in the \
+         ECU's description (`OsTaskExecutionBudget`, `OsIsrExecutionBudget`, with which \
+         `cargo xtask generate` analysed the task set before generating it), in the image's \
+         instructions: the check fails where the execution analysed here exceeds it. Figures in \
          the image's instructions ({} per ms under QEMU's `-icount shift=5`), times in ms of \
          that virtual clock.\n",
         s.items
@@ -483,8 +539,8 @@ pub(super) fn markdown(s: &Schedule, md: &mut String) {
     );
     let _ = writeln!(
         md,
-        "| item | priority | released by | period (ms) | net | execution analysed | blocking | jitter | analysed worst response | deadline | measured worst response (jobs) | |\n\
-         |---|---|---|---|---|---|---|---|---|---|---|---|"
+        "| item | priority | released by | period (ms) | net | execution analysed | budget | blocking | jitter | analysed worst response | deadline | measured worst response (jobs) | |\n\
+         |---|---|---|---|---|---|---|---|---|---|---|---|---|"
     );
     for i in &s.items {
         let measured = i.measured.map_or("-".to_string(), |(m, jobs)| {
@@ -503,15 +559,19 @@ pub(super) fn markdown(s: &Schedule, md: &mut String) {
             ),
             Response::NoPeriod => ("-".into(), "-".into(), "-"),
         };
+        let budget = i.budget_us.map_or("-".to_string(), |us| {
+            format!("{} = {us} µs", s.instructions(us))
+        });
         let _ = writeln!(
             md,
-            "| `{}` | {} | {} | {} | {} | {} | {} | {} | {} | {} ms | {} | {} |",
+            "| `{}` | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} ms | {} | {} |",
             i.name,
             i.load.priority,
             i.released_by,
             ms(i.load.period, s.per_ms),
             i.net,
             i.load.wcet,
+            budget,
             blocking,
             i.load.jitter,
             response,
@@ -523,8 +583,8 @@ pub(super) fn markdown(s: &Schedule, md: &mut String) {
     let _ = writeln!(
         md,
         "\nThe check command runs the same analysis on its short run and fails, naming the \
-         item, when an item misses its deadline or a measured response exceeds the analysed \
-         one. The paper gives no schedulability analysis; its Table 1 shows periods, not \
+         item, when an item misses its deadline, a measured response exceeds the analysed \
+         one, or an execution exceeds its budget. The paper gives no schedulability analysis; its Table 1 shows periods, not \
          response times.\n"
     );
 }
@@ -650,6 +710,15 @@ pub(super) mod tests {
         assert!(check(&missed)
             .unwrap_err()
             .contains("OsComTask's worst-case"));
+        // An execution above its budget in the description.
+        let mut over = s.clone();
+        over.items[0].budget_us = Some(1);
+        let error = check(&over).unwrap_err();
+        assert!(
+            error.contains("OsLEDTask's execution on the image")
+                && error.contains("1 µs (31 instructions)"),
+            "{error}"
+        );
         let mut unmeasured = s;
         unmeasured.items[0].measured = None;
         assert!(check(&unmeasured)
