@@ -319,6 +319,21 @@ pub fn parse_exact_us(text: &str) -> Option<u64> {
     exact_units(text, 6)
 }
 
+/// [`parse_exact_us`], or a double that a tool printed with all its 17 digits
+/// (`1.4999999999999999E-4` for 150 µs) within a nanosecond of a whole microsecond.
+pub fn parse_us(text: &str) -> Option<u64> {
+    parse_exact_us(text).or_else(|| near_whole(text, 1e6, 1e-3))
+}
+
+/// `text` (seconds) in units of `1 / per_second` s, where a double is within `tolerance`
+/// units (or its last digit's precision) of a whole number of them, up to `u32::MAX`.
+fn near_whole(text: &str, per_second: f64, tolerance: f64) -> Option<u64> {
+    let s: f64 = text.trim().parse().ok()?;
+    let units = (s * per_second).round();
+    let near = (s * per_second - units).abs() <= tolerance.max(units * 1e-15);
+    (s.is_finite() && near && (0.0..=f64::from(u32::MAX)).contains(&units)).then_some(units as u64)
+}
+
 /// A time in seconds as a whole number of `10^-power` s, up to `u32::MAX`, read exactly
 /// from its decimal digits.
 fn exact_units(text: &str, power: i32) -> Option<u64> {
@@ -363,12 +378,7 @@ fn exact_units(text: &str, power: i32) -> Option<u64> {
 /// [`parse_exact_ms`], or a double that a tool printed with all its 17 digits
 /// (`0.10000000000000001` for 0.1 s) within a nanosecond of a whole millisecond.
 pub fn parse_ms(text: &str) -> Option<u64> {
-    parse_exact_ms(text).or_else(|| {
-        let s: f64 = text.trim().parse().ok()?;
-        let ms = (s * 1000.0).round();
-        let near = (s * 1000.0 - ms).abs() <= 1e-6_f64.max(ms * 1e-15);
-        (s.is_finite() && near && (0.0..=f64::from(u32::MAX)).contains(&ms)).then_some(ms as u64)
-    })
+    parse_exact_ms(text).or_else(|| near_whole(text, 1000.0, 1e-6))
 }
 
 impl<'a> Take<'a> {
@@ -456,7 +466,7 @@ impl<'a> Take<'a> {
 
     fn us(&mut self, def: &str, out: &mut Vec<Error>) -> Option<u64> {
         let what = "a whole number of microseconds (in seconds)";
-        self.parsed(def, parse_exact_us, what, out)
+        self.parsed(def, parse_us, what, out)
     }
 
     /// The `OsTaskTimingProtection` or `OsIsrTimingProtection` (`kind` `Task` or `Isr`)
@@ -475,8 +485,16 @@ impl<'a> Take<'a> {
             budget_us: t.us(&format!("Os{kind}ExecutionBudget"), out),
             time_frame_us: t.us(&format!("Os{kind}TimeFrame"), out),
         };
+        // A lock budget declares a section that blocks interrupts: the analysis does not
+        // model one, so only 0 (none) is taken.
         for lock in ["AllInterruptLockBudget", "OsInterruptLockBudget"] {
-            t.unused(&format!("Os{kind}{lock}"), notes);
+            let def = format!("Os{kind}{lock}");
+            if let Some(us) = t.us(&def, out).filter(|&us| us > 0) {
+                out.push(Error::new(
+                    format!("{def} = {us} µs: interrupt lock sections are not in the task set's analysis (0 or none is taken)"),
+                    &[&c.path],
+                ));
+            }
         }
         for sub in t.subs(&format!("Os{kind}ResourceLock")) {
             notes.push(format!(

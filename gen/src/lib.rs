@@ -105,7 +105,11 @@ pub fn generate_rte(
     let sw = rte::read(bytes, source).map_err(Refused)?;
     let ecu_bytes = ecu;
     let ecu = arxml::read(ecu_bytes, ecu_source).map_err(Refused)?.ecu;
-    let errors = rte::check(&sw, &ecu);
+    // The ECU's own checks first: the RTE and the analysis take its OS as valid.
+    let mut errors = validate::check(&ecu);
+    if errors.is_empty() {
+        errors = rte::check(&sw, &ecu);
+    }
     if !errors.is_empty() {
         return Err(Refused(errors));
     }
@@ -117,8 +121,13 @@ pub fn generate_rte(
             "no task or ISR of {ecu_source} has a timing protection (OsTaskTimingProtection, OsIsrTimingProtection): the task set is not analysed"
         )),
         timing::Analysis::Schedulable { items, left_out } => {
+            let without = if left_out.is_empty() {
+                String::new()
+            } else {
+                format!(", {} ISR(s) without one left out", left_out.len())
+            };
             report.push(format!(
-                "the task set of {ecu_source} meets every deadline with its budgets (response-time analysis, µs):"
+                "the task set of {ecu_source} meets every deadline with its budgets (response-time analysis, µs{without}):"
             ));
             report.extend(items.iter().map(timing::Item::line));
             report.extend(left_out.iter().map(|isr| {
@@ -164,7 +173,8 @@ pub fn generate(bytes: &[u8], source: &str) -> Result<Generated, Refused> {
 /// `node`: the paper's ECU extract, checked before generation.
 ///
 /// # Errors
-/// Either file cannot be read, or they disagree ([`extract::check`]), at once.
+/// Either file cannot be read, the ECUC values fail their own checks
+/// ([`validate::check`]), or the two disagree ([`extract::check`]), at once.
 pub fn check_communication(
     ecu: &[u8],
     ecu_source: &str,
@@ -174,5 +184,9 @@ pub fn check_communication(
 ) -> Result<extract::Agreed, Refused> {
     let bus = system::read(system, system_source).map_err(Refused)?;
     let ecu = arxml::read(ecu, ecu_source).map_err(Refused)?.ecu;
+    let errors = validate::check(&ecu);
+    if !errors.is_empty() {
+        return Err(Refused(errors));
+    }
     extract::check(&bus, system_source, node, &ecu).map_err(Refused)
 }

@@ -227,10 +227,10 @@ pub fn a_bus_reads_back_as_written(frames: &[FrameSeed]) -> bool {
     read.system == bus && matches!(dbc, Ok(r) if r.system == bus)
 }
 
-/// The repository's bus with `frames` (a [`bus_of`], between other nodes than the ECU's)
-/// added where their identifiers are free: the ECU's communication still agrees with it,
-/// frame for frame as with the repository's bus; and with any one of them sent by the
-/// ECU instead, it is refused, the frame named.
+/// The repository's bus with `frames` (a [`bus_of`], sent and received by the bus's other
+/// node, PC) added where their identifiers are free: the ECU's communication still agrees
+/// with it, frame for frame as with the repository's bus; and with any one of them sent by
+/// the ECU instead, or with a signal for it, it is refused, the frame named.
 pub fn frames_of_other_nodes_leave_the_ecu_alone(frames: &[FrameSeed]) -> bool {
     // Read once: the fuzz target runs this on every input.
     static REPOSITORY: std::sync::OnceLock<Option<(crate::system::Read, crate::model::Ecu)>> =
@@ -248,7 +248,13 @@ pub fn frames_of_other_nodes_leave_the_ecu_alone(frames: &[FrameSeed]) -> bool {
         return false;
     };
     let mut added = Vec::new();
+    // The bus's other node sends and receives them.
+    let other = "PC".to_string();
     for mut frame in bus_of(frames).frames {
+        frame.sender = frame.sender.map(|_| other.clone());
+        for signal in &mut frame.signals {
+            signal.receivers = vec![other.clone(); signal.receivers.len().min(1)];
+        }
         let taken = bus
             .system
             .frames
@@ -263,15 +269,32 @@ pub fn frames_of_other_nodes_leave_the_ecu_alone(frames: &[FrameSeed]) -> bool {
     if crate::extract::check(&bus, "ecu.dbc", crate::NODE, ecu) != Ok(alone) {
         return false;
     }
-    added.iter().all(|name| {
-        let mut ours = bus.clone();
-        for f in ours.system.frames.iter_mut().filter(|f| f.name == *name) {
-            f.sender = Some(crate::NODE.to_string());
-        }
+    // Sent by the ECU, or with a signal for it: refused, the frame named.
+    let refused = |ours: &crate::system::Read, name: &str| {
         matches!(
-            crate::extract::check(&ours, "ecu.dbc", crate::NODE, ecu),
+            crate::extract::check(ours, "ecu.dbc", crate::NODE, ecu),
             Err(e) if e.iter().any(|e| e.what.contains(&format!("frame {name} ")))
         )
+    };
+    added.iter().all(|name| {
+        let mut sent = bus.clone();
+        let mut received = bus.clone();
+        let mut has_signals = false;
+        for f in sent.system.frames.iter_mut().filter(|f| f.name == *name) {
+            f.sender = Some(crate::NODE.to_string());
+        }
+        for f in received
+            .system
+            .frames
+            .iter_mut()
+            .filter(|f| f.name == *name)
+        {
+            if let Some(s) = f.signals.first_mut() {
+                s.receivers.push(crate::NODE.to_string());
+                has_signals = true;
+            }
+        }
+        refused(&sent, name) && (!has_signals || refused(&received, name))
     })
 }
 

@@ -450,6 +450,7 @@ pub fn from_dbc(text: &str, source: &str) -> Result<Read, Vec<Error>> {
         out.extend(layout_errors(&frame, &at));
         system.frames.push(frame);
     }
+    out.extend(duplicate_errors(&system, &places));
     if out.is_empty() {
         Ok(Read {
             system,
@@ -459,6 +460,41 @@ pub fn from_dbc(text: &str, source: &str) -> Result<Read, Vec<Error>> {
     } else {
         Err(out)
     }
+}
+
+/// Two frames of one identifier or one name, or two signals of one name in a frame: the
+/// bus would be ambiguous (which one a node sends, which one a name means).
+fn duplicate_errors(system: &System, places: &Places) -> Vec<Error> {
+    let mut out = Vec::new();
+    for (k, f) in system.frames.iter().enumerate() {
+        let earlier = system.frames.iter().take(k);
+        if let Some(first) = earlier
+            .clone()
+            .find(|g| (g.id, g.extended) == (f.id, f.extended))
+        {
+            out.push(Error::new(
+                format!(
+                    "frames {} and {} have one identifier, {:#x}",
+                    first.name, f.name, f.id
+                ),
+                &[&places.frame(&f.name), &places.frame(&first.name)],
+            ));
+        } else if earlier.clone().any(|g| g.name == f.name) {
+            out.push(Error::new(
+                format!("two frames are named {}", f.name),
+                &[&places.frame(&f.name)],
+            ));
+        }
+        for (j, sig) in f.signals.iter().enumerate() {
+            if f.signals.iter().take(j).any(|t| t.name == sig.name) {
+                out.push(Error::new(
+                    format!("frame {} has two signals named {}", f.name, sig.name),
+                    &[&places.signal(&f.name, &sig.name)],
+                ));
+            }
+        }
+    }
+    out
 }
 
 /// The identifier of a DBC's pseudo-message for the signals no message carries
@@ -872,6 +908,7 @@ pub fn read(bytes: &[u8], file_name: &str) -> Result<Read, Vec<Error>> {
             }
         }
     }
+    out.extend(duplicate_errors(&system, &places));
     if out.is_empty() {
         Ok(Read {
             system,

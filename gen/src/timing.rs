@@ -11,10 +11,15 @@
 //! - a task that a data-received event of the RTE activates: released once per job of the
 //!   task whose runnable writes, as late as that job's end (its release jitter, the
 //!   writer's response time: `rta::settle_jitter`);
-//! - any other task: released at most once per `OsTaskTimeFrame`; without one, an
-//!   autostarted task runs once at start-up, before any alarm, and is not analysed;
+//! - any other task: released at most once per `OsTaskTimeFrame` (above 0); without one,
+//!   an autostarted basic task runs its one job at start-up and is not analysed (it is no
+//!   periodic load); any other task is refused;
 //! - an ISR with `OsIsrTimingProtection`: at most once per `OsIsrTimeFrame`, above every
-//!   task. An ISR without it is left out (a note names it).
+//!   task. An ISR without it is left out (the report names it).
+//!
+//! A task released by the jobs of two tasks is refused (one writer each), as are interrupt
+//! lock budgets above 0 (`Os...AllInterruptLockBudget`, `Os...OsInterruptLockBudget`: their
+//! sections are not modelled).
 //!
 //! Every deadline is the item's period. A job holding a resource runs at its ceiling (the
 //! highest priority of the tasks and ISRs that use it), a non-preemptive task at the
@@ -112,8 +117,10 @@ fn field(timing: Option<&Timing>, f: impl Fn(&Timing) -> Option<u64>) -> Option<
 ///
 /// # Errors
 /// A task that runs after start-up without an execution budget or a release the analysis
-/// can tell; an ISR's timing protection without its budget or time frame; an item that
-/// can miss its deadline, named with the items of its priority or above.
+/// can tell (or released by two tasks' jobs, or with a time frame of 0); an ISR's timing
+/// protection without its budget or a time frame above 0; release jitters that do not
+/// settle; an item that cannot be analysed, or can miss its deadline, named with the
+/// items of its priority or above.
 pub fn analyse(ecu: &Ecu, released_by: &[(String, String)]) -> Result<Analysis, Vec<Error>> {
     let os = &ecu.os;
     if os.tasks.iter().all(|t| t.timing.is_none()) && os.isrs.iter().all(|i| i.timing.is_none()) {
@@ -122,7 +129,7 @@ pub fn analyse(ecu: &Ecu, released_by: &[(String, String)]) -> Result<Analysis, 
     let mut out = Vec::new();
     let top_task = os.tasks.iter().map(|t| t.priority).max().unwrap_or(0);
     // ISRs above every task, in their own order.
-    let isr_priority = |p: u64| top_task + 1 + p;
+    let isr_priority = |p: u64| top_task.saturating_add(1).saturating_add(p);
     // Each resource's ceiling on that one scale.
     let ceiling = |resource: &str| {
         let tasks = os
@@ -139,19 +146,50 @@ pub fn analyse(ecu: &Ecu, released_by: &[(String, String)]) -> Result<Analysis, 
     };
     let to_u16 = |p: u64| u16::try_from(p).unwrap_or(u16::MAX);
     let mut items: Vec<Item> = Vec::new();
+    // Tasks already refused: a task they release is not refused again for it.
+    let mut refused: Vec<String> = Vec::new();
     for t in &os.tasks {
         let cycle = crate::rte::task_period_ms(ecu, &t.name);
         let timing = t.timing.as_ref();
-        let releaser = released_by
+        let mut writers: Vec<&str> = released_by
             .iter()
-            .find(|(task, _)| *task == t.name)
-            .map(|(_, by)| by.clone());
-        let (release, period) = match (cycle, releaser, field(timing, |x| x.time_frame_us)) {
+            .filter(|(task, _)| *task == t.name)
+            .map(|(_, by)| by.as_str())
+            .collect();
+        writers.sort_unstable();
+        writers.dedup();
+        if let [first, second, ..] = writers.as_slice() {
+            out.push(Error::new(
+                format!(
+                    "task {} is released by the jobs of {first} and {second}: the analysis takes one writer per released task",
+                    t.name
+                ),
+                &[&t.path],
+            ));
+            refused.push(t.name.clone());
+            continue;
+        }
+        let frame = field(timing, |x| x.time_frame_us);
+        if frame == Some(0) {
+            out.push(Error::new(
+                format!(
+                    "task {}'s OsTaskTimeFrame is 0: releases need time between them",
+                    t.name
+                ),
+                &[timing.map_or(t.path.as_str(), |x| x.path.as_str())],
+            ));
+            refused.push(t.name.clone());
+            continue;
+        }
+        let releaser = writers.first().map(|by| (*by).to_string());
+        let (release, period) = match (cycle, releaser, frame) {
             (Some(ms), _, _) => (Release::Alarm, ms.saturating_mul(1000)),
             // The writer's period, set below once every alarm's task is known.
             (None, Some(by), _) => (Release::Task(by), 0),
             (None, None, Some(frame)) => (Release::TimeFrame, frame),
-            (None, None, None) if t.autostart => continue,
+            // A basic task started once: its one job is no periodic load. (An extended
+            // one may wait for events for ever, and needs a time frame.)
+            (None, None, None) if t.autostart && t.events.is_empty() => continue,
             (None, None, None) => {
                 out.push(Error::new(
                     format!(
@@ -160,6 +198,7 @@ pub fn analyse(ecu: &Ecu, released_by: &[(String, String)]) -> Result<Analysis, 
                     ),
                     &[&t.path],
                 ));
+                refused.push(t.name.clone());
                 continue;
             }
         };
@@ -171,6 +210,7 @@ pub fn analyse(ecu: &Ecu, released_by: &[(String, String)]) -> Result<Analysis, 
                 ),
                 &[timing.map_or(t.path.as_str(), |x| x.path.as_str())],
             ));
+            refused.push(t.name.clone());
             continue;
         };
         let mut raises_to = t.resources.iter().map(|r| ceiling(r)).max().unwrap_or(0);
@@ -192,10 +232,12 @@ pub fn analyse(ecu: &Ecu, released_by: &[(String, String)]) -> Result<Analysis, 
             left_out.push(i.name.clone());
             continue;
         };
-        let (Some(budget), Some(frame)) = (timing.budget_us, timing.time_frame_us) else {
+        let (Some(budget), Some(frame)) =
+            (timing.budget_us, timing.time_frame_us.filter(|&f| f > 0))
+        else {
             out.push(Error::new(
                 format!(
-                    "ISR {}'s timing protection needs both OsIsrExecutionBudget and OsIsrTimeFrame for the analysis",
+                    "ISR {}'s timing protection needs both OsIsrExecutionBudget and an OsIsrTimeFrame above 0 for the analysis",
                     i.name
                 ),
                 &[&timing.path],
@@ -249,6 +291,8 @@ pub fn analyse(ecu: &Ecu, released_by: &[(String, String)]) -> Result<Analysis, 
         };
         match items.iter().position(|w| w.name == *by) {
             Some(w) if item.load.period > 0 => pairs.push((k, w)),
+            // Its writer's error says why.
+            _ if refused.contains(by) => {}
             _ => out.push(Error::new(
                 format!(
                     "task {} is released by {by}'s job, which the analysis does not release periodically",
@@ -263,14 +307,33 @@ pub fn analyse(ecu: &Ecu, released_by: &[(String, String)]) -> Result<Analysis, 
     }
     let mut loads: Vec<Load> = items.iter().map(|i| i.load).collect();
     // A releaser that misses is reported below, with the rest.
-    let _ = rta::settle_jitter(&mut loads, &pairs);
+    let settled = rta::settle_jitter(&mut loads, &pairs);
     for (k, item) in items.iter_mut().enumerate() {
         if let Some(load) = loads.get(k) {
             item.load = *load;
         }
         item.response = rta::response_time(&loads, k);
     }
+    if !settled && items.iter().all(|i| i.response.meets()) {
+        let paths: Vec<&str> = pairs
+            .iter()
+            .filter_map(|&(k, _)| items.get(k).map(|i| i.path.as_str()))
+            .collect();
+        out.push(Error::new(
+            "the release jitters of the tasks other tasks' jobs release did not settle: the analysis cannot bound them",
+            &paths,
+        ));
+    }
     for item in &items {
+        if item.response == Response::NoPeriod {
+            out.push(Error::new(
+                format!(
+                    "{} cannot be analysed: it or an item above it has no period",
+                    item.name
+                ),
+                &[&item.path],
+            ));
+        }
         if let Response::Misses { at_least, blocking } = item.response {
             let mut paths = vec![item.path.as_str()];
             paths.extend(

@@ -200,21 +200,80 @@ fn without_any_timing_protection_nothing_is_analysed() {
 fn a_non_preemptive_task_blocks_every_task_above_it_for_its_budget() {
     let mut ecu = ecu();
     let released = released_by(&ecu);
+    // The sonar task without resources, its budget above any other section.
     let sonar = ecu
         .os
         .tasks
         .iter_mut()
         .find(|t| t.name == "OsSonarTask")
         .expect("sonar");
-    sonar.preemptive = false;
-    let Ok(Analysis::Schedulable { items, .. }) = timing::analyse(&ecu, &released) else {
-        panic!("still schedulable");
+    sonar.resources.clear();
+    if let Some(t) = sonar.timing.as_mut() {
+        t.budget_us = Some(300);
+    }
+    let blocking = |ecu: &Ecu, name: &str| {
+        let Ok(Analysis::Schedulable { items, .. }) = timing::analyse(ecu, &released) else {
+            panic!("schedulable");
+        };
+        match items.iter().find(|i| i.name == name).map(|i| i.response) {
+            Some(Response::Meets { blocking, .. }) => blocking,
+            other => panic!("{name}: {other:?}"),
+        }
     };
-    let led = items.iter().find(|i| i.name == "OsLEDTask").expect("LED");
-    let Response::Meets { blocking, .. } = led.response else {
-        panic!("meets");
-    };
-    assert_eq!(blocking, 200, "the sonar job's whole budget");
+    let (led, can) = (blocking(&ecu, "OsLEDTask"), blocking(&ecu, "CanIsr"));
+    assert!(led < 300, "preemptive: {led}");
+    if let Some(sonar) = ecu.os.tasks.iter_mut().find(|t| t.name == "OsSonarTask") {
+        sonar.preemptive = false;
+    }
+    assert_eq!(
+        blocking(&ecu, "OsLEDTask"),
+        300,
+        "the sonar job's whole budget"
+    );
+    // An ISR still preempts it.
+    assert_eq!(blocking(&ecu, "CanIsr"), can);
+}
+
+#[test]
+fn a_time_frame_of_zero_two_writers_or_a_lock_budget_are_refused() {
+    let mut ecu = ecu();
+    let released = released_by(&ecu);
+    timing_of(&mut ecu, "SysTickIsr").time_frame_us = Some(0);
+    let e = timing::analyse(&ecu, &released).expect_err("no time between releases");
+    assert!(e[0]
+        .what
+        .starts_with("ISR SysTickIsr's timing protection needs both"));
+    let ecu = self::ecu();
+    let two = [
+        ("OsComTask".to_string(), "OsSonarTask".to_string()),
+        ("OsComTask".to_string(), "OsLEDTask".to_string()),
+    ];
+    let e = timing::analyse(&ecu, &two).expect_err("two writers");
+    assert_eq!(
+        e[0].what,
+        "task OsComTask is released by the jobs of OsLEDTask and OsSonarTask: the analysis \
+         takes one writer per released task"
+    );
+    // An interrupt lock section is not modelled: only 0 is taken.
+    let lock = "<VALUE>0.0001</VALUE>\n                        </ECUC-NUMERICAL-PARAM-VALUE>";
+    assert!(ECU.contains(lock));
+    let text = ECU.replacen(
+        lock,
+        &format!(
+            "{lock}\n                        <ECUC-NUMERICAL-PARAM-VALUE>\n                          \
+             <DEFINITION-REF DEST=\"ECUC-FLOAT-PARAM-DEF\">/AUTOSAR/EcucDefs/Os/OsTask/\
+             OsTaskTimingProtection/OsTaskAllInterruptLockBudget</DEFINITION-REF>\n                          \
+             <VALUE>0.00001</VALUE>\n                        </ECUC-NUMERICAL-PARAM-VALUE>"
+        ),
+        1,
+    );
+    let e = cw_gen::arxml::read(text.as_bytes(), "ecu.arxml").expect_err("a lock budget");
+    assert_eq!(
+        e[0].to_string(),
+        "OsTaskAllInterruptLockBudget = 10 µs: interrupt lock sections are not in the task \
+         set's analysis (0 or none is taken)\n  \
+         at /CollisionWarning/EcucValues/Os/OsLEDTask/OsTaskTimingProtection"
+    );
 }
 
 #[test]
@@ -224,6 +283,8 @@ fn budgets_are_read_in_whole_microseconds_and_refused_otherwise() {
     assert_eq!(parse_exact_us("1E-4"), Some(100));
     assert_eq!(parse_exact_us("0.04"), Some(40_000));
     assert_eq!(parse_exact_us("0.0000005"), None);
+    // A double a tool printed with all its digits.
+    assert_eq!(cw_gen::arxml::parse_us("1.4999999999999999E-4"), Some(150));
     let text = ECU.replacen("<VALUE>0.0001</VALUE>", "<VALUE>0.00010005</VALUE>", 1);
     let e = cw_gen::arxml::read(text.as_bytes(), "ecu.arxml").expect_err("refused");
     assert_eq!(

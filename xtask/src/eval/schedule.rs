@@ -438,6 +438,8 @@ impl Schedule {
 /// its budget in the ECU's description. An error names the item.
 pub(super) fn check(s: &Schedule) -> Result {
     for item in &s.items {
+        // (The run's figures come with every item's budget: `Schedule::budgets`; the unit
+        // tests' logs have none.)
         if let Some(budget) = item.budget_us {
             let allowed = s.instructions(budget);
             if item.load.wcet > allowed {
